@@ -1,0 +1,44 @@
+# Two commands for a new user: `make run` and `make test`. Both set up first; set-up is
+# idempotent and takes seconds once everything is in place.
+SHELL := /bin/bash
+.SHELLFLAGS := -o pipefail -ec
+PYTHON ?= python3.11
+VENV ?= .venv
+PY := $(VENV)/bin/python
+ARGS ?=
+TESTS ?= tests
+JOBS ?= auto
+export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
+
+.PHONY: setup run test lint interfaces graphviz clean
+
+setup: $(VENV)/.installed interfaces graphviz
+
+$(VENV)/.installed: pyproject.toml
+	@command -v $(PYTHON) >/dev/null || { echo "setup: $(PYTHON) is missing; install Python 3.11 or run make PYTHON=/path/to/python3.11" >&2; exit 1; }
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@echo "setup: installing Python and ROS 2 Kilted wheels into $(VENV)"
+	@$(PY) -m pip install -q --progress-bar off -e '.[dev,build]' 2>&1 | { grep -v "is ignored: it is neither a file nor a directory" || true; }
+	@touch $@
+
+interfaces: $(VENV)/.installed
+	@interfaces/build.sh $(VENV)
+
+graphviz:
+	@if command -v dot >/dev/null; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "setup: installing Graphviz (Debian package graphviz) for tree images"; \
+	  apt-get update -qq >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz >/dev/null; \
+	else echo "setup: Graphviz is missing: tree images (svg/png) need it; install the 'graphviz' package" >&2; fi
+
+run: setup
+	$(PY) -m bt_servicesim.run $(ARGS)
+
+test: setup
+	$(PY) -m pytest -n $(JOBS) $(TESTS)
+
+lint: setup
+	$(VENV)/bin/ruff check .
+
+clean:
+	rm -rf $(VENV) runs .pytest_cache

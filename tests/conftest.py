@@ -1,0 +1,43 @@
+"""Test-wide ROS 2 isolation.
+
+Every test process talks DDS on loopback only, in a ROS domain of its own: the pytest-xdist
+worker index and the id of the pytest run pick the domain, so parallel workers and two test
+runs at the same time never see each other's nodes. This runs at import, before any test
+calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import pytest
+
+from bt_servicesim.ros_environment import apply_localhost_defaults
+
+DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
+
+
+def _test_domain_id() -> int:
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    run = int(os.environ.get("PYTEST_XDIST_TESTRUNUID", "0")[:8] or "0", 16) or os.getpid()
+    return 1 + (run + index * 37) % DOMAIN_SPAN
+
+
+apply_localhost_defaults()
+os.environ["ROS_DOMAIN_ID"] = str(_test_domain_id())
+
+
+@pytest.fixture
+def ros_context() -> Iterator[object]:
+    """A fresh rclpy context for one test, shut down afterwards."""
+    import rclpy
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    try:
+        yield context
+    finally:
+        context.try_shutdown()
