@@ -1,0 +1,69 @@
+"""The simulator as a child process, reached only over ROS.
+
+The executive never imports the simulator: the run command starts it as its own process
+(``python -m servicesim_sim``), so it can be swapped for Gazebo + Nav2 by starting something
+else. Its output goes to a log file in the run directory; when it refuses its input (a broken
+world file, say) its last error line is what the user sees.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+SIMULATOR_MODULE = "servicesim_sim"
+
+
+class SimulatorProcess:
+    """Start, watch and stop one simulator process."""
+
+    def __init__(
+        self,
+        *,
+        world: Path | None,
+        seed: int | None,
+        speed: float,
+        log_path: Path,
+        extra_args: tuple[str, ...] = (),
+    ) -> None:
+        self.command = [sys.executable, "-m", SIMULATOR_MODULE, "--speed", repr(speed)]
+        if world is not None:
+            self.command += ["--world", str(world)]
+        if seed is not None:
+            self.command += ["--seed", str(seed)]
+        self.command += list(extra_args)
+        self.log_path = log_path
+        self._process: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        with self.log_path.open("wb") as log:
+            self._process = subprocess.Popen(
+                self.command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                env=os.environ.copy(), start_new_session=True,
+            )
+
+    def exit_code(self) -> int | None:
+        """None while it runs."""
+        return None if self._process is None else self._process.poll()
+
+    def last_error(self) -> str:
+        """The simulator's last non-empty output line (its one-line error when it refused)."""
+        try:
+            lines = self.log_path.read_text(errors="replace").strip().splitlines()
+        except OSError:
+            return "no simulator output"
+        return lines[-1].strip() if lines else "no simulator output"
+
+    def stop(self, *, grace_s: float = 5.0) -> None:
+        """SIGINT, then SIGKILL if it does not exit within ``grace_s``."""
+        if self._process is None or self._process.poll() is not None:
+            return
+        self._process.send_signal(signal.SIGINT)
+        try:
+            self._process.wait(timeout=grace_s)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            self._process.wait()
