@@ -1,0 +1,112 @@
+"""Keep a tree file's ``<TreeNodesModel>`` in step with the behaviours, so Groot2 opens it.
+
+Groot2 knows BehaviorTree.CPP's own nodes; every other tag a file uses — this project's leaves
+and the py_trees decorators — must be declared in a ``<TreeNodesModel>`` with its ports. The
+model is generated from the code (the ports registry and the decorators' constructor
+arguments), never written by hand:
+
+    python -m bt_servicesim.tree_model trees/servicesim_mission.xml          # rewrite in place
+    python -m bt_servicesim.tree_model --check trees/servicesim_mission.xml  # exit 1 if stale
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import re
+import sys
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Sequence
+from pathlib import Path
+
+import py_trees
+
+from bt_servicesim.mission_tree import register_leaves
+
+MODEL_PATTERN = re.compile(r"\n?[ \t]*<TreeNodesModel>.*?</TreeNodesModel>[ \t]*\n?", re.DOTALL)
+CONDITIONS = {"GuestInRange", "RobotStateReady"}
+BTCPP_BUILTINS = {"Sequence", "Fallback", "Parallel", "SubTree", "BehaviorTree", "root",
+                  "TreeNodesModel"}
+
+
+def used_tags(tree_file: Path) -> list[str]:
+    root = ElementTree.parse(tree_file).getroot()
+    tags = {element.tag for tree in root.findall("BehaviorTree") for element in tree.iter()}
+    return sorted(tags - BTCPP_BUILTINS)
+
+
+def _decorator_class(tag: str) -> type | None:
+    candidate = getattr(py_trees.decorators, tag, None)
+    return candidate if inspect.isclass(candidate) else None
+
+
+def _type_name(data_type: object) -> str:
+    return getattr(data_type, "__name__", str(data_type))
+
+
+def node_model(tag: str, registry: dict[str, type]) -> str:
+    """One ``<Action|Condition|Decorator ID=…>`` element with its ports."""
+    if tag in registry:
+        cls = registry[tag]
+        kind = ("Decorator" if issubclass(cls, py_trees.decorators.Decorator)
+                else "Condition" if tag in CONDITIONS else "Action")
+        ports = [f'<input_port name="{name}" type="{_type_name(info.data_type)}"/>'
+                 for name, info in cls.input_ports().items()]
+        ports += [f'<output_port name="{name}" type="{_type_name(info.data_type)}"/>'
+                  for name, info in cls.output_ports().items()]
+        ports += [f'<input_port name="{name}"/>' for name in _extra_arguments(cls)
+                  if name not in cls.input_ports()]
+    else:
+        cls = _decorator_class(tag)
+        if cls is None:
+            raise ValueError(f"unknown tag <{tag}>: neither a behaviour nor a py_trees decorator")
+        kind = "Decorator"
+        ports = [f'<input_port name="{name}"/>' for name in _extra_arguments(cls)]
+    body = "".join(f"\n      {port}" for port in ports)
+    return f'    <{kind} ID="{tag}">{body}\n    </{kind}>' if ports else f'    <{kind} ID="{tag}"/>'
+
+
+def _extra_arguments(cls: type) -> list[str]:
+    """Constructor keyword arguments a tree file may set as attributes (``seconds``, ...)."""
+    skip = {"self", "name", "child", "children", "behaviour_class_name", "args", "kwargs"}
+    parameters = inspect.signature(cls.__init__).parameters
+    return [name for name in parameters if name not in skip]
+
+
+def model_for(tree_file: Path) -> str:
+    registry = register_leaves()
+    nodes = "\n".join(node_model(tag, registry) for tag in used_tags(tree_file))
+    return f"  <TreeNodesModel>\n{nodes}\n  </TreeNodesModel>\n"
+
+
+def with_model(text: str, model: str) -> str:
+    """The file's text with its model replaced (or added before ``</root>``)."""
+    stripped = MODEL_PATTERN.sub("\n", text)
+    return stripped.replace("</root>", "\n" + model + "\n</root>", 1).replace("\n\n\n", "\n\n")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bt_servicesim.tree_model")
+    parser.add_argument("--check", action="store_true", help="exit 1 if the model is stale")
+    parser.add_argument("trees", nargs="+", type=Path)
+    args = parser.parse_args(argv)
+    stale = []
+    for tree_file in args.trees:
+        try:
+            text = tree_file.read_text()
+            updated = with_model(text, model_for(tree_file))
+        except (OSError, ElementTree.ParseError, ValueError) as error:
+            print(f"{parser.prog}: error: {tree_file}: {error}", file=sys.stderr)
+            return 2
+        if updated != text:
+            stale.append(tree_file)
+            if not args.check:
+                tree_file.write_text(updated)
+    if args.check and stale:
+        print(f"stale TreeNodesModel in: {', '.join(map(str, stale))}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,394 @@
+"""The simulator's ROS 2 face: the competition's topics, services and navigation action.
+
+Everything that happens lives in :class:`~servicesim_sim.engine.SimEngine`, stepped at a fixed
+physics step in sim time; this node only turns engine state into messages and requests into
+engine calls. Its loop steps the engine, publishes ``/clock`` and the sensors, then lets rclpy
+handle requests; with a speed factor it sleeps (spinning) until the wall clock catches up,
+with speed 0 it never sleeps. Nothing here reads the wall clock for simulation purposes.
+
+Service answers and navigation results are coroutines that wait in *sim* time (for the
+service-latency knob and for navigation to finish), so no request ever blocks the loop, and a
+request the original made fail is answered at once with a documented error answer.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import rclpy
+from builtin_interfaces.msg import Duration, Time
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Image
+from servicesim_competition.action import NavigateToPose
+from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
+from servicesim_competition.srv import (
+    DropOffGuest,
+    Drift,
+    NewTask,
+    PickUpGuest,
+    RoomInfo,
+    TaskInfo,
+)
+from std_srvs.srv import Empty
+
+from servicesim_sim.engine import NavigationState, SimEngine
+from servicesim_sim.scenario import make_scenario
+from servicesim_sim.settings import SimSettings
+
+IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
+PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+ROBOT_NAME = "servicebot"
+
+
+def stamp(seconds: float) -> Time:
+    whole = math.floor(seconds)
+    return Time(sec=int(whole), nanosec=int(round((seconds - whole) * 1e9)) % 1_000_000_000)
+
+
+def duration(seconds: float) -> Duration:
+    whole = math.floor(max(seconds, 0.0))
+    return Duration(sec=int(whole), nanosec=int((max(seconds, 0.0) - whole) * 1e9))
+
+
+class SimulatorNode:
+    """One simulated world on one ROS node; :meth:`run` until interrupted."""
+
+    def __init__(self, settings: SimSettings, *, node: Node) -> None:
+        self.settings = settings
+        self.node = node
+        scenario = make_scenario(settings.world, seed=settings.seed,
+                                 difficulty=settings.difficulty)
+        self.engine = SimEngine(world=settings.world, scenario=scenario)
+        self.steps_per_io = max(1, round(IO_PERIOD_S / self.engine.dt))
+        self._sleepers: list[tuple[float, Future]] = []
+        self._active_goal: ServerGoalHandle | None = None
+        self._preempted: set[int] = set()
+        self._io_count = 0
+        self._camera_next = 0.0
+        self._make_publishers()
+        self._make_services()
+        self._navigation = ActionServer(
+            node, NavigateToPose, "/servicebot/navigate_to_pose",
+            execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
+            handle_accepted_callback=self._on_goal_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT,
+        )
+        node.create_subscription(PoseWithCovarianceStamped, "/servicebot/initialpose",
+                                 self._on_initial_pose, LATCHED)
+        node.create_subscription(Twist, "/servicebot/cmd_vel", self._on_cmd_vel, 10)
+        self._map_publisher.publish(self._map_message())
+
+    # ----------------------------------------------------------------- wiring
+    def _make_publishers(self) -> None:
+        node = self.node
+        self._clock = node.create_publisher(Clock, "/clock", 10)
+        self._odom = node.create_publisher(Odometry, "/servicebot/odom", 10)
+        self._rfid = node.create_publisher(ActorNames, "/servicebot/rfid", 10)
+        self._score = node.create_publisher(Score, "/servicesim/score", 10)
+        self._referee = node.create_publisher(RefereeState, "/servicesim/referee", LATCHED)
+        self._actors = node.create_publisher(ActorStates, "/servicesim/actors", 10)
+        self._camera = node.create_publisher(Image, "/servicebot/camera_front/image_raw", 2)
+        self._map_publisher = node.create_publisher(OccupancyGrid, "/servicebot/map", LATCHED)
+
+    def _make_services(self) -> None:
+        services: list[tuple[Any, str, Callable[..., Any]]] = [
+            (NewTask, "/servicesim/new_task", self._new_task),
+            (TaskInfo, "/servicesim/task_info", self._task_info),
+            (RoomInfo, "/servicesim/room_info", self._room_info),
+            (PickUpGuest, "/servicesim/pickup_guest", self._pickup_guest),
+            (DropOffGuest, "/servicesim/dropoff_guest", self._dropoff_guest),
+            (Drift, "/servicesim/drift", self._drift),
+            (Empty, "/servicebot/move_base/clear_costmaps", self._clear_costmaps),
+        ]
+        self._services = [self.node.create_service(kind, name, callback)
+                          for kind, name, callback in services]
+
+    # ------------------------------------------------------------- sim sleep
+    def sim_sleep(self, seconds: float) -> Future:
+        """A future completed by the loop once ``seconds`` of sim time have passed."""
+        future = Future()
+        self._sleepers.append((self.engine.sim_time + max(seconds, 0.0), future))
+        return future
+
+    def _wake_sleepers(self) -> None:
+        now = self.engine.sim_time
+        due = [future for when, future in self._sleepers if when <= now]
+        self._sleepers = [(when, future) for when, future in self._sleepers if when > now]
+        for future in due:
+            future.set_result(True)
+
+    async def _latency(self) -> None:
+        latency = self.settings.difficulty.service_latency_s
+        if latency > 0.0:
+            await self.sim_sleep(latency)
+
+    # -------------------------------------------------------------- services
+    async def _new_task(self, request: NewTask.Request, response: NewTask.Response) -> Any:
+        await self._latency()
+        started, reason = self.engine.new_task()
+        if not started:
+            self.node.get_logger().warning(f"new_task refused: {reason}")
+            return response  # the documented error answer: every field empty
+        return self._fill_task(response)
+
+    async def _task_info(self, request: TaskInfo.Request, response: TaskInfo.Response) -> Any:
+        await self._latency()
+        if not self.engine.task_started:
+            self.node.get_logger().warning("task_info refused: no task has been started")
+            return response
+        return self._fill_task(response)
+
+    def _fill_task(self, response: Any) -> Any:
+        scenario = self.engine.scenario
+        response.pick_up_location = scenario.pick_up
+        response.drop_off_location = scenario.drop_off
+        response.guest_name = scenario.guest_name
+        start = response.robot_start_pose
+        start.position.x, start.position.y, start.position.z = (
+            scenario.start_x, scenario.start_y, 0.75)
+        start.orientation.z = math.sin(scenario.start_yaw / 2.0)
+        start.orientation.w = math.cos(scenario.start_yaw / 2.0)
+        return response
+
+    async def _room_info(self, request: RoomInfo.Request, response: RoomInfo.Response) -> Any:
+        await self._latency()
+        box = self.settings.world.areas.get(request.name)
+        if box is None:
+            self.node.get_logger().warning(f"room_info refused: unknown room {request.name!r}")
+            return response  # the documented error answer: a zero-size box at the origin
+        response.min.x, response.min.y = box.min_x, box.min_y
+        response.max.x, response.max.y = box.max_x, box.max_y
+        return response
+
+    async def _pickup_guest(self, request: PickUpGuest.Request,
+                            response: PickUpGuest.Response) -> Any:
+        await self._latency()
+        response.success, reason = self.engine.pickup(request.guest_name, request.robot_name)
+        self._log_call("pickup_guest", response.success, reason)
+        return response
+
+    async def _dropoff_guest(self, request: DropOffGuest.Request,
+                             response: DropOffGuest.Response) -> Any:
+        await self._latency()
+        response.success, reason = self.engine.dropoff(request.guest_name)
+        self._log_call("dropoff_guest", response.success, reason)
+        return response
+
+    def _drift(self, request: Drift.Request, response: Drift.Response) -> Any:
+        response.drift, reason = self.engine.force_drift()
+        self._log_call("drift", response.drift, reason)
+        return response
+
+    def _clear_costmaps(self, request: Empty.Request, response: Empty.Response) -> Any:
+        self.engine.clear_costmaps()
+        return response
+
+    def _log_call(self, service: str, success: bool, reason: str) -> None:
+        log = self.node.get_logger()
+        (log.info if success else log.warning)(f"{service}: {'ok' if success else 'refused'}: "
+                                               f"{reason}")
+
+    # ----------------------------------------------------------- navigation
+    def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
+        if self._active_goal is not None and self._active_goal.is_active:
+            self._preempted.add(id(self._active_goal))
+        self._active_goal = goal_handle
+        goal_handle.execute()
+
+    async def _navigate(self, goal_handle: ServerGoalHandle) -> NavigateToPose.Result:
+        pose = goal_handle.request.pose.pose
+        yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
+        ticket = self.engine.navigate(pose.position.x, pose.position.y, yaw)
+        started = self.engine.sim_time
+        while True:
+            await self.sim_sleep(IO_PERIOD_S)
+            if id(goal_handle) in self._preempted:
+                self._preempted.discard(id(goal_handle))
+                goal_handle.abort()
+                return NavigateToPose.Result(error_code=NavigateToPose.Result.UNKNOWN,
+                                             error_msg="preempted by a newer goal")
+            if goal_handle.is_cancel_requested:
+                self.engine.cancel_navigation(ticket)
+                goal_handle.canceled()
+                return NavigateToPose.Result(error_msg="canceled")
+            state = self.engine.navigation_state(ticket)
+            goal_handle.publish_feedback(self._feedback(state, started))
+            if state.status == "succeeded":
+                goal_handle.succeed()
+                return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE)
+            if state.status != "running":
+                goal_handle.abort()
+                return NavigateToPose.Result(error_code=state.error_code,
+                                             error_msg=state.error_msg)
+
+    def _feedback(self, state: NavigationState, started: float) -> NavigateToPose.Feedback:
+        feedback = NavigateToPose.Feedback()
+        feedback.current_pose = self._pose_stamped()
+        feedback.navigation_time = duration(self.engine.sim_time - started)
+        feedback.estimated_time_remaining = duration(state.distance_remaining / 0.5)
+        feedback.number_of_recoveries = int(state.recoveries)
+        feedback.distance_remaining = float(state.distance_remaining)
+        return feedback
+
+    def _on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
+        pose = message.pose.pose
+        yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
+        self.engine.set_initial_pose(pose.position.x, pose.position.y, yaw)
+
+    def _on_cmd_vel(self, message: Twist) -> None:
+        self.engine.command_velocity(message.linear.x, message.angular.z)
+
+    # ------------------------------------------------------------- messages
+    def _pose_stamped(self) -> Any:
+        from geometry_msgs.msg import PoseStamped
+
+        x, y, yaw = self.engine.robot_pose()
+        message = PoseStamped()
+        message.header.stamp = stamp(self.engine.sim_time)
+        message.header.frame_id = "map"
+        message.pose.position.x, message.pose.position.y = x, y
+        message.pose.orientation.z, message.pose.orientation.w = (
+            math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+        return message
+
+    def _map_message(self) -> OccupancyGrid:
+        occupancy = self.settings.world.map
+        message = OccupancyGrid()
+        message.header.frame_id = "map"
+        message.info.resolution = float(occupancy.resolution)
+        message.info.width, message.info.height = occupancy.width, occupancy.height
+        message.info.origin.position.x = float(occupancy.origin_x)
+        message.info.origin.position.y = float(occupancy.origin_y)
+        message.info.origin.orientation.w = 1.0
+        message.data = occupancy.grid.astype("int8").ravel().tobytes()
+        return message
+
+    def _publish_io(self) -> None:
+        now = self.engine.sim_time
+        self._clock.publish(Clock(clock=stamp(now)))
+        self._publish_odom()
+        names = self.engine.rfid_names()
+        if names is not None:  # silent when nobody is near, or when a reading is dropped
+            self._rfid.publish(ActorNames(actor_names=names))
+        self._io_count += 1
+        if self._io_count % PUBLIC_PERIOD_STEPS == 0 or self.engine.referee_changed():
+            self._referee.publish(self._referee_state())
+        if self._io_count % PUBLIC_PERIOD_STEPS == 0:
+            self._actors.publish(self._actor_states())
+        self._publish_camera()
+
+    def _publish_odom(self) -> None:
+        x, y, yaw = self.engine.robot_pose()
+        v, w = self.engine.robot_velocity()
+        odom = Odometry()
+        odom.header.stamp = stamp(self.engine.sim_time)
+        odom.header.frame_id, odom.child_frame_id = "map", "base_link"
+        odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
+        odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = (
+            math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+        odom.twist.twist.linear.x, odom.twist.twist.angular.z = v, w
+        self._odom.publish(odom)
+
+    def _publish_camera(self) -> None:
+        rate = self.settings.camera_rate_hz
+        if rate <= 0.0 or self.engine.sim_time < self._camera_next:
+            return
+        self._camera_next = self.engine.sim_time + 1.0 / rate
+        if self._camera.get_subscription_count() == 0:
+            return
+        pixels = self.engine.camera_image()
+        image = Image(height=pixels.shape[0], width=pixels.shape[1], encoding="rgb8",
+                      is_bigendian=0, step=pixels.shape[1] * 3)
+        image.header.stamp = stamp(self.engine.sim_time)
+        image.header.frame_id = "camera_front"
+        image.data = pixels.tobytes()
+        self._camera.publish(image)
+
+    def _referee_state(self) -> RefereeState:
+        report = self.engine.referee_report()
+        state = RefereeState()
+        state.stamp = stamp(self.engine.sim_time)
+        state.task_running = bool(report["running"])
+        state.completed = bool(report["completed"])
+        state.score = float(report["score"])
+        state.task_sim_time = float(report["task_sim_time"])
+        state.checkpoint_names = [c["name"] for c in report["checkpoints"]]
+        state.checkpoint_done = [bool(c["done"]) for c in report["checkpoints"]]
+        state.checkpoint_sim_time = [float(c["sim_time_s"]) for c in report["checkpoints"]]
+        penalties = report["penalties"]
+        state.failed_pickups = int(penalties["failed_pickup"])
+        state.failed_dropoffs = int(penalties["failed_dropoff"])
+        state.too_fast = int(penalties["too_fast"])
+        state.drifts = int(penalties["drifts"])
+        state.contact = float(penalties["contact"])
+        state.approximation = float(penalties["approximation"])
+        return state
+
+    def _actor_states(self) -> ActorStates:
+        from geometry_msgs.msg import Point
+
+        message = ActorStates()
+        message.stamp = stamp(self.engine.sim_time)
+        for name, role, x, y in self.engine.people_states():
+            message.names.append(name)
+            message.roles.append(role)
+            message.positions.append(Point(x=float(x), y=float(y)))
+        message.guest_state = self.engine.guest_state()
+        return message
+
+    # ----------------------------------------------------------------- loop
+    def run(self, executor: SingleThreadedExecutor) -> None:
+        wall_start, sim_start = time.monotonic(), self.engine.sim_time
+        speed = self.settings.speed
+        while rclpy.ok(context=self.node.context):
+            for _ in range(self.steps_per_io):
+                self.engine.step()
+                if self.engine.task_running():
+                    self._score.publish(Score(score=float(self.engine.score())))
+            self._publish_io()
+            self._wake_sleepers()
+            for _ in range(4):
+                executor.spin_once(timeout_sec=0.0)
+            if speed > 0.0:
+                due = wall_start + (self.engine.sim_time - sim_start) / speed
+                while (remaining := due - time.monotonic()) > 0.0:
+                    executor.spin_once(timeout_sec=remaining)
+
+
+def run_simulator(settings: SimSettings) -> int:
+    """Run until Ctrl-C or SIGTERM; returns the process exit status."""
+    import signal
+
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    node = Node("servicesim")
+    simulator = SimulatorNode(settings, node=node)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    node.get_logger().info(
+        f"world {settings.world.name}: task {simulator.engine.scenario.pick_up} -> "
+        f"{simulator.engine.scenario.drop_off}, guest {simulator.engine.scenario.guest_name}, "
+        f"seed {settings.seed}, speed {settings.speed}")
+    try:
+        simulator.run(executor)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

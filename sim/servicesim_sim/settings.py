@@ -1,0 +1,70 @@
+"""The simulator's settings, checked before anything starts.
+
+Command-line arguments become a :class:`SimSettings`: the loaded world, the seed, the speed
+factor and the difficulty knobs. Every problem is a :class:`SettingsError` whose message is the
+one line the user sees (a broken world file names the file and what is wrong with it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from dataclasses import dataclass
+
+from servicesim_sim.scenario import Difficulty
+from servicesim_sim.world import DEFAULT_WORLD, World, WorldError, load_world
+
+
+class SettingsError(ValueError):
+    """A bad argument or world file; the message is one line."""
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    world: World
+    seed: int | None
+    speed: float
+    difficulty: Difficulty
+    camera_rate_hz: float
+
+
+_KNOBS = {
+    # argument name: (Difficulty field, lowest, highest)
+    "drift_scale": ("drift_scale", 0.01, 100.0),
+    "nav_abort_probability": ("nav_abort_probability", 0.0, 1.0),
+    "rfid_dropout": ("rfid_dropout", 0.0, 1.0),
+    "service_latency": ("service_latency_s", 0.0, 60.0),
+}
+
+
+def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
+    if args.seed is not None and args.seed < 0:
+        raise SettingsError(f"--seed {args.seed}: must be 0 or more")
+    if not args.speed >= 0.0:
+        raise SettingsError(f"--speed {args.speed}: must be 0 or more")
+    if not 0.0 <= args.camera_rate <= 30.0:
+        raise SettingsError(f"--camera-rate {args.camera_rate}: must be within 0..30")
+    try:
+        world = load_world(args.world or DEFAULT_WORLD)
+    except WorldError as error:
+        raise SettingsError(str(error)) from error
+    except OSError as error:
+        raise SettingsError(f"{args.world}: {error.strerror or error}") from error
+    return SimSettings(world=world, seed=args.seed, speed=args.speed,
+                       difficulty=difficulty_from(args), camera_rate_hz=args.camera_rate)
+
+
+def difficulty_from(args: argparse.Namespace) -> Difficulty:
+    difficulty = Difficulty.hard() if args.difficulty == "hard" else Difficulty.default()
+    changes: dict[str, object] = {}
+    if args.guest_out_of_range:
+        changes["guest_out_of_range"] = True
+    for argument, (field, lowest, highest) in _KNOBS.items():
+        value = getattr(args, argument)
+        if value is None:
+            continue
+        if not lowest <= value <= highest:
+            flag = "--" + argument.replace("_", "-")
+            raise SettingsError(f"{flag} {value}: must be within {lowest}..{highest}")
+        changes[field] = value
+    return dataclasses.replace(difficulty, **changes)

@@ -1,0 +1,128 @@
+"""Scripted stand-ins for the mission tree's leaves, for tree tests without a ROS graph.
+
+:func:`scripted_registry` reads a tree file and makes, for every leaf tag it uses, a ports class
+with exactly the ports the file wires, whose outcomes come from a :class:`Script`. The real
+sim-time decorators (``SimTimeout``, ``SimWait``) are kept and run on a :class:`ManualClock`,
+so the mission's structure (its retries, fallbacks and time limit) is what gets tested.
+"""
+
+from __future__ import annotations
+
+import types
+import xml.etree.ElementTree as ElementTree
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import py_trees
+from py_trees.ports import BehaviourWithPorts, PortInformation
+from rclpy.clock import ClockType
+from rclpy.time import Time
+
+from bt_servicesim.geometry import Box, Pose2D
+
+Status = py_trees.common.Status
+KEEP_REAL = ("SimTimeout", "SimWait")
+NOT_LEAVES = {"root", "BehaviorTree", "SubTree", "TreeNodesModel", "Sequence", "Fallback",
+              "Selector", "Parallel"}
+
+#: What a scripted leaf writes to each output port it has when it succeeds.
+OUTPUT_VALUES: dict[str, Any] = {
+    "pick_up_location": "FrontElevator", "drop_off_location": "PrivateCubicle_32_1",
+    "guest_name": "human_20843", "start_pose": Pose2D(10.975, 3.75, 3.14),
+    "box": Box(-1.5, 0.0, 1.5, 2.7), "goal": Pose2D(0.0, 1.3, 0.0), "copy": Pose2D(0.0, 1.3),
+    "jittered": Pose2D(0.1, 1.3), "waypoints": [Pose2D(1.0, 1.0), Pose2D(-1.0, 1.0)],
+    "robot_pose": Pose2D(0.0, 0.0), "occupancy": object(), "actors_in_range": [],
+    "rfid_age": 0.0, "guest_last_seen": Pose2D(-5.0, 5.0), "distance_remaining": 0.0,
+    "error_code": 0, "error_msg": "",
+}
+
+
+class ManualClock:
+    """A node stand-in whose sim time the test advances."""
+
+    def __init__(self) -> None:
+        self.nanoseconds = 1_000_000_000
+
+    def advance(self, seconds: float) -> None:
+        self.nanoseconds += int(seconds * 1e9)
+
+    def now(self) -> Time:
+        return Time(nanoseconds=self.nanoseconds, clock_type=ClockType.ROS_TIME)
+
+    def get_clock(self) -> ManualClock:
+        return self
+
+
+class Script:
+    """Outcomes per leaf, by the end of its dotted name (``"GoToStart.NavigateToGoal"``).
+
+    An outcome is a Status, or ``(Status, n)``: RUNNING for ``n`` ticks, then the Status.
+    A leaf with no outcomes left succeeds at once. Every activation is logged in ``calls``.
+    """
+
+    def __init__(self, outcomes: dict[str, list[Any]] | None = None) -> None:
+        self.outcomes = {key: list(value) for key, value in (outcomes or {}).items()}
+        self.calls: list[str] = []
+        self.terminated: dict[str, list[Status]] = defaultdict(list)
+
+    def next_outcome(self, name: str) -> tuple[Status, int]:
+        self.calls.append(name)
+        for suffix, queue in self.outcomes.items():
+            if (name == suffix or name.endswith("." + suffix)) and queue:
+                outcome = queue.pop(0)
+                return outcome if isinstance(outcome, tuple) else (outcome, 0)
+        return Status.SUCCESS, 0
+
+    def count(self, suffix: str) -> int:
+        return sum(1 for name in self.calls if name == suffix or name.endswith("." + suffix))
+
+
+def _scripted_leaf(tag: str, ports: set[str], script: Script) -> type:
+    port_info = {port: PortInformation(data_type=object, required=False) for port in ports}
+
+    def initialise(self: Any) -> None:
+        self._outcome, self._running_ticks = script.next_outcome(self.name)
+
+    def update(self: Any) -> Status:
+        if self._running_ticks > 0:
+            self._running_ticks -= 1
+            return Status.RUNNING
+        if self._outcome == Status.SUCCESS:
+            for port in self.output_ports():
+                self._set_output(port, OUTPUT_VALUES.get(port, object()))
+        self.feedback_message = f"scripted {self._outcome.name}"
+        return self._outcome
+
+    def terminate(self: Any, new_status: Status) -> None:
+        script.terminated[self.name].append(new_status)
+
+    def body(namespace: dict[str, Any]) -> None:
+        namespace.update(INPUT_PORTS=dict(port_info), OUTPUT_PORTS=dict(port_info),
+                         initialise=initialise, update=update, terminate=terminate)
+
+    return types.new_class(f"Scripted{tag}", (BehaviourWithPorts,), {"register": False}, body)
+
+
+def leaf_ports(tree_file: Path) -> dict[str, set[str]]:
+    """Every leaf tag the file uses, with the attributes it gives it (minus ``name``)."""
+    ports: dict[str, set[str]] = defaultdict(set)
+    decorators = {name.lower() for name in dir(py_trees.decorators)}
+    for tree in ElementTree.parse(tree_file).getroot().findall("BehaviorTree"):
+        for element in tree.iter():
+            if element.tag in NOT_LEAVES or element.tag.lower() in decorators:
+                continue
+            ports[element.tag].update(key for key in element.attrib if key != "name")
+    return ports
+
+
+def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[..., Any]]:
+    from bt_servicesim.mission_tree import register_leaves
+
+    real = register_leaves()
+    registry: dict[str, Callable[..., Any]] = {tag: real[tag] for tag in KEEP_REAL}
+    for tag, ports in leaf_ports(tree_file).items():
+        if tag not in KEEP_REAL:
+            registry[tag] = _scripted_leaf(tag, ports, script)
+    return registry

@@ -1,0 +1,154 @@
+"""The mission tree's structure, with scripted leaves: retries, exploration, re-acquiring, limits.
+
+The real tree file is parsed; every ROS-facing leaf is replaced by a scripted stand-in with the
+same ports (tests/mission_script.py), while the sim-time decorators are the real ones on a manual
+clock. Each test scripts what the world does and checks what the mission does about it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import py_trees
+import pytest
+from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+from bt_servicesim.mission_tree import DEFAULT_TREE
+from tests.mission_script import ManualClock, Script, scripted_registry
+
+Status = py_trees.common.Status
+TICK_S = 0.1
+
+
+@pytest.fixture(autouse=True)
+def clean_blackboard() -> Iterator[None]:
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+def run_mission(script: Script, *, time_limit_s: float = 900.0,
+                max_ticks: int = 5000) -> tuple[Status, ManualClock]:
+    root = parse_behaviour_tree_xml(
+        str(DEFAULT_TREE), node_registry=scripted_registry(DEFAULT_TREE, script),
+        input_mappings={"time_limit": repr(time_limit_s)},
+    )
+    tree = py_trees.trees.BehaviourTree(root)
+    clock = ManualClock()
+    tree.setup(node=clock)
+    for _ in range(max_ticks):
+        tree.tick()
+        clock.advance(TICK_S)
+        if root.status in (Status.SUCCESS, Status.FAILURE):
+            return root.status, clock
+    raise AssertionError(f"mission still running after {max_ticks} ticks: {script.calls[-10:]}")
+
+
+def test_a_smooth_mission_visits_the_four_phases_in_order() -> None:
+    script = Script()
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    milestones = ["RequestNewTask", "LocaliseAtStart", "GetPickUpArea", "CallPickUpGuest",
+                  "GetDropOffArea", "CallDropOffGuest", "ComputeReturnGoal"]
+    positions = [next(i for i, c in enumerate(script.calls) if c.endswith(m)) for m in milestones]
+    assert positions == sorted(positions)
+    assert script.count("ResumeRunningTask") == 0
+    assert script.count("ClearCostmaps") == 0
+    assert script.count("PlanExploration") == 0
+
+
+def test_a_running_task_is_resumed_when_new_task_is_refused() -> None:
+    script = Script({"RequestNewTask": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("ResumeRunningTask") == 1
+
+
+def test_navigation_failures_climb_the_recovery_ladder_then_succeed() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE, Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 3
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 2
+    assert script.count("GoToPickUpArea.JitterGoal") == 2
+
+
+def test_navigation_that_never_works_fails_the_mission_after_the_ladder() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 10})
+    status, _ = run_mission(script)
+    assert status == Status.FAILURE
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 4
+    assert script.count("CallPickUpGuest") == 0
+
+
+def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [(Status.SUCCESS, 10), (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("PlanExploration") == 1
+    assert script.count("NavigateToWaypoint") >= 2
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_failed_pick_up_is_retried_not_ignored() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallPickUpGuest") == 2
+
+
+def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+        "GuestCaughtUp": [Status.FAILURE],
+        "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("PlanGuestSearch") == 1
+    assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
+    assert script.count("ComputeDropOffGoal") == 2
+    assert Status.INVALID in script.terminated[
+        next(c for c in script.calls if c.endswith("GoToDropOffArea.NavigateToGoal"))]
+
+
+def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GuestCaughtUp") == 1
+    assert script.count("PlanGuestSearch") == 0
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_failed_drop_off_repositions_and_tries_again() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallDropOffGuest") == 2
+    assert script.count("ComputeRepositionGoal") == 1
+
+
+def test_the_time_limit_ends_a_hopeless_mission_and_stops_navigation() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 10**6)]})
+    status, clock = run_mission(script, time_limit_s=30.0)
+    assert status == Status.FAILURE
+    assert 30.0 <= clock.nanoseconds / 1e9 - 1.0 <= 31.0
+    navigate = next(c for c in script.calls if c.endswith("GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[navigate][-1] == Status.INVALID
+
+
+def test_the_sim_time_waits_follow_the_clock_not_the_wall() -> None:
+    script = Script()
+    status, clock = run_mission(script)
+    assert status == Status.SUCCESS
+    waited = 0.3 + 2.0  # SettleBeforePickUp + LetGuestCatchUp
+    assert clock.nanoseconds / 1e9 - 1.0 >= waited
