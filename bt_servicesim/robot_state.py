@@ -1,0 +1,337 @@
+"""What the robot knows: topic readers that write to the blackboard, and guest conditions.
+
+The readers follow py_trees_ros's "to blackboard" idiom: a subscription callback only keeps the
+latest message (it runs in the executor, not in the tick); the tick converts it and writes the
+output ports, so the blackboard changes only while the tree ticks. Placed in a Topics2BB
+sequence at the front of the tree they return SUCCESS once data has arrived, and RUNNING
+before it, so the tree waits for the simulator.
+
+The RFID reader is the exception: the sensor publishes NOTHING while nobody is in range, so
+silence is a reading in itself. The last list is trusted for ``stale_after`` sim seconds and
+replaced by an empty one afterwards; before any message the list is empty as well, and the
+reader always returns SUCCESS.
+
+:class:`GuestInRange` and :class:`GuestFollowing` read those ports: the first is a plain
+condition, the second a monitor that runs beside navigation while guiding, remembers where
+the robot was when it last had the guest in range, and fails once the guest has been out of
+range for longer than its ``grace`` period. All times are sim time.
+"""
+
+import math
+from typing import Any, ClassVar
+
+import py_trees
+from nav_msgs.msg import OccupancyGrid, Odometry
+from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
+from rclpy.node import Node
+from rclpy.qos import (
+    DurabilityPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_profile_sensor_data,
+)
+from servicesim_competition.msg import ActorNames
+
+from bt_servicesim.geometry import Pose2D
+from bt_servicesim.sim_time import SimStopwatch, node_from_setup_kwargs, sim_now_s
+
+try:  # written by a colleague; until it exists the port carries whatever the reader stores
+    from bt_servicesim.occupancy import OccupancyGrid2D as _OccupancyType
+except ModuleNotFoundError as _missing:
+    if _missing.name != "bt_servicesim.occupancy":
+        raise
+    _OccupancyType = object  # type: ignore[assignment,misc]
+
+__all__ = [
+    "GuestFollowing",
+    "GuestInRange",
+    "MapToBlackboard",
+    "OdomToBlackboard",
+    "RfidToBlackboard",
+]
+
+Status = py_trees.common.Status
+Ports = dict[str, PortInformation]
+"""A port declaration: port name to its information."""
+
+NEVER = math.inf
+"""The ``rfid_age`` before the first RFID message."""
+
+MAP_QOS = QoSProfile(
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+"""The map is latched: published once, kept for late joiners."""
+
+
+class _TopicReader(BehaviourWithPorts, register=False):
+    """Keep the latest message of one topic; subclasses write it to their ports.
+
+    Args:
+        name: the behaviour's name
+        topic: the topic to subscribe to
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: ClassVar[Ports] = {}
+    MESSAGE_TYPE: ClassVar[Any]
+    QOS: ClassVar[QoSProfile | int] = qos_profile_sensor_data
+
+    def __init__(self, name: str, topic: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.topic = topic
+        self.node: Node | None = None
+        self._message: Any = None
+        self._received_s = 0.0
+
+    def setup(self, **kwargs: Any) -> None:
+        """Subscribe on ``kwargs["node"]``."""
+        self.node = node_from_setup_kwargs(self.name, kwargs)
+        self.node.create_subscription(self.MESSAGE_TYPE, self.topic, self._on_message, self.QOS)
+
+    def initialise(self) -> None:
+        """Nothing to start: the subscription runs from setup onwards."""
+        self._require_node()
+        self.feedback_message = f"reading {self.topic}"
+
+    def _on_message(self, message: Any) -> None:
+        self._received_s = sim_now_s(self._require_node().get_clock())
+        self._message = message
+
+    def _require_node(self) -> Node:
+        if self.node is None:
+            raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
+        return self.node
+
+    def _waiting(self) -> Status:
+        self.feedback_message = f"waiting for the first message on {self.topic}"
+        return Status.RUNNING
+
+
+class RfidToBlackboard(_TopicReader):
+    """The people in RFID range (``actors_in_range``) and the reading's age (``rfid_age``).
+
+    Args:
+        name: the behaviour's name
+        topic: the RFID topic
+        stale_after: sim seconds after the last message from which nobody is in range
+    """
+
+    MESSAGE_TYPE = ActorNames
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "actors_in_range": PortInformation(data_type=list[str], required=False),
+        "rfid_age": PortInformation(data_type=float, required=False),
+    }
+
+    def __init__(
+        self,
+        name: str = "RfidToBlackboard",
+        topic: str = "/servicebot/rfid",
+        stale_after: float = 2.0,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(name=name, topic=topic, **kwargs)
+        self.stale_after = float(stale_after)
+
+    def update(self) -> Status:
+        """Write the list, emptied once it is stale; always SUCCESS."""
+        message, received_s = self._message, self._received_s
+        if message is None:
+            self._write([], NEVER)
+            self.feedback_message = "no RFID message yet: nobody in range"
+            return Status.SUCCESS
+        age = max(0.0, sim_now_s(self._require_node().get_clock()) - received_s)
+        if age > self.stale_after:
+            self._write([], age)
+            self.feedback_message = f"RFID silent for {age:.1f} sim s: nobody in range"
+            return Status.SUCCESS
+        names = [str(name) for name in message.actor_names]
+        self._write(names, age)
+        self.feedback_message = f"in range: {', '.join(names) or 'nobody'}"
+        return Status.SUCCESS
+
+    def _write(self, names: list[str], age: float) -> None:
+        self._set_output("actors_in_range", names)
+        self._set_output("rfid_age", float(age))
+
+
+class OdomToBlackboard(_TopicReader):
+    """The robot's pose from odometry (``robot_pose``); RUNNING until the first message.
+
+    Args:
+        name: the behaviour's name
+        topic: the odometry topic
+    """
+
+    MESSAGE_TYPE = Odometry
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "robot_pose": PortInformation(data_type=Pose2D, required=False),
+    }
+
+    def __init__(
+        self, name: str = "OdomToBlackboard", topic: str = "/servicebot/odom", **kwargs: Any
+    ) -> None:
+        super().__init__(name=name, topic=topic, **kwargs)
+
+    def update(self) -> Status:
+        """Write the latest pose."""
+        message = self._message
+        if message is None:
+            return self._waiting()
+        pose = Pose2D.from_pose(message.pose.pose)
+        self._set_output("robot_pose", pose)
+        self.feedback_message = f"robot at ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})"
+        return Status.SUCCESS
+
+
+class MapToBlackboard(_TopicReader):
+    """The static map (``occupancy``, an ``OccupancyGrid2D``); RUNNING until it arrives.
+
+    The conversion runs once per map message, in the callback, so ticks stay cheap.
+
+    Args:
+        name: the behaviour's name
+        topic: the map topic (latched)
+    """
+
+    MESSAGE_TYPE = OccupancyGrid
+    QOS = MAP_QOS
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "occupancy": PortInformation(data_type=_OccupancyType, required=False),
+    }
+
+    def __init__(
+        self, name: str = "MapToBlackboard", topic: str = "/servicebot/map", **kwargs: Any
+    ) -> None:
+        super().__init__(name=name, topic=topic, **kwargs)
+        self._written: Any = None
+
+    def _on_message(self, message: Any) -> None:
+        self._received_s = sim_now_s(self._require_node().get_clock())
+        self._message = _to_occupancy(message)
+
+    def update(self) -> Status:
+        """Write the map when a new one has arrived."""
+        occupancy = self._message
+        if occupancy is None:
+            return self._waiting()
+        if occupancy is not self._written:
+            self._set_output("occupancy", occupancy)
+            self._written = occupancy
+        self.feedback_message = f"map from {self.topic} on the blackboard"
+        return Status.SUCCESS
+
+
+def _to_occupancy(message: OccupancyGrid) -> Any:
+    """The grid as ``OccupancyGrid2D`` once that module exists; the message until then."""
+    if _OccupancyType is object:
+        return message
+    from bt_servicesim.occupancy import OccupancyGrid2D
+
+    return OccupancyGrid2D.from_message(message)
+
+
+# ------------------------------------------------------------------------- the guest
+_GUEST_INPUTS: Ports = {
+    "guest_name": PortInformation(data_type=str, required=True),
+    "actors_in_range": PortInformation(data_type=list[str], required=True),
+}
+
+
+class GuestInRange(BehaviourWithPorts):
+    """SUCCESS if the guest is among ``actors_in_range``, else FAILURE."""
+
+    INPUT_PORTS: ClassVar[Ports] = dict(_GUEST_INPUTS)
+    OUTPUT_PORTS: ClassVar[Ports] = {}
+
+    def __init__(self, name: str = "GuestInRange", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def update(self) -> Status:
+        """Look the guest up in the RFID list."""
+        try:
+            guest = self.get_input("guest_name")
+            actors = self.get_input("actors_in_range")
+        except NoDataAvailable as error:
+            self.feedback_message = f"cannot check the guest: {error}"
+            return Status.FAILURE
+        if guest in actors:
+            self.feedback_message = f"{guest} in RFID range"
+            return Status.SUCCESS
+        self.feedback_message = f"{guest} not in RFID range"
+        return Status.FAILURE
+
+
+class GuestFollowing(BehaviourWithPorts):
+    """RUNNING while the guest keeps within RFID range; FAILURE once lost. Never SUCCESS.
+
+    The guest counts as seen at initialise (guiding starts right after a pick-up). Each tick
+    with the guest in range writes the robot's pose to ``guest_last_seen``, where a search
+    for a lost guest would start.
+
+    Args:
+        name: the behaviour's name
+        grace: sim seconds the guest may be out of range before it counts as lost
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        **_GUEST_INPUTS,
+        "robot_pose": PortInformation(data_type=Pose2D, required=False),
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "guest_last_seen": PortInformation(data_type=Pose2D, required=False),
+    }
+
+    def __init__(self, name: str = "GuestFollowing", grace: float = 3.0, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.grace = float(grace)
+        self._since_seen: SimStopwatch | None = None
+
+    def setup(self, **kwargs: Any) -> None:
+        """Take the clock from ``kwargs["node"]``."""
+        node = node_from_setup_kwargs(self.name, kwargs)
+        self._since_seen = SimStopwatch(node.get_clock())
+
+    def initialise(self) -> None:
+        """Start the grace period."""
+        self._require_setup().restart()
+        self.feedback_message = f"watching the guest (grace {self.grace:.1f} sim s)"
+
+    def update(self) -> Status:
+        """Reset the grace period whenever the guest is in range."""
+        since_seen = self._require_setup()
+        try:
+            guest = self.get_input("guest_name")
+            actors = self.get_input("actors_in_range")
+        except NoDataAvailable as error:
+            self.feedback_message = f"cannot watch the guest: {error}"
+            return Status.FAILURE
+        if guest in actors:
+            since_seen.restart()
+            self._remember_where()
+            self.feedback_message = f"{guest} following"
+            return Status.RUNNING
+        missing = since_seen.elapsed()
+        if missing > self.grace:
+            self.feedback_message = f"guest lost: not in RFID range for {missing:.1f} s"
+            return Status.FAILURE
+        self.feedback_message = f"{guest} out of range for {missing:.1f}/{self.grace:.1f} sim s"
+        return Status.RUNNING
+
+    def terminate(self, new_status: Status) -> None:
+        """Nothing is in flight; note an interruption."""
+        if new_status == Status.INVALID:
+            self.feedback_message = "guest watch stopped"
+
+    def _remember_where(self) -> None:
+        try:
+            pose = self.get_input("robot_pose")
+        except NoDataAvailable:
+            return
+        self._set_output("guest_last_seen", pose)
+
+    def _require_setup(self) -> SimStopwatch:
+        if self._since_seen is None:
+            raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
+        return self._since_seen
