@@ -9,6 +9,7 @@ Interrupting it stops the tree, so behaviours cancel whatever they have in fligh
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Protocol
 
 import py_trees
 from rclpy.node import Node
@@ -21,6 +22,20 @@ MISSION_SEQUENCE = "Mission"
 def short_name(behaviour: py_trees.behaviour.Behaviour) -> str:
     """The XML parser prefixes names with their ancestors' (``A.B.Leaf``); this is ``Leaf``."""
     return behaviour.name.rsplit(".", 1)[-1]
+
+
+class Executive(Protocol):
+    """What the run command needs of an executive: the behaviour tree, or the seed's baseline."""
+
+    outcome: py_trees.common.Status | None
+
+    def setup(self, *, timeout_s: float = 15.0) -> None: ...
+    def start(self) -> None: ...
+    @property
+    def finished(self) -> bool: ...
+    def interrupt(self) -> None: ...
+    def phase(self) -> str: ...
+    def activity(self) -> str: ...
 
 
 class MissionExecutive:

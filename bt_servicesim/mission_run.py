@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
-import py_trees
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -19,7 +19,7 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from servicesim_competition.srv import NewTask
 
-from bt_servicesim.executive import MissionExecutive
+from bt_servicesim.executive import Executive
 from bt_servicesim.progress import ProgressView
 from bt_servicesim.referee_monitor import RefereeMonitor
 from bt_servicesim.run import (
@@ -45,11 +45,11 @@ class MissionRun:
         self,
         *,
         settings: RunSettings,
-        root: py_trees.behaviour.Behaviour,
+        make_executive: Callable[[Node], Executive],
         extra_sim_args: tuple[str, ...] = (),
     ) -> None:
         self.settings = settings
-        self.root = root
+        self.make_executive = make_executive
         self.simulator = SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
             log_path=settings.out / "sim.log", extra_args=extra_sim_args,
@@ -65,7 +65,7 @@ class MissionRun:
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         monitor = RefereeMonitor(node)
-        executive = MissionExecutive(node=node, root=self.root)
+        executive = self.make_executive(node)
         try:
             code = self._run(node, executor, monitor, executive)
         except KeyboardInterrupt:
@@ -82,7 +82,7 @@ class MissionRun:
         return code
 
     def _run(self, node: Node, executor: SingleThreadedExecutor, monitor: RefereeMonitor,
-             executive: MissionExecutive) -> int:
+             executive: Executive) -> int:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
             return refused

@@ -11,7 +11,7 @@ import sys
 import time
 from typing import TextIO
 
-from bt_servicesim.executive import MissionExecutive
+from bt_servicesim.executive import Executive
 from bt_servicesim.referee_monitor import RefereeMonitor
 
 REDRAW_PERIOD_S = 0.25
@@ -27,7 +27,7 @@ class ProgressView:
         self._last_key: tuple[str, str] | None = None
         self._last_print = 0.0
 
-    def update(self, *, executive: MissionExecutive, monitor: RefereeMonitor,
+    def update(self, *, executive: Executive, monitor: RefereeMonitor,
                sim_time_s: float) -> None:
         now = time.monotonic()
         key = (executive.phase(), monitor.checkpoint())
@@ -43,14 +43,14 @@ class ProgressView:
             self.stream.write(line + "\n")
         self.stream.flush()
 
-    def close(self, *, executive: MissionExecutive, monitor: RefereeMonitor,
+    def close(self, *, executive: Executive, monitor: RefereeMonitor,
               sim_time_s: float) -> None:
         line = self._line(executive, monitor, sim_time_s)
         self.stream.write(("\r\x1b[2K" + line + "\n") if self.live else line + "\n")
         self.stream.flush()
 
     @staticmethod
-    def _line(executive: MissionExecutive, monitor: RefereeMonitor, sim_time_s: float) -> str:
+    def _line(executive: Executive, monitor: RefereeMonitor, sim_time_s: float) -> str:
         return (f"[{sim_time_s:7.1f} s sim] {executive.phase():<13} "
                 f"checkpoints {monitor.checkpoint()}  score {monitor.score():8.1f}  "
                 f"{executive.activity()}")

@@ -106,9 +106,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     apply_localhost_defaults()
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 101))
-    from bt_servicesim.mission_run import MissionRun  # rclpy only once the input is good
+    from bt_servicesim.executive import MissionExecutive  # rclpy only once the input is good
+    from bt_servicesim.mission_run import MissionRun
 
-    return MissionRun(settings=settings, root=root, extra_sim_args=tuple(args.sim_arg)).execute()
+    return MissionRun(
+        settings=settings,
+        make_executive=lambda node: MissionExecutive(node=node, root=root),
+        extra_sim_args=tuple(args.sim_arg),
+    ).execute()
 
 
 def write_report(path: Path, report: dict[str, Any]) -> None:
