@@ -1,0 +1,374 @@
+"""The office's other people: walkers on looping routes and idlers standing still.
+
+As in the original competition there are walkers (0.9–1.2 m/s, each on a looping route, stopping
+while the robot is within 1.5 m in front of them) and idlers (standing at random spots at least
+1 m apart). Every one of them is called ``human_NNNNN`` and is an obstacle; the engine decides
+what touching one costs, this module only says where they are.
+
+Design intent:
+
+* Everything is decided at construction from the given random generator, so one seed gives one
+  crowd. Stepping is cheap (arc length along a precomputed polyline) and draws nothing random.
+* People stay inside the building: the bounding box of the map's occupied cells, so a map whose
+  outside is free (the competition's own) keeps nobody on the lawn.
+* Idlers are placed first, each at least 0.6 m from any wall, 1 m from each other and outside the
+  keep-clear discs. An idler is also refused where it would cut a passage the robot needs (the
+  robot-passable free space must not split), so no seed makes a room unreachable.
+* Walker routes are planned afterwards on a coarse grid of the free space eroded by 0.5 m, with
+  the keep-clear discs and the idlers cut out, and straightened by line of sight. A walker so
+  never walks through a wall, an idler or a keep-clear disc, and never needs to side-step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components, dijkstra
+
+WALKER = "walker"
+IDLER = "idler"
+
+PERSON_RADIUS = 0.25  # metres; a person's footprint seen as a disc
+WALKER_SPEED_RANGE = (0.9, 1.2)  # m/s
+WALKER_STOP_DISTANCE = 1.5  # a robot this close in front stops a walker ...
+WALKER_STOP_HALF_ANGLE = math.radians(60.0)  # ... when within this angle of its heading
+WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
+WALKER_IDLER_CLEARANCE = 0.8  # ... and this far from idlers
+ROUTE_CELL = 0.25  # metres per route-grid cell
+ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
+ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
+IDLER_SPACING = 1.0
+IDLER_WALL_CLEARANCE = 0.6
+ROBOT_PASSAGE_CLEARANCE = 0.35  # free space the robot needs around its centre
+PASSAGE_CELL = 0.10  # metres per cell of the robot-passage connectivity grid
+PLACEMENT_DRAWS = 200  # random spots drawn per idler before giving up
+
+KeepClear = tuple[float, float, float]  # (x, y, radius) in metres
+
+
+class OccupancyMapLike(Protocol):
+    """The part of ``world.OccupancyMap`` this module reads."""
+
+    grid: np.ndarray
+    resolution: float
+    origin_x: float
+    origin_y: float
+
+    def blocked_mask(self) -> np.ndarray: ...
+
+
+@dataclass
+class Person:
+    """One walker or idler; ``yaw`` is the way they face (a walker: the way they walk)."""
+
+    name: str
+    role: str  # WALKER | IDLER
+    x: float
+    y: float
+    yaw: float
+
+
+# --------------------------------------------------------------------------------- free space
+@dataclass(frozen=True)
+class Clearance:
+    """Distance (metres) to the nearest blocked cell, for each map cell inside the building.
+
+    The window is the bounding box of the map's occupied cells and its border counts as a wall.
+    Window cell (r, c) is map cell (row0 + r, col0 + c); rows grow with +y, columns with +x.
+    """
+
+    metres: np.ndarray
+    row0: int
+    col0: int
+    resolution: float
+    origin_x: float
+    origin_y: float
+
+    @classmethod
+    def of(cls, occupancy_map: OccupancyMapLike) -> Clearance:
+        blocked = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
+        occupied = blocked & (np.asarray(occupancy_map.grid) != -1)
+        rows, cols = np.nonzero(occupied if occupied.any() else ~blocked)
+        if rows.size == 0:
+            raise ValueError("the occupancy map has neither free nor occupied cells")
+        window = blocked[rows.min():rows.max() + 1, cols.min():cols.max() + 1]
+        walled = np.pad(window, 1, constant_values=True)
+        cells = ndimage.distance_transform_edt(~walled)[1:-1, 1:-1]
+        metres = np.maximum(cells - 0.5, 0.0) * occupancy_map.resolution
+        return cls(metres=metres.astype(np.float32), row0=int(rows.min()), col0=int(cols.min()),
+                   resolution=float(occupancy_map.resolution),
+                   origin_x=float(occupancy_map.origin_x), origin_y=float(occupancy_map.origin_y))
+
+    def centres(self, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World (x, y) of window cells' centres."""
+        xs = self.origin_x + (self.col0 + np.asarray(cols) + 0.5) * self.resolution
+        ys = self.origin_y + (self.row0 + np.asarray(rows) + 0.5) * self.resolution
+        return xs, ys
+
+    def cells(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Window (row, col) of world points, clipped into the window."""
+        cols = np.floor((np.asarray(xs) - self.origin_x) / self.resolution) - self.col0
+        rows = np.floor((np.asarray(ys) - self.origin_y) / self.resolution) - self.row0
+        height, width = self.metres.shape
+        return (np.clip(rows, 0, height - 1).astype(np.intp),
+                np.clip(cols, 0, width - 1).astype(np.intp))
+
+    def disc_mask(self, discs: list[KeepClear], *, grow: float = 0.0) -> np.ndarray:
+        """Window cells whose centre lies within ``radius + grow`` of a disc's centre."""
+        mask = np.zeros(self.metres.shape, dtype=bool)
+        for x, y, radius in discs:
+            reach = radius + grow
+            (r0, r1), (c0, c1) = self.cells(np.array([x - reach, x + reach]),
+                                            np.array([y - reach, y + reach]))
+            rows, cols = np.mgrid[r0:r1 + 1, c0:c1 + 1]
+            xs, ys = self.centres(rows, cols)
+            mask[r0:r1 + 1, c0:c1 + 1] |= np.hypot(xs - x, ys - y) <= reach
+        return mask
+
+    def line_is_clear(self, start: np.ndarray, end: np.ndarray, walkable: np.ndarray) -> bool:
+        """Whether every point of a segment inside the window lies on a ``walkable`` cell."""
+        (x0, y0), (x1, y1) = start, end
+        samples = math.ceil(math.hypot(x1 - x0, y1 - y0) / (0.5 * self.resolution)) + 1
+        t = np.arange(samples) / max(samples - 1, 1)
+        cols = ((x0 - self.origin_x + t * (x1 - x0)) / self.resolution).astype(np.intp)
+        rows = ((y0 - self.origin_y + t * (y1 - y0)) / self.resolution).astype(np.intp)
+        return bool(walkable[rows - self.row0, cols - self.col0].all())
+
+
+# ----------------------------------------------------------------------------------- idlers
+class RobotPassage:
+    """Where the robot's centre can go, as connected regions, so idlers never split one."""
+
+    def __init__(self, clearance: Clearance) -> None:
+        step = max(1, round(PASSAGE_CELL / clearance.resolution))
+        self._sample = (slice(step // 2, None, step), slice(step // 2, None, step))
+        self._clearance = clearance
+        self.passable = clearance.metres[self._sample] >= ROBOT_PASSAGE_CLEARANCE
+        self.labels, _ = ndimage.label(self.passable)
+
+    def block(self, x: float, y: float) -> bool:
+        """Stand a person at (x, y) unless that splits a region; True when they stand there."""
+        reach = PERSON_RADIUS + ROBOT_PASSAGE_CLEARANCE
+        cut = self._clearance.disc_mask([(x, y, reach)])[self._sample] & self.passable
+        after = self.passable & ~cut
+        labels, _ = ndimage.label(after)
+        for region in np.unique(self.labels[cut]):
+            if np.unique(labels[(self.labels == region) & after]).size > 1:
+                return False
+        self.passable, self.labels = after, labels
+        return True
+
+
+def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
+                keep_clear: list[KeepClear]) -> list[tuple[float, float]]:
+    """Random standing spots: off walls, apart, out of keep-clear discs, splitting nothing."""
+    if count == 0:
+        return []
+    allowed = clearance.metres >= IDLER_WALL_CLEARANCE
+    allowed &= ~clearance.disc_mask(keep_clear, grow=PERSON_RADIUS)
+    candidates = np.flatnonzero(allowed)
+    if candidates.size == 0:
+        raise ValueError("no free spot for idlers: nowhere 0.6 m clear of walls")
+    passage = RobotPassage(clearance)
+    spots: list[tuple[float, float]] = []
+    for _ in range(count * PLACEMENT_DRAWS):
+        if len(spots) == count:
+            break
+        row, col = np.unravel_index(candidates[rng.integers(candidates.size)], allowed.shape)
+        x, y = (float(v) for v in clearance.centres(row, col))
+        if any(math.hypot(x - sx, y - sy) < IDLER_SPACING for sx, sy in spots):
+            continue
+        if passage.block(x, y):
+            spots.append((x, y))
+    if len(spots) < count:
+        raise ValueError(f"room for only {len(spots)} of {count} idlers on this map")
+    return spots
+
+
+# ----------------------------------------------------------------------------------- routes
+def grid_graph(free: np.ndarray, spacing: float) -> coo_matrix:
+    """An 8-connected graph of the ``free`` cells (no corner cutting), nodes in row-major order."""
+    ids = np.full(free.shape, -1, dtype=np.intp)
+    ids[free] = np.arange(int(free.sum()))
+    height, width = free.shape
+    sources, targets, lengths = [], [], []
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        c0, c1 = max(0, -dc), width - max(0, dc)
+        src, dst = ids[:height - dr, c0:c1], ids[dr:, c0 + dc:c1 + dc]
+        ok = (src >= 0) & (dst >= 0)
+        if dr and dc:
+            ok &= free[dr:, c0:c1] & free[:height - dr, c0 + dc:c1 + dc]
+        sources.append(src[ok])
+        targets.append(dst[ok])
+        lengths.append(np.full(int(ok.sum()), spacing * math.hypot(dr, dc)))
+    count = int(free.sum())
+    return coo_matrix((np.concatenate(lengths), (np.concatenate(sources),
+                                                 np.concatenate(targets))), shape=(count, count))
+
+
+class RouteGrid:
+    """Coarse free space for walkers, and looping routes planned on it."""
+
+    def __init__(self, clearance: Clearance, *, keep_clear: list[KeepClear],
+                 idlers: list[tuple[float, float]]) -> None:
+        self._clearance = clearance
+        avoid = clearance.disc_mask(keep_clear, grow=PERSON_RADIUS)
+        avoid |= clearance.disc_mask([(x, y, WALKER_IDLER_CLEARANCE) for x, y in idlers])
+        self.walkable = (clearance.metres >= WALKER_WALL_CLEARANCE) & ~avoid
+        step = max(1, round(ROUTE_CELL / clearance.resolution))
+        free = self.walkable[step // 2::step, step // 2::step]
+        self.graph = grid_graph(free, spacing=step * clearance.resolution).tocsr()
+        rows, cols = np.nonzero(free)  # in node-id order
+        xs, ys = clearance.centres(step // 2 + rows * step, step // 2 + cols * step)
+        self.points = np.column_stack([xs, ys])
+        _, component = connected_components(self.graph, directed=False)
+        largest = np.argmax(np.bincount(component)) if component.size else 0
+        self.nodes = np.flatnonzero(component == largest)
+        if self.nodes.size < 2:
+            raise ValueError("no free space wide enough for walker routes on this map")
+
+    def loop(self, rng: np.random.Generator) -> np.ndarray:
+        """A closed polyline (first point repeated last) through a few random waypoints."""
+        waypoints = self._waypoints(rng, int(rng.integers(ROUTE_WAYPOINTS[0],
+                                                          ROUTE_WAYPOINTS[1] + 1)))
+        sources = np.unique(waypoints)
+        _, predecessors = dijkstra(self.graph, directed=False, indices=sources,
+                                   return_predecessors=True)
+        path = [waypoints[0]]
+        for start, end in zip(waypoints, [*waypoints[1:], waypoints[0]], strict=True):
+            row = predecessors[int(np.searchsorted(sources, start))]
+            path.extend(self._leg(row, start, end))
+        return self._straightened(self.points[path])
+
+    def _waypoints(self, rng: np.random.Generator, count: int) -> list[int]:
+        chosen = [int(self.nodes[rng.integers(self.nodes.size)])]
+        for _ in range(count - 1):
+            gaps = np.hypot(*(self.points[self.nodes] - self.points[chosen[-1]]).T)
+            far = self.nodes[gaps >= ROUTE_MIN_LEG]
+            chosen.append(int(far[rng.integers(far.size)]) if far.size
+                          else int(self.nodes[np.argmax(gaps)]))
+        return chosen
+
+    @staticmethod
+    def _leg(predecessors: np.ndarray, start: int, end: int) -> list[int]:
+        """Node ids after ``start`` up to and including ``end``."""
+        leg = []
+        node = end
+        while node != start:
+            leg.append(node)
+            node = int(predecessors[node])
+        return leg[::-1]
+
+    def _straightened(self, points: np.ndarray) -> np.ndarray:
+        """Drop every corner that a clear straight line can skip."""
+        kept = [0]
+        while kept[-1] < len(points) - 1:
+            here, reach = kept[-1], kept[-1] + 1
+            while reach + 1 < len(points) and self._clearance.line_is_clear(
+                    points[here], points[reach + 1], self.walkable):
+                reach += 1
+            kept.append(reach)
+        line = points[kept]
+        steps = np.hypot(*np.diff(line, axis=0).T)
+        return np.vstack([line[:1], line[1:][steps > 1e-9]])
+
+
+# ----------------------------------------------------------------------------------- walkers
+@dataclass
+class Walker:
+    """A person walking a closed polyline at a constant speed."""
+
+    person: Person
+    route: np.ndarray  # (n, 2), first point repeated last
+    along: np.ndarray  # arc length at each route point
+    speed: float
+    travelled: float  # arc length from the route's start, below the route's length
+
+    @classmethod
+    def on(cls, person: Person, route: np.ndarray, *, speed: float,
+           start: float) -> Walker:
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(route, axis=0).T))])
+        walker = cls(person=person, route=route, along=along, speed=speed, travelled=0.0)
+        walker.advance(start * along[-1])
+        return walker
+
+    def advance(self, metres: float) -> None:
+        self.travelled = (self.travelled + metres) % self.along[-1]
+        leg = min(int(np.searchsorted(self.along, self.travelled, side="right")) - 1,
+                  len(self.route) - 2)
+        start, end = self.route[leg], self.route[leg + 1]
+        t = (self.travelled - self.along[leg]) / (self.along[leg + 1] - self.along[leg])
+        self.person.x = float(start[0] + t * (end[0] - start[0]))
+        self.person.y = float(start[1] + t * (end[1] - start[1]))
+        self.person.yaw = math.atan2(end[1] - start[1], end[0] - start[0])
+
+    def sees_robot_ahead(self, robot: tuple[float, float, float]) -> bool:
+        dx, dy = robot[0] - self.person.x, robot[1] - self.person.y
+        distance = math.hypot(dx, dy)
+        if distance > WALKER_STOP_DISTANCE:
+            return False
+        facing = dx * math.cos(self.person.yaw) + dy * math.sin(self.person.yaw)
+        return facing >= math.cos(WALKER_STOP_HALF_ANGLE) * distance
+
+
+# ------------------------------------------------------------------------------------ crowd
+def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:
+    """``count`` distinct ``human_NNNNN`` names, none of them in ``taken``."""
+    names: list[str] = []
+    used = set(taken)
+    while len(names) < count:
+        name = f"human_{int(rng.integers(0, 100_000)):05d}"
+        if name not in used:
+            used.add(name)
+            names.append(name)
+    return names
+
+
+class Crowd:
+    """All walkers and idlers of one run."""
+
+    def __init__(self, occupancy_map: OccupancyMapLike, *, rng: np.random.Generator,
+                 walkers: int, idlers: int, taken_names: set[str],
+                 keep_clear: list[KeepClear]) -> None:
+        if walkers < 0 or idlers < 0:
+            raise ValueError(f"walkers {walkers}, idlers {idlers}: counts must be 0 or more")
+        clearance = Clearance.of(occupancy_map)
+        names = fresh_names(rng, walkers + idlers, taken=taken_names)
+        spots = idler_spots(clearance, rng, count=idlers, keep_clear=keep_clear)
+        standing = [Person(name=name, role=IDLER, x=x, y=y, yaw=float(rng.uniform(-math.pi,
+                                                                                  math.pi)))
+                    for name, (x, y) in zip(names[walkers:], spots, strict=True)]
+        self._walkers: list[Walker] = []
+        if walkers:
+            grid = RouteGrid(clearance, keep_clear=keep_clear, idlers=spots)
+            self._walkers = [self._walker(name, grid, rng) for name in names[:walkers]]
+        self.people: list[Person] = [w.person for w in self._walkers] + standing
+
+    @staticmethod
+    def _walker(name: str, grid: RouteGrid, rng: np.random.Generator) -> Walker:
+        route = grid.loop(rng)
+        speed = float(rng.uniform(*WALKER_SPEED_RANGE))
+        person = Person(name=name, role=WALKER, x=float(route[0, 0]), y=float(route[0, 1]),
+                        yaw=0.0)
+        return Walker.on(person, route, speed=speed, start=float(rng.uniform()))
+
+    @property
+    def walkers(self) -> list[Walker]:
+        return list(self._walkers)
+
+    def step(self, dt: float, *, robot: tuple[float, float, float]) -> None:
+        """Move every walker ``dt`` seconds on, except those with the robot just ahead."""
+        if dt < 0.0:
+            raise ValueError(f"dt {dt}: must be 0 or more")
+        for walker in self._walkers:
+            if not walker.sees_robot_ahead(robot):
+                walker.advance(walker.speed * dt)
+
+    def states(self) -> list[tuple[str, str, float, float]]:
+        """(name, role, x, y) of everybody, walkers first."""
+        return [(p.name, p.role, p.x, p.y) for p in self.people]
