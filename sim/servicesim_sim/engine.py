@@ -1,0 +1,312 @@
+"""The simulated world, stepped at a fixed physics step in sim time, with no ROS in it.
+
+:class:`SimEngine` owns the robot, the guest, the crowd, navigation and the referee, and applies
+the competition's rules; the ROS node (:mod:`servicesim_sim.node`) only turns its state into
+messages and requests into calls. Keeping ROS out makes the rules testable in microseconds and
+the engine deterministic: every random draw comes from generators seeded by the scenario.
+
+One :meth:`SimEngine.step` is ``dt`` sim seconds: the robot drives (navigation's command, else
+the last ``cmd_vel`` for half a second), the guest follows its trail, the crowd walks, the
+referee checks the checkpoints that depend on where things are (1 and 4), whether the guest
+fell too far behind or drifted, and books contact and approximation penalties.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from servicesim_sim import referee as rules
+from servicesim_sim.camera import render_front_camera
+from servicesim_sim.guest import LOST_DISTANCE, Guest, GuestState
+from servicesim_sim.navigation import Navigator
+from servicesim_sim.people import Crowd
+from servicesim_sim.referee import Referee
+from servicesim_sim.robot import BODY_RADIUS, Robot, WallClearance
+from servicesim_sim.scenario import Scenario
+from servicesim_sim.world import World
+
+PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
+ROBOT_NAME = "servicebot"
+RFID_RANGE_M = 2.0
+PICKUP_RANGE_M = 2.0
+PERSON_BODY_RADIUS = 0.25
+PERSON_APPROXIMATION_M = 0.75
+OBJECT_APPROXIMATION_M = 0.35
+CMD_VEL_TIMEOUT_S = 0.5
+TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
+NAV_ABORT_WINDOW_S = (1.0, 10.0)  # when a randomly aborted goal gives up
+
+
+@dataclass(frozen=True)
+class NavigationState:
+    status: str  # "running", "succeeded", "aborted", "canceled"
+    error_code: int = 0
+    error_msg: str = ""
+    distance_remaining: float = 0.0
+    recoveries: int = 0
+
+
+class SimEngine:
+    """One world, one scenario; see the module docstring."""
+
+    def __init__(self, *, world: World, scenario: Scenario,
+                 dt: float = PHYSICS_STEP_S) -> None:
+        self.world, self.scenario, self.dt = world, scenario, dt
+        self.sim_time = 0.0
+        self.task_started_at: float | None = None
+        self.referee = Referee()
+        self.robot = Robot(x=scenario.start_x, y=scenario.start_y, yaw=scenario.start_yaw,
+                           walls=WallClearance(world.map))
+        self.guest = Guest(name=scenario.guest_name, x=scenario.guest_x, y=scenario.guest_y,
+                           yaw=scenario.guest_yaw)
+        self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
+                           walkers=world.people.walkers, idlers=world.people.idlers,
+                           taken_names={scenario.guest_name}, keep_clear=self._keep_clear())
+        self._knobs = np.random.default_rng(scenario.knob_seed)
+        self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
+        self._ticket = 0
+        self._localised = False
+        self._refused: dict[int, NavigationState] = {}
+        self._cmd_vel = (0.0, 0.0, -math.inf)
+        self._drifts = list(scenario.drift_times)
+        self._seen_revision = -1
+
+    def _keep_clear(self) -> list[tuple[float, float, float]]:
+        scenario, areas = self.scenario, self.world.areas
+        discs = [(scenario.start_x, scenario.start_y, 1.5),
+                 (scenario.guest_x, scenario.guest_y, 1.5)]
+        for name in (scenario.pick_up, scenario.drop_off, scenario.start_area):
+            x, y = areas[name].centre
+            discs.append((x, y, 2.0))
+        return discs
+
+    # ------------------------------------------------------------------ the task
+    @property
+    def task_started(self) -> bool:
+        return self.referee.started
+
+    def task_running(self) -> bool:
+        return self.referee.running
+
+    def new_task(self) -> tuple[bool, str]:
+        if self.referee.started:
+            state = "is running" if self.referee.running else "has ended"
+            return False, f"a task {state}; one task per simulator run"
+        self.referee.start()
+        self.task_started_at = self.sim_time
+        self._check_area_checkpoints()
+        return True, "task started"
+
+    def pickup(self, guest_name: str, robot_name: str) -> tuple[bool, str]:
+        referee = self.referee
+        if not referee.running:
+            return False, "no task is running"
+        reason = self._pickup_refusal(guest_name, robot_name)
+        if reason:
+            referee.failed_pickup()
+            return False, reason
+        self.guest.start_following(self.robot.x, self.robot.y)
+        referee.reach(rules.PICK_UP_GUEST)
+        return True, f"{guest_name} follows {robot_name}"
+
+    def _pickup_refusal(self, guest_name: str, robot_name: str) -> str:
+        if robot_name != ROBOT_NAME:
+            return f"unknown robot {robot_name!r}"
+        if guest_name != self.guest.name:
+            return f"{guest_name!r} is not the guest"
+        if self.referee.current != rules.PICK_UP_GUEST:
+            return ("checkpoint 1 (reach the pick-up area) is not done"
+                    if self.referee.current < rules.PICK_UP_GUEST else "the guest is picked up")
+        distance = self.guest.distance_to(self.robot.x, self.robot.y)
+        if distance > PICKUP_RANGE_M:
+            return f"the guest is {distance:.2f} m away (more than {PICKUP_RANGE_M} m)"
+        return ""
+
+    def dropoff(self, guest_name: str) -> tuple[bool, str]:
+        referee = self.referee
+        if not referee.running:
+            return False, "no task is running"
+        reason = self._dropoff_refusal(guest_name)
+        if reason:
+            referee.failed_dropoff()
+            return False, reason
+        self.guest.stop_following(GuestState.DROPPED_OFF)
+        referee.reach(rules.DROP_OFF_GUEST)
+        return True, f"{guest_name} dropped off in {self.scenario.drop_off}"
+
+    def _dropoff_refusal(self, guest_name: str) -> str:
+        if guest_name != self.guest.name:
+            return f"{guest_name!r} is not the guest"
+        if self.referee.current != rules.DROP_OFF_GUEST or not self.guest.following:
+            return "the guest is not following the robot"
+        box = self.world.areas[self.scenario.drop_off]
+        if not box.contains(self.guest.x, self.guest.y):
+            return (f"the guest at ({self.guest.x:.2f}, {self.guest.y:.2f}) is outside "
+                    f"{self.scenario.drop_off}")
+        return ""
+
+    def force_drift(self) -> tuple[bool, str]:
+        if not self.guest.following:
+            return False, "the guest is not following"
+        self._drift()
+        return True, "the guest drifted"
+
+    def _drift(self) -> None:
+        self.guest.stop_following(GuestState.DRIFTED)
+        self.referee.back_to_pick_up(too_fast=False)
+
+    # ---------------------------------------------------------------- the robot
+    def set_initial_pose(self, x: float, y: float, yaw: float) -> None:
+        """Localisation input. The robot's true pose is the world's; this makes it localised."""
+        self._localised = True
+
+    def command_velocity(self, v: float, w: float) -> None:
+        self._cmd_vel = (v, w, self.sim_time)
+
+    def robot_pose(self) -> tuple[float, float, float]:
+        return self.robot.pose
+
+    def robot_velocity(self) -> tuple[float, float]:
+        return self.robot.v, self.robot.w
+
+    def navigate(self, x: float, y: float, yaw: float) -> int:
+        """Start a goal (preempting any other); the ticket names it in later calls."""
+        self._ticket += 1
+        if not self._localised:
+            self._refused[self._ticket] = NavigationState(
+                status="aborted", error_code=TF_ERROR,
+                error_msg="robot not localised: publish /servicebot/initialpose first")
+            return self._ticket
+        abort_after = None
+        if self._knobs.random() < self.scenario.difficulty.nav_abort_probability:
+            abort_after = float(self._knobs.uniform(*NAV_ABORT_WINDOW_S))
+        self.navigator.start(x, y, yaw, now=self.sim_time, abort_after_s=abort_after)
+        return self._ticket
+
+    def cancel_navigation(self, ticket: int) -> None:
+        if ticket == self._ticket:
+            self.navigator.cancel()
+
+    def navigation_state(self, ticket: int) -> NavigationState:
+        if ticket in self._refused:
+            return self._refused[ticket]
+        if ticket != self._ticket:
+            return NavigationState(status="canceled", error_msg="preempted by a newer goal")
+        navigator = self.navigator
+        return NavigationState(status=navigator.status, error_code=navigator.error_code,
+                               error_msg=navigator.error_msg,
+                               distance_remaining=navigator.distance_remaining,
+                               recoveries=navigator.recoveries)
+
+    def clear_costmaps(self) -> None:
+        self.navigator.clear_costmaps()
+
+    # ------------------------------------------------------------------ stepping
+    def step(self) -> None:
+        dt = self.dt
+        v, w = self._drive_command()
+        self.robot.step(dt, v=v, w=w)
+        self.guest.record_robot(self.robot.x, self.robot.y)
+        self.guest.step(dt, robot_x=self.robot.x, robot_y=self.robot.y)
+        self.crowd.step(dt, robot=self.robot.pose)
+        self.sim_time += dt
+        self.referee.advance(dt)
+        if self.referee.running:
+            self._check_area_checkpoints()
+            self._check_guest()
+            self._book_contacts(dt)
+
+    def _drive_command(self) -> tuple[float, float]:
+        if self.navigator.status == "running":
+            return self.navigator.command(pose=self.robot.pose, people=self._obstacles(),
+                                          now=self.sim_time)
+        v, w, when = self._cmd_vel
+        if self.sim_time - when <= CMD_VEL_TIMEOUT_S:
+            return v, w
+        return 0.0, 0.0
+
+    def _obstacles(self) -> list[tuple[float, float]]:
+        """People navigation must avoid: everyone but a guest walking behind the robot."""
+        people = [(person.x, person.y) for person in self.crowd.people]
+        if not self.guest.following:
+            people.append((self.guest.x, self.guest.y))
+        return people
+
+    def _check_area_checkpoints(self) -> None:
+        referee, areas = self.referee, self.world.areas
+        x, y = self.robot.x, self.robot.y
+        if (referee.current == rules.GO_TO_PICK_UP
+                and areas[self.scenario.pick_up].contains(x, y)):
+            referee.reach(rules.GO_TO_PICK_UP)
+        if (referee.current == rules.RETURN_TO_START
+                and areas[self.scenario.start_area].contains(x, y)):
+            referee.reach(rules.RETURN_TO_START)
+
+    def _check_guest(self) -> None:
+        guest = self.guest
+        elapsed = self.sim_time - (self.task_started_at or 0.0)
+        due = bool(self._drifts) and elapsed >= self._drifts[0]
+        if due:
+            self._drifts.pop(0)  # a drift due while the guest is not following is skipped
+        if not guest.following:
+            return
+        if guest.distance_to(self.robot.x, self.robot.y) > LOST_DISTANCE:
+            guest.stop_following(GuestState.LOST)
+            self.referee.back_to_pick_up(too_fast=True)
+        elif due:
+            self._drift()
+
+    def _book_contacts(self, dt: float) -> None:
+        gaps = self._person_gaps()
+        wall_gap = self.robot.wall_gap()
+        touching = np.clip(PERSON_BODY_RADIUS - gaps, 0.0, None)
+        self.referee.contact(person_depth=float(touching.sum()),
+                             object_depth=max(0.0, -wall_gap), dt=dt)
+        approach = np.clip(PERSON_APPROXIMATION_M - gaps, 0.0, PERSON_APPROXIMATION_M)
+        self.referee.approximation(
+            person_depth=float(approach.sum()),
+            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - wall_gap)),
+            dt=dt)
+
+    def _person_gaps(self) -> np.ndarray:
+        """Distance from the robot's body edge to each person's origin."""
+        xs = [person.x for person in self.crowd.people] + [self.guest.x]
+        ys = [person.y for person in self.crowd.people] + [self.guest.y]
+        distances = np.hypot(np.asarray(xs) - self.robot.x, np.asarray(ys) - self.robot.y)
+        return distances - BODY_RADIUS
+
+    # ------------------------------------------------------------------ sensors
+    def rfid_names(self) -> list[str] | None:
+        """Everyone within 2 m; None (nothing published) when nobody is, or a reading is lost."""
+        x, y = self.robot.x, self.robot.y
+        names = [name for name, _, px, py in self.people_states()
+                 if math.hypot(px - x, py - y) <= RFID_RANGE_M]
+        if not names or self._knobs.random() < self.scenario.difficulty.rfid_dropout:
+            return None
+        return sorted(names)
+
+    def people_states(self) -> list[tuple[str, str, float, float]]:
+        return [*self.crowd.states(), (self.guest.name, "guest", self.guest.x, self.guest.y)]
+
+    def guest_state(self) -> str:
+        return self.guest.state.value
+
+    def camera_image(self) -> np.ndarray:
+        return render_front_camera(robot=self.robot.pose, people=self.people_states(),
+                                   guest_name=self.guest.name, occupancy_map=self.world.map)
+
+    # ------------------------------------------------------------------ referee
+    def score(self) -> float:
+        return self.referee.score()
+
+    def referee_report(self) -> dict[str, object]:
+        return self.referee.report()
+
+    def referee_changed(self) -> bool:
+        """Whether a referee event happened since the last call."""
+        changed = self.referee.revision != self._seen_revision
+        self._seen_revision = self.referee.revision
+        return changed

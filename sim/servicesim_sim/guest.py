@@ -1,0 +1,87 @@
+"""The guest: waits to be picked up, then follows the robot along its trail.
+
+The original guest walked straight at the robot, through walls. This one follows the robot's
+*trail* — the points the robot's origin passed, recorded every few centimetres — so it takes the
+same doors and corridors the robot took. It walks at up to 0.8 m/s, stops when it is within
+1.2 m of the robot, and stops following for good (until picked up again) in two ways the
+referee cares about: the robot gets more than 4.0 m ahead ("too fast"), or a scheduled drift
+makes it wander off its task and stay where it is.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from enum import Enum
+
+FOLLOW_SPEED = 0.8  # m/s
+STOP_DISTANCE = 1.2  # m from the robot
+LOST_DISTANCE = 4.0  # m: the robot is "too fast" beyond this
+TRAIL_SPACING = 0.05  # m between trail points
+
+
+class GuestState(Enum):
+    WAITING = "waiting"  # at the pick-up spot, never picked up
+    FOLLOWING = "following"
+    LOST = "lost"  # the robot went more than 4 m ahead
+    DRIFTED = "drifted"  # a drift made them stop following
+    DROPPED_OFF = "dropped_off"
+
+
+class Guest:
+    """Position and state of the guest; :meth:`step` moves them."""
+
+    def __init__(self, *, name: str, x: float, y: float, yaw: float) -> None:
+        self.name = name
+        self.x, self.y, self.yaw = x, y, yaw
+        self.state = GuestState.WAITING
+        self.trail: deque[tuple[float, float]] = deque()
+
+    @property
+    def following(self) -> bool:
+        return self.state is GuestState.FOLLOWING
+
+    def distance_to(self, x: float, y: float) -> float:
+        return math.hypot(x - self.x, y - self.y)
+
+    def start_following(self, robot_x: float, robot_y: float) -> None:
+        """Picked up: the trail starts with the straight line to where the robot stands."""
+        self.state = GuestState.FOLLOWING
+        self.trail.clear()
+        steps = max(1, int(self.distance_to(robot_x, robot_y) / TRAIL_SPACING))
+        for index in range(1, steps + 1):
+            fraction = index / steps
+            self.trail.append((self.x + fraction * (robot_x - self.x),
+                               self.y + fraction * (robot_y - self.y)))
+
+    def stop_following(self, state: GuestState) -> None:
+        self.state = state
+        self.trail.clear()
+
+    def record_robot(self, robot_x: float, robot_y: float) -> None:
+        """Extend the trail with the robot's origin when it has moved far enough."""
+        if not self.following:
+            return
+        last = self.trail[-1] if self.trail else (self.x, self.y)
+        if math.hypot(robot_x - last[0], robot_y - last[1]) >= TRAIL_SPACING:
+            self.trail.append((robot_x, robot_y))
+
+    def step(self, dt: float, *, robot_x: float, robot_y: float) -> None:
+        """Walk along the trail towards the robot, stopping 1.2 m short of it."""
+        if not self.following:
+            return
+        budget = FOLLOW_SPEED * dt
+        while budget > 1e-9 and self.trail:
+            if self.distance_to(robot_x, robot_y) <= STOP_DISTANCE:
+                return
+            target_x, target_y = self.trail[0]
+            gap = self.distance_to(target_x, target_y)
+            if gap <= budget:
+                self.x, self.y = target_x, target_y
+                self.trail.popleft()
+                budget -= gap
+                continue
+            self.yaw = math.atan2(target_y - self.y, target_x - self.x)
+            self.x += budget * math.cos(self.yaw)
+            self.y += budget * math.sin(self.yaw)
+            budget = 0.0

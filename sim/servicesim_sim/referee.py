@@ -1,0 +1,151 @@
+"""The referee: the competition's checkpoints, penalties and score, as the original counted them.
+
+The task has four checkpoints, done in order: go to the pick-up area, pick up the guest, drop
+them off, return to the start. Each accrues the sim seconds during which it is the current one;
+the score is the weighted sum of those times plus the penalties (lower is better):
+
+======================  =====================================================
+checkpoint time          × 1 (CP1), × 2 (CP2), × 2 (CP3), × 1 (CP4)
+failed pick-up           40 each
+failed drop-off          50 each
+guest lost "too fast"    25 each
+contact                  40000 × depth (a person), 20000 × depth (a wall)
+approximation            1 × depth inside 0.75 m of a person, 0.25 × depth inside
+                         0.35 m of a wall
+======================  =====================================================
+
+The original's contact sensors reported at the physics rate, 500 Hz, and each report added
+weight × penetration depth. The simulator steps more coarsely, so a step of ``dt`` seconds adds
+``500 · dt`` reports' worth: the penalty per sim second is the original's for the same depth.
+
+A drift or a guest lost "too fast" sends the task from checkpoint 3 back to checkpoint 2. The
+referee only keeps the books; the engine decides what happened and asks it to record it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+CHECKPOINT_NAMES = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
+CHECKPOINT_WEIGHTS = (1.0, 2.0, 2.0, 1.0)
+FAILED_PICKUP_PENALTY = 40.0
+FAILED_DROPOFF_PENALTY = 50.0
+TOO_FAST_PENALTY = 25.0
+CONTACT_REPORT_RATE_HZ = 500.0
+PERSON_CONTACT_WEIGHT = 40000.0
+OBJECT_CONTACT_WEIGHT = 20000.0
+PERSON_APPROXIMATION_WEIGHT = 1.0
+OBJECT_APPROXIMATION_WEIGHT = 0.25
+
+GO_TO_PICK_UP, PICK_UP_GUEST, DROP_OFF_GUEST, RETURN_TO_START = range(4)
+
+
+@dataclass
+class Penalties:
+    failed_pickup: int = 0
+    failed_dropoff: int = 0
+    too_fast: int = 0
+    drifts: int = 0
+    contact: float = 0.0
+    approximation: float = 0.0
+
+    def points(self) -> float:
+        return (self.failed_pickup * FAILED_PICKUP_PENALTY
+                + self.failed_dropoff * FAILED_DROPOFF_PENALTY
+                + self.too_fast * TOO_FAST_PENALTY + self.contact + self.approximation)
+
+
+@dataclass
+class Referee:
+    """The books of one task; :meth:`start` opens them, :meth:`advance` runs the clock."""
+
+    running: bool = False
+    started: bool = False
+    completed: bool = False
+    current: int = GO_TO_PICK_UP
+    elapsed: float = 0.0
+    checkpoint_times: list[float] = field(default_factory=lambda: [0.0] * 4)
+    checkpoint_done: list[bool] = field(default_factory=lambda: [False] * 4)
+    penalties: Penalties = field(default_factory=Penalties)
+    revision: int = 0  # bumped on every event, so observers can tell something changed
+
+    def start(self) -> None:
+        self.running = self.started = True
+        self.revision += 1
+
+    def advance(self, dt: float) -> None:
+        """Count ``dt`` sim seconds against the current checkpoint."""
+        if self.running:
+            self.elapsed += dt
+            self.checkpoint_times[self.current] += dt
+
+    def reach(self, checkpoint: int) -> None:
+        """The current checkpoint is done; the task completes after the fourth."""
+        assert checkpoint == self.current and self.running
+        self.checkpoint_done[checkpoint] = True
+        self.revision += 1
+        if checkpoint == RETURN_TO_START:
+            self.running, self.completed = False, True
+        else:
+            self.current = checkpoint + 1
+
+    def back_to_pick_up(self, *, too_fast: bool) -> None:
+        """The guest stopped following during checkpoint 3: pick them up again."""
+        if too_fast:
+            self.penalties.too_fast += 1
+        else:
+            self.penalties.drifts += 1
+        if self.current == DROP_OFF_GUEST:
+            self.checkpoint_done[PICK_UP_GUEST] = False
+            self.current = PICK_UP_GUEST
+        self.revision += 1
+
+    def failed_pickup(self) -> None:
+        self.penalties.failed_pickup += 1
+        self.revision += 1
+
+    def failed_dropoff(self) -> None:
+        self.penalties.failed_dropoff += 1
+        self.revision += 1
+
+    def contact(self, *, person_depth: float, object_depth: float, dt: float) -> None:
+        if self.running and (person_depth > 0.0 or object_depth > 0.0):
+            reports = CONTACT_REPORT_RATE_HZ * dt
+            self.penalties.contact += reports * (PERSON_CONTACT_WEIGHT * person_depth
+                                                 + OBJECT_CONTACT_WEIGHT * object_depth)
+
+    def approximation(self, *, person_depth: float, object_depth: float, dt: float) -> None:
+        if self.running and (person_depth > 0.0 or object_depth > 0.0):
+            reports = CONTACT_REPORT_RATE_HZ * dt
+            self.penalties.approximation += reports * (
+                PERSON_APPROXIMATION_WEIGHT * person_depth
+                + OBJECT_APPROXIMATION_WEIGHT * object_depth)
+
+    def score(self) -> float:
+        timed = sum(weight * seconds
+                    for weight, seconds in zip(CHECKPOINT_WEIGHTS, self.checkpoint_times,
+                                               strict=True))
+        return timed + self.penalties.points()
+
+    def report(self) -> dict[str, Any]:
+        """The referee's account, in report.json's shape."""
+        return {
+            "running": self.running,
+            "completed": self.completed,
+            "score": round(self.score(), 6),
+            "task_sim_time": round(self.elapsed, 6),
+            "checkpoints": [
+                {"name": name, "done": done, "sim_time_s": round(seconds, 6)}
+                for name, done, seconds in zip(CHECKPOINT_NAMES, self.checkpoint_done,
+                                               self.checkpoint_times, strict=True)
+            ],
+            "penalties": {
+                "failed_pickup": self.penalties.failed_pickup,
+                "failed_dropoff": self.penalties.failed_dropoff,
+                "too_fast": self.penalties.too_fast,
+                "drifts": self.penalties.drifts,
+                "contact": round(self.penalties.contact, 6),
+                "approximation": round(self.penalties.approximation, 6),
+            },
+        }

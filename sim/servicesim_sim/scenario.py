@@ -1,0 +1,223 @@
+"""Scenarios: which task a simulator run plays, and how hard the world makes it.
+
+A :class:`Scenario` is everything random about one run, drawn once from one seed: the pick-up
+and drop-off areas, the guest's name and spot, the robot's start area and pose, the drift
+schedule, and the seeds of the people and of the difficulty knobs. The same seed on the same
+world always gives the same scenario; without a seed the world's fixed task (the shipped task
+of the default office) is played, with the original's drift schedule parameters.
+
+:class:`Difficulty` holds the knobs that make a run harder for the executive under test: a guest
+placed beyond RFID range of the pick-up area's centre, earlier and more frequent drifts,
+navigation goals that abort, RFID messages that are lost, and slow referee services.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from servicesim_sim.world import AreaBox, DriftSpec, World
+
+GUEST_PADDING_M = 1.0  # the original spawns the guest 1.0 m inside a room's area
+NARROW_AREA_M = 2.0  # narrower than this (bathrooms, cubicle strips): the centre line instead
+PERSON_CLEARANCE_M = 0.45  # a spot for a person or the robot: this far from any wall
+RFID_RANGE_M = 2.0
+OUT_OF_RANGE_M = (2.6, 5.0)  # how far from the area centre an out-of-range guest stands
+SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed 100
+
+
+@dataclass(frozen=True)
+class Difficulty:
+    """Knobs that make the world harder for the executive; the defaults are the original."""
+
+    guest_out_of_range: bool = False
+    drift_scale: float = 1.0  # < 1: earlier and more frequent drifts
+    nav_abort_probability: float = 0.0
+    rfid_dropout: float = 0.0  # probability that one RFID message is lost
+    service_latency_s: float = 0.0  # sim seconds before a referee service answers
+
+    @classmethod
+    def default(cls) -> Difficulty:
+        return cls()
+
+    @classmethod
+    def hard(cls) -> Difficulty:
+        """The evaluation's ``hard`` set: every knob turned up at once."""
+        return cls(guest_out_of_range=True, drift_scale=0.25, nav_abort_probability=0.15,
+                   rfid_dropout=0.2, service_latency_s=0.2)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One run's task and random draws."""
+
+    pick_up: str
+    drop_off: str
+    guest_name: str
+    guest_x: float
+    guest_y: float
+    guest_yaw: float
+    start_area: str
+    start_x: float
+    start_y: float
+    start_yaw: float
+    drift_times: tuple[float, ...]  # sim seconds after the task started
+    people_seed: int
+    knob_seed: int
+    difficulty: Difficulty
+    seed: int | None
+
+
+class ScenarioError(ValueError):
+    """The world cannot host a task (too few areas, no free spot); one line."""
+
+
+def make_scenario(world: World, *, seed: int | None = None,
+                  difficulty: Difficulty | None = None) -> Scenario:
+    """The world's fixed task without a seed (if it has one), else a task drawn from ``seed``."""
+    difficulty = difficulty or Difficulty.default()
+    if seed is None and world.task is not None:
+        return _fixed_scenario(world, difficulty)
+    rng = np.random.default_rng([0 if seed is None else seed, 1])
+    free = _spot_mask(world)
+    pick_up, drop_off, start_area = _three_areas(world, rng)
+    guest_x, guest_y = _guest_spot(world, world.areas[pick_up], free, rng, difficulty)
+    start_x, start_y = _start_spot(world, world.areas[start_area], free, rng)
+    return Scenario(
+        pick_up=pick_up, drop_off=drop_off, guest_name=person_name(rng),
+        guest_x=guest_x, guest_y=guest_y, guest_yaw=float(rng.uniform(-math.pi, math.pi)),
+        start_area=start_area, start_x=start_x, start_y=start_y,
+        start_yaw=float(rng.uniform(-math.pi, math.pi)),
+        drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
+        people_seed=int(rng.integers(2**31)), knob_seed=int(rng.integers(2**31)),
+        difficulty=difficulty, seed=seed,
+    )
+
+
+def person_name(rng: np.random.Generator) -> str:
+    """``human_NNNNN``, as every person in the original is named."""
+    return f"human_{int(rng.integers(10000, 100000)):05d}"
+
+
+def drift_schedule(spec: DriftSpec, *, rng: np.random.Generator,
+                   scale: float = 1.0) -> tuple[float, ...]:
+    """Drift times: the first at ``start_s``, then every ``min..max`` seconds, scaled."""
+    times, now = [], spec.start_s
+    for _ in range(spec.count):
+        times.append(round(now * scale, 3))
+        now += float(rng.uniform(spec.min_interval_s, spec.max_interval_s))
+    return tuple(times)
+
+
+def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
+    task = world.task
+    assert task is not None
+    rng = np.random.default_rng([SHIPPED_DRIFT_SEED, 1])
+    guest_x, guest_y = task.guest_x, task.guest_y
+    if difficulty.guest_out_of_range:
+        guest_x, guest_y = _out_of_range_spot(world, world.areas[task.pick_up],
+                                              _spot_mask(world), rng)
+    return Scenario(
+        pick_up=task.pick_up, drop_off=task.drop_off, guest_name=task.guest_name,
+        guest_x=guest_x, guest_y=guest_y, guest_yaw=task.guest_yaw,
+        start_area=task.start_area, start_x=task.start_x, start_y=task.start_y,
+        start_yaw=task.start_yaw,
+        drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
+        people_seed=int(rng.integers(2**31)), knob_seed=int(rng.integers(2**31)),
+        difficulty=difficulty, seed=None,
+    )
+
+
+def _three_areas(world: World, rng: np.random.Generator) -> tuple[str, str, str]:
+    targets = list(world.targets)
+    if len(targets) < 3:
+        raise ScenarioError(f"{world.path}: a random task needs at least 3 target areas, "
+                            f"the world has {len(targets)}")
+    chosen = rng.choice(len(targets), size=3, replace=False)
+    pick_up, drop_off, start = (targets[int(index)] for index in chosen)
+    return pick_up, drop_off, start
+
+
+def _spot_mask(world: World) -> np.ndarray:
+    """Cells where a person or the robot may stand: free and clear of walls."""
+    occupancy = world.map
+    clearance = ndimage.distance_transform_edt(~occupancy.blocked_mask()) * occupancy.resolution
+    return clearance >= PERSON_CLEARANCE_M
+
+
+def _free(world: World, free: np.ndarray, x: float, y: float) -> bool:
+    row, col = world.map.world_to_cell(x, y)
+    return world.map.in_bounds(row, col) and bool(free[row, col])
+
+
+def _guest_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator,
+                difficulty: Difficulty) -> tuple[float, float]:
+    if difficulty.guest_out_of_range:
+        return _out_of_range_spot(world, box, free, rng)
+    for _ in range(200):
+        x, y = _padded_point(box, rng)
+        if _free(world, free, x, y):
+            return x, y
+    return _nearest_spot(world, box, free, rng)
+
+
+def _padded_point(box: AreaBox, rng: np.random.Generator) -> tuple[float, float]:
+    """A random point 1.0 m inside a room's box; on the centre line of a narrow one."""
+    centre_x, centre_y = box.centre
+
+    def along(low: float, high: float, centre: float) -> float:
+        if high - low <= NARROW_AREA_M:
+            return centre
+        return float(rng.uniform(low + GUEST_PADDING_M, high - GUEST_PADDING_M))
+
+    return along(box.min_x, box.max_x, centre_x), along(box.min_y, box.max_y, centre_y)
+
+
+def _out_of_range_spot(world: World, box: AreaBox, free: np.ndarray,
+                       rng: np.random.Generator) -> tuple[float, float]:
+    """A free spot 2.6-5 m from the area centre, reachable from it: beyond RFID range."""
+    centre_x, centre_y = box.centre
+    reachable = _reachable_from(world, free, centre_x, centre_y)
+    for _ in range(500):
+        distance = float(rng.uniform(*OUT_OF_RANGE_M))
+        angle = float(rng.uniform(-math.pi, math.pi))
+        x, y = centre_x + distance * math.cos(angle), centre_y + distance * math.sin(angle)
+        if _free(world, reachable, x, y):
+            return round(x, 3), round(y, 3)
+    raise ScenarioError(f"{world.path}: no free spot beyond RFID range of {box}")
+
+
+def _reachable_from(world: World, free: np.ndarray, x: float, y: float) -> np.ndarray:
+    labels, _ = ndimage.label(free)
+    row, col = world.map.world_to_cell(x, y)
+    if not world.map.in_bounds(row, col) or labels[row, col] == 0:
+        return free
+    return labels == labels[row, col]
+
+
+def _start_spot(world: World, box: AreaBox, free: np.ndarray,
+                rng: np.random.Generator) -> tuple[float, float]:
+    """The area's pivot: its centre, or the free spot in it nearest the centre."""
+    x, y = box.centre
+    if _free(world, free, x, y):
+        return round(x, 3), round(y, 3)
+    return _nearest_spot(world, box, free, rng)
+
+
+def _nearest_spot(world: World, box: AreaBox, free: np.ndarray,
+                  rng: np.random.Generator) -> tuple[float, float]:
+    centre_x, centre_y = box.centre
+    best: tuple[float, float, float] | None = None
+    for _ in range(400):
+        x = float(rng.uniform(box.min_x, box.max_x))
+        y = float(rng.uniform(box.min_y, box.max_y))
+        distance = math.hypot(x - centre_x, y - centre_y)
+        if _free(world, free, x, y) and (best is None or distance < best[0]):
+            best = (distance, x, y)
+    if best is None:
+        raise ScenarioError(f"{world.path}: no free spot inside area {box}")
+    return round(best[1], 3), round(best[2], 3)
+

@@ -1,0 +1,132 @@
+"""The referee's books and the guest's walk, without ROS: weights, penalties, following."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from servicesim_sim import referee as rules
+from servicesim_sim.guest import STOP_DISTANCE, Guest, GuestState
+from servicesim_sim.referee import Referee
+
+
+def started() -> Referee:
+    referee = Referee()
+    referee.start()
+    return referee
+
+
+def test_checkpoint_times_are_weighted_1_2_2_1() -> None:
+    referee = started()
+    for checkpoint, seconds in enumerate((10.0, 20.0, 30.0, 40.0)):
+        referee.advance(seconds)
+        referee.reach(checkpoint)
+    assert referee.completed and not referee.running
+    assert referee.score() == pytest.approx(10 * 1 + 20 * 2 + 30 * 2 + 40 * 1)
+    referee.advance(100.0)  # the clock stops with the task
+    assert referee.score() == pytest.approx(150.0)
+
+
+def test_time_before_new_task_does_not_count() -> None:
+    referee = Referee()
+    referee.advance(50.0)
+    assert referee.score() == 0.0
+    referee.start()
+    referee.advance(1.0)
+    assert referee.score() == pytest.approx(1.0)
+
+
+def test_failed_calls_and_too_fast_carry_their_penalties() -> None:
+    referee = started()
+    referee.failed_pickup()
+    referee.failed_pickup()
+    referee.failed_dropoff()
+    referee.reach(rules.GO_TO_PICK_UP)
+    referee.reach(rules.PICK_UP_GUEST)
+    referee.back_to_pick_up(too_fast=True)
+    assert referee.score() == pytest.approx(2 * 40 + 50 + 25)
+    report = referee.report()["penalties"]
+    assert (report["failed_pickup"], report["failed_dropoff"], report["too_fast"]) == (2, 1, 1)
+
+
+def test_a_drift_sends_checkpoint_3_back_to_2_without_penalty() -> None:
+    referee = started()
+    referee.reach(rules.GO_TO_PICK_UP)
+    referee.reach(rules.PICK_UP_GUEST)
+    assert referee.current == rules.DROP_OFF_GUEST
+    referee.back_to_pick_up(too_fast=False)
+    assert referee.current == rules.PICK_UP_GUEST
+    assert not referee.checkpoint_done[rules.PICK_UP_GUEST]
+    assert referee.penalties.drifts == 1 and referee.score() == 0.0
+    referee.advance(2.0)  # time after the drift counts against checkpoint 2 again
+    assert referee.checkpoint_times[rules.PICK_UP_GUEST] == pytest.approx(2.0)
+
+
+def test_contact_penalties_scale_with_the_original_500_hz_report_rate() -> None:
+    referee = started()
+    referee.contact(person_depth=0.01, object_depth=0.0, dt=0.02)  # 10 reports of 1 cm
+    assert referee.penalties.contact == pytest.approx(10 * 40000 * 0.01)
+    referee.approximation(person_depth=0.1, object_depth=0.2, dt=0.1)  # 50 reports
+    assert referee.penalties.approximation == pytest.approx(50 * (1 * 0.1 + 0.25 * 0.2))
+
+
+def test_the_report_has_the_run_report_shape() -> None:
+    report = started().report()
+    assert [c["name"] for c in report["checkpoints"]] == list(rules.CHECKPOINT_NAMES)
+    assert set(report["penalties"]) == {"failed_pickup", "failed_dropoff", "too_fast", "drifts",
+                                        "contact", "approximation"}
+
+
+def walk(guest: Guest, path: list[tuple[float, float]], *, dt: float = 0.02,
+         speed: float = 0.5) -> None:
+    """Move a robot along ``path`` at ``speed`` while the guest follows."""
+    x, y = path[0]
+    for target_x, target_y in path[1:]:
+        while math.hypot(target_x - x, target_y - y) > 1e-6:
+            step = min(speed * dt, math.hypot(target_x - x, target_y - y))
+            heading = math.atan2(target_y - y, target_x - x)
+            x, y = x + step * math.cos(heading), y + step * math.sin(heading)
+            guest.record_robot(x, y)
+            guest.step(dt, robot_x=x, robot_y=y)
+    for _ in range(500):  # the robot waits; the guest catches up
+        guest.step(dt, robot_x=x, robot_y=y)
+
+
+def test_the_guest_follows_the_trail_round_a_corner_and_stops_1_2_m_short() -> None:
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0)
+    guest.start_following(1.0, 0.0)
+    path = [(1.0, 0.0), (5.0, 0.0), (5.0, 5.0)]
+    visited: list[tuple[float, float]] = []
+    original_step = guest.step
+
+    def recording_step(dt: float, *, robot_x: float, robot_y: float) -> None:
+        original_step(dt, robot_x=robot_x, robot_y=robot_y)
+        visited.append((guest.x, guest.y))
+
+    guest.step = recording_step  # type: ignore[method-assign]
+    walk(guest, path)
+    assert math.hypot(guest.x - 5.0, guest.y - 5.0) == pytest.approx(STOP_DISTANCE, abs=0.06)
+    # it turned the corner on the trail rather than cutting across the (imagined) wall
+    assert all(y < 0.06 or x > 4.94 for x, y in visited)
+
+
+def test_the_guest_walks_no_faster_than_0_8_m_s() -> None:
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0)
+    guest.start_following(1.5, 0.0)
+    for index in range(1, 200):
+        guest.record_robot(1.5 + index * 0.05, 0.0)
+    before = guest.x
+    guest.step(1.0, robot_x=11.5, robot_y=0.0)
+    assert guest.x - before == pytest.approx(0.8, abs=1e-6)
+
+
+def test_a_guest_not_following_does_not_move() -> None:
+    guest = Guest(name="human_00001", x=2.0, y=3.0, yaw=0.0)
+    guest.step(1.0, robot_x=10.0, robot_y=10.0)
+    assert (guest.x, guest.y, guest.state) == (2.0, 3.0, GuestState.WAITING)
+    guest.start_following(2.5, 3.0)
+    guest.stop_following(GuestState.DRIFTED)
+    guest.record_robot(9.0, 3.0)
+    guest.step(1.0, robot_x=9.0, robot_y=3.0)
+    assert (guest.x, guest.y) == (2.0, 3.0)
