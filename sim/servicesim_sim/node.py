@@ -13,6 +13,7 @@ request the original made fail is answered at once with a documented error answe
 
 from __future__ import annotations
 
+import array
 import math
 import time
 from collections.abc import Callable
@@ -34,8 +35,8 @@ from sensor_msgs.msg import Image
 from servicesim_competition.action import NavigateToPose
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import (
-    DropOffGuest,
     Drift,
+    DropOffGuest,
     NewTask,
     PickUpGuest,
     RoomInfo,
@@ -55,13 +56,13 @@ ROBOT_NAME = "servicebot"
 
 
 def stamp(seconds: float) -> Time:
-    whole = math.floor(seconds)
-    return Time(sec=int(whole), nanosec=int(round((seconds - whole) * 1e9)) % 1_000_000_000)
+    whole, nanoseconds = divmod(round(max(seconds, 0.0) * 1e9), 1_000_000_000)
+    return Time(sec=whole, nanosec=nanoseconds)
 
 
 def duration(seconds: float) -> Duration:
-    whole = math.floor(max(seconds, 0.0))
-    return Duration(sec=int(whole), nanosec=int((max(seconds, 0.0) - whole) * 1e9))
+    whole, nanoseconds = divmod(round(max(seconds, 0.0) * 1e9), 1_000_000_000)
+    return Duration(sec=whole, nanosec=nanoseconds)
 
 
 class SimulatorNode:
@@ -274,7 +275,7 @@ class SimulatorNode:
         message.info.origin.position.x = float(occupancy.origin_x)
         message.info.origin.position.y = float(occupancy.origin_y)
         message.info.origin.orientation.w = 1.0
-        message.data = occupancy.grid.astype("int8").ravel().tobytes()
+        message.data = array.array("b", occupancy.grid.astype("int8").ravel().tobytes())
         return message
 
     def _publish_io(self) -> None:
