@@ -1,0 +1,288 @@
+"""The navigation costmap: the static map inflated once, plus people seen by the lidar.
+
+Costs follow Nav2's conventions (0 free, 1..252 inflated, 253 inscribed, 254 lethal). A cell is
+lethal when its centre lies within the robot's radius of an obstacle (the robot's centre there
+would touch it) and its cost decays exponentially out to the inflation radius, as in Nav2's
+inflation layer, so plans keep to the middle of doors and corridors.
+
+Design intent:
+
+* The grid is coarser than the map (0.1 m against 0.05 m) and cropped to the building: the
+  bounding box of the map's occupied cells plus a margin. A coarse cell takes the smallest wall
+  distance of the map cells it covers, so coarsening never lets a plan closer to a wall.
+* The static layer is computed once, with one Euclidean distance transform.
+* The obstacle layer holds people as marks (x, y). :meth:`Costmap.observe` is a lidar sweep:
+  everyone inside the ±120° field of view and 0.1–30 m range whose centre is in line of sight
+  (no wall and no nearer person in the way) is marked, and every old mark in view with nobody
+  there any more is cleared. Marks out of view stay, stale, until seen again or
+  :meth:`Costmap.clear`. A person is a disc, inflated like a wall.
+* The lidar is approximated by one ray per person to the person's centre, walls sampled on the
+  map's own grid; people's legs, the scan's angular resolution and noise are not modelled.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from scipy import ndimage
+
+FREE = 0
+MAX_INFLATED = 252
+INSCRIBED = 253
+LETHAL = 254
+
+ROBOT_RADIUS = 0.25  # m: the simulator's contact disc (footprint 0.4 x 0.5 m)
+INFLATION_RADIUS = 0.4  # m, as in the competition's costmap
+PERSON_RADIUS = 0.3  # m
+
+
+class OccupancyMapLike(Protocol):
+    """The part of ``world.OccupancyMap`` the costmap reads."""
+
+    grid: np.ndarray
+    resolution: float
+    origin_x: float
+    origin_y: float
+
+    def blocked_mask(self) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class GridFrame:
+    """Where a grid lies in the world: cell (row, col) spans ``resolution`` metres from the
+    origin, rows growing with +y and columns with +x."""
+
+    origin_x: float
+    origin_y: float
+    resolution: float
+    rows: int
+    cols: int
+
+    def cell_of(self, x: float, y: float) -> tuple[int, int]:
+        return (math.floor((y - self.origin_y) / self.resolution),
+                math.floor((x - self.origin_x) / self.resolution))
+
+    def centre_of(self, row: int, col: int) -> tuple[float, float]:
+        return (self.origin_x + (col + 0.5) * self.resolution,
+                self.origin_y + (row + 0.5) * self.resolution)
+
+    def contains(self, row: int, col: int) -> bool:
+        return 0 <= row < self.rows and 0 <= col < self.cols
+
+    def centres(self, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World (x, y) of many cells' centres."""
+        return (self.origin_x + (np.asarray(cols) + 0.5) * self.resolution,
+                self.origin_y + (np.asarray(rows) + 0.5) * self.resolution)
+
+
+@dataclass(frozen=True)
+class Inflation:
+    """Cost as a function of the distance from a cell's centre to the nearest obstacle."""
+
+    robot_radius: float = ROBOT_RADIUS
+    inflation_radius: float = INFLATION_RADIUS
+    cost_scaling_factor: float = 5.0
+
+    def costs(self, distance: np.ndarray) -> np.ndarray:
+        distance = np.asarray(distance, dtype=np.float64)
+        decay = MAX_INFLATED * np.exp(
+            -self.cost_scaling_factor * (distance - self.robot_radius))
+        costs = np.where(distance <= self.inflation_radius, np.maximum(decay, 1.0), FREE)
+        costs = np.where(distance <= self.robot_radius, INSCRIBED, costs)
+        costs = np.where(distance <= 0.0, LETHAL, costs)
+        return np.rint(costs).astype(np.uint8)
+
+
+@dataclass(frozen=True)
+class Lidar:
+    """The planar scanner: field of view (half angle) and range, both as in the competition."""
+
+    half_angle: float = math.radians(120.0)
+    min_range: float = 0.1
+    max_range: float = 30.0
+
+
+@dataclass(frozen=True)
+class PersonMark:
+    """A person the lidar saw at (x, y), at sim time ``seen_at``."""
+
+    x: float
+    y: float
+    seen_at: float
+
+
+class Costmap:
+    """Static walls inflated once, and people marked and cleared by lidar sweeps.
+
+    Args:
+        occupancy_map: the static map (0 free, 100 occupied, -1 unknown; unknown blocks)
+        robot_radius: within this distance of an obstacle a cell is lethal to the robot's centre
+        inflation_radius: costs decay to zero at this distance
+        resolution: metres per costmap cell, rounded to a whole number of map cells
+        crop_margin: metres kept around the bounding box of the map's occupied cells
+        person_radius: a marked person is an obstacle disc of this radius
+    """
+
+    def __init__(self, occupancy_map: OccupancyMapLike, *, robot_radius: float = ROBOT_RADIUS,
+                 inflation_radius: float = INFLATION_RADIUS, cost_scaling_factor: float = 5.0,
+                 resolution: float = 0.1, crop_margin: float = 1.0,
+                 person_radius: float = PERSON_RADIUS, lidar: Lidar | None = None) -> None:
+        self.map = occupancy_map
+        self.inflation = Inflation(robot_radius=robot_radius, inflation_radius=inflation_radius,
+                                   cost_scaling_factor=cost_scaling_factor)
+        self.person_radius = person_radius
+        self.lidar = lidar or Lidar()
+        self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
+        self.frame, wall_distance = _coarse_wall_distance(
+            occupancy_map, self._walls, resolution=resolution, margin=crop_margin)
+        self.static = self.inflation.costs(wall_distance)
+        self.marks: tuple[PersonMark, ...] = ()
+        self.visible_people: tuple[tuple[float, float], ...] = ()
+        self.version = 0
+        self._costs = self.static
+        self._costs_version = 0
+
+    # ------------------------------------------------------------------ queries
+    def costs(self) -> np.ndarray:
+        """The combined grid (static and people), rebuilt only when the marks changed."""
+        if self._costs_version != self.version:
+            self._costs = self._with_people(self.static.copy())
+            self._costs_version = self.version
+        return self._costs
+
+    def cost_at(self, x: float, y: float) -> int:
+        """Combined cost under a world point; lethal outside the grid."""
+        row, col = self.frame.cell_of(x, y)
+        if not self.frame.contains(row, col):
+            return LETHAL
+        return int(self.costs()[row, col])
+
+    # ------------------------------------------------------------------ people
+    def observe(self, robot_x: float, robot_y: float, robot_yaw: float,
+                people_xy: list[tuple[float, float]] | np.ndarray, now: float) -> None:
+        """One lidar sweep: mark the people in view, clear old marks in view."""
+        robot = np.array([robot_x, robot_y], dtype=np.float64)
+        people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
+        seen = people[self._in_view(robot, robot_yaw, people, occluders=people)]
+        old = np.array([(mark.x, mark.y) for mark in self.marks]).reshape(-1, 2)
+        keep = ~self._in_view(robot, robot_yaw, old, occluders=seen) & ~_near_any(
+            old, seen, self.person_radius)
+        marks = tuple(mark for mark, kept in zip(self.marks, keep, strict=True) if kept)
+        marks += tuple(PersonMark(float(x), float(y), now) for x, y in seen)
+        self.visible_people = tuple((float(x), float(y)) for x, y in seen)
+        self._set_marks(marks)
+
+    def clear(self) -> None:
+        """Forget every mark (what clear_costmaps does)."""
+        self._set_marks(())
+
+    def _set_marks(self, marks: tuple[PersonMark, ...]) -> None:
+        if sorted((m.x, m.y) for m in marks) != sorted((m.x, m.y) for m in self.marks):
+            self.version += 1
+        self.marks = marks
+
+    def _with_people(self, costs: np.ndarray) -> np.ndarray:
+        reach = self.person_radius + self.inflation.inflation_radius
+        frame = self.frame
+        for mark in self.marks:
+            row0, col0 = frame.cell_of(mark.x - reach, mark.y - reach)
+            row1, col1 = frame.cell_of(mark.x + reach, mark.y + reach)
+            row0, col0 = max(row0, 0), max(col0, 0)
+            row1, col1 = min(row1, frame.rows - 1), min(col1, frame.cols - 1)
+            if row0 > row1 or col0 > col1:
+                continue
+            rows, cols = np.mgrid[row0:row1 + 1, col0:col1 + 1]
+            xs, ys = frame.centres(rows, cols)
+            gap = np.hypot(xs - mark.x, ys - mark.y) - self.person_radius
+            window = costs[row0:row1 + 1, col0:col1 + 1]
+            np.maximum(window, self.inflation.costs(gap), out=window)
+        return costs
+
+    # ------------------------------------------------------------------ the lidar
+    def _in_view(self, robot: np.ndarray, yaw: float, targets: np.ndarray, *,
+                 occluders: np.ndarray) -> np.ndarray:
+        """Which targets (person centres) the lidar at ``robot`` facing ``yaw`` would hit."""
+        offsets = targets - robot
+        distance = np.hypot(offsets[:, 0], offsets[:, 1])
+        surface = distance - self.person_radius
+        bearing = np.arctan2(offsets[:, 1], offsets[:, 0]) - yaw
+        bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
+        visible = ((np.abs(bearing) <= self.lidar.half_angle)
+                   & (surface >= self.lidar.min_range) & (surface <= self.lidar.max_range))
+        candidates = np.flatnonzero(visible)
+        if candidates.size:
+            visible[candidates] = self._wall_free(robot, targets[candidates])
+            visible[candidates] &= ~self._hidden_by_people(robot, targets[candidates], occluders)
+        return visible
+
+    def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        """Whether each ray from the robot to a target's surface misses every wall cell."""
+        offsets = targets - robot
+        lengths = np.hypot(offsets[:, 0], offsets[:, 1]) - self.person_radius
+        step = 0.5 * self.map.resolution
+        samples = np.arange(self.lidar.min_range, float(lengths.max()) + step, step)
+        along = samples[None, :] <= lengths[:, None]
+        unit = offsets / np.maximum(lengths + self.person_radius, 1e-9)[:, None]
+        xs = robot[0] + unit[:, :1] * samples[None, :]
+        ys = robot[1] + unit[:, 1:] * samples[None, :]
+        cols = np.floor((xs - self.map.origin_x) / self.map.resolution).astype(np.intp)
+        rows = np.floor((ys - self.map.origin_y) / self.map.resolution).astype(np.intp)
+        height, width = self._walls.shape
+        inside = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
+        walls = self._walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)]
+        return ~np.any(along & (walls | ~inside), axis=1)
+
+    def _hidden_by_people(self, robot: np.ndarray, targets: np.ndarray,
+                          occluders: np.ndarray) -> np.ndarray:
+        """Whether a nearer person's disc crosses each ray from the robot to a target."""
+        if occluders.size == 0:
+            return np.zeros(len(targets), dtype=bool)
+        offsets = targets - robot
+        distance = np.maximum(np.hypot(offsets[:, 0], offsets[:, 1]), 1e-9)
+        unit = offsets / distance[:, None]
+        relative = occluders[None, :, :] - robot[None, None, :]
+        along = np.einsum("tod,td->to", relative, unit)
+        across = np.abs(relative[:, :, 0] * unit[:, None, 1] - relative[:, :, 1] * unit[:, None, 0])
+        in_front = (along > 0.0) & (along < distance[:, None] - self.person_radius)
+        return np.any(in_front & (across < self.person_radius), axis=1)
+
+
+def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarray:
+    """Which points lie within ``radius`` of any of the others."""
+    if points.size == 0 or others.size == 0:
+        return np.zeros(len(points), dtype=bool)
+    gaps = np.hypot(points[:, None, 0] - others[None, :, 0],
+                    points[:, None, 1] - others[None, :, 1])
+    return np.any(gaps <= radius, axis=1)
+
+
+def _coarse_wall_distance(occupancy_map: OccupancyMapLike, walls: np.ndarray, *,
+                          resolution: float, margin: float) -> tuple[GridFrame, np.ndarray]:
+    """The costmap's frame and, per coarse cell, metres to the nearest wall cell.
+
+    The frame covers the occupied cells' bounding box plus ``margin``, clipped to the map and
+    grown to whole coarse cells; anything beyond the frame or the map counts as wall.
+    """
+    fine = float(occupancy_map.resolution)
+    factor = max(1, round(resolution / fine))
+    occupied_rows, occupied_cols = np.nonzero(np.asarray(occupancy_map.grid) == 100)
+    height, width = walls.shape
+    if occupied_rows.size:
+        pad = math.ceil(margin / fine)
+        row0, row1 = max(occupied_rows.min() - pad, 0), min(occupied_rows.max() + pad + 1, height)
+        col0, col1 = max(occupied_cols.min() - pad, 0), min(occupied_cols.max() + pad + 1, width)
+    else:
+        row0, row1, col0, col1 = 0, height, 0, width
+    rows, cols = -(-(row1 - row0) // factor), -(-(col1 - col0) // factor)
+    window = np.ones((rows * factor, cols * factor), dtype=bool)
+    window[:row1 - row0, :col1 - col0] = walls[row0:row1, col0:col1]
+    walled = np.pad(window, 1, constant_values=True)  # beyond the map is wall
+    distance = ndimage.distance_transform_edt(~walled)[1:-1, 1:-1] * fine
+    coarse = distance.reshape(rows, factor, cols, factor).min(axis=(1, 3))
+    frame = GridFrame(origin_x=float(occupancy_map.origin_x) + int(col0) * fine,
+                      origin_y=float(occupancy_map.origin_y) + int(row0) * fine,
+                      resolution=factor * fine, rows=int(rows), cols=int(cols))
+    return frame, coarse

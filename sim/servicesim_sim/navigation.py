@@ -1,0 +1,421 @@
+"""Navigation to a pose: plan on the costmap, follow the path, recover, succeed or abort.
+
+The engine drives a :class:`Navigator` once per physics step: it hands over the robot's pose and
+everyone's position, and gets the (v, w) to apply for that step. Everything runs in sim time.
+
+Design intent:
+
+* Following is pure pursuit on the planned polyline, as a differential drive: the robot turns on
+  the spot when the way it should head is far from the way it faces, drives to a sharp corner of
+  the path and turns there (so it keeps the path through doors instead of cutting the corner),
+  and slows down before corners and the goal. Within the goal tolerance (0.3 m) it stops and
+  turns to the goal yaw (0.262 rad), like Nav2's stateful goal checker.
+* The costmap sees people through the lidar, ten sweeps a sim second. The path is replanned
+  every second when the costmap changed, and when the robot strays from it.
+* A person within 0.7 m ahead on the path (between the robot's front and their body) stops the
+  robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
+  no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
+  other time. Each wait is a recovery. Blocked for 20 s in all, navigation aborts.
+* A robot that has not moved 0.25 m in 10 s backs up a little and replans (a recovery); after
+  20 s without progress navigation aborts.
+* Failures carry Nav2's numeric codes: the planner's (ComputePathToPose), the follower's
+  (FollowPath) or the navigator's own (NavigateToPose), with a sentence for a human.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Literal
+
+import numpy as np
+
+from servicesim_sim.costmap import Costmap, OccupancyMapLike
+from servicesim_sim.planner import ComputePathToPoseError, Planner, PlanResult, path_length
+
+NavigationStatus = Literal["idle", "running", "succeeded", "aborted", "canceled"]
+Pose = tuple[float, float, float]
+Twist = tuple[float, float]
+STOP: Twist = (0.0, 0.0)
+
+
+class FollowPathError(IntEnum):
+    """nav2_msgs/action/FollowPath result codes (Nav2 Kilted)."""
+
+    NONE = 0
+    UNKNOWN = 100
+    INVALID_CONTROLLER = 101
+    TF_ERROR = 102
+    INVALID_PATH = 103
+    PATIENCE_EXCEEDED = 104
+    FAILED_TO_MAKE_PROGRESS = 105
+    NO_VALID_CONTROL = 106
+    CONTROLLER_TIMED_OUT = 107
+
+
+class NavigateToPoseError(IntEnum):
+    """nav2_msgs/action/NavigateToPose result codes (Nav2 Kilted)."""
+
+    NONE = 0
+    UNKNOWN = 9000
+    FAILED_TO_LOAD_BEHAVIOR_TREE = 9001
+    TF_ERROR = 9002
+    TIMEOUT = 9003
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """How the navigator follows, waits and recovers (distances in m, times in sim s)."""
+
+    lookahead: float = 0.5
+    rotate_in_place_above: float = 0.7  # rad of heading error
+    sharp_corner: float = 0.6  # rad: corners turning more are driven to and turned on the spot
+    corner_capture: float = 0.08  # a corner this close counts as reached
+    approach_gain: float = 0.8  # speed (m/s) per metre left to a corner or the goal
+    creep_speed: float = 0.08
+    turn_gain: float = 2.0
+    min_turn_rate: float = 0.2
+    observe_period: float = 0.1
+    replan_period: float = 1.0
+    off_path: float = 0.6
+    person_gap: float = 0.7  # from the robot's front to a person's body
+    robot_front: float = 0.25
+    person_radius: float = 0.3
+    person_across: float = 0.5  # a person this near the path is on it
+    wait: tuple[float, float] = (0.5, 1.5)
+    blocked_patience: float = 20.0
+    progress_distance: float = 0.25
+    progress_window: float = 10.0
+    backup_speed: float = 0.15
+    backup_time: float = 1.0
+
+
+class PolylinePath:
+    """A planned path as a polyline with arc lengths, and the corners to stop and turn at."""
+
+    def __init__(self, waypoints: list[tuple[float, float]], *, sharp_corner: float) -> None:
+        self.points = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
+        segments = np.diff(self.points, axis=0)
+        self.lengths = np.hypot(segments[:, 0], segments[:, 1])
+        self.arc = np.concatenate(([0.0], np.cumsum(self.lengths)))
+        self.total = float(self.arc[-1])
+        self.corners = self._sharp_corners(sharp_corner)
+
+    def _sharp_corners(self, sharp_corner: float, *, reach: float = 0.3) -> list[float]:
+        corners: list[float] = []
+        for at in self.arc[1:-1]:
+            before = self.point_at(at) - self.point_at(at - reach)
+            after = self.point_at(at + reach) - self.point_at(at)
+            turn = math.atan2(before[0] * after[1] - before[1] * after[0],
+                              float(before @ after))
+            if abs(turn) >= sharp_corner and (not corners or at - corners[-1] > reach):
+                corners.append(float(at))
+        return corners
+
+    def point_at(self, s: float) -> np.ndarray:
+        s = min(max(s, 0.0), self.total)
+        index = min(int(np.searchsorted(self.arc, s, side="right")) - 1, len(self.lengths) - 1)
+        if index < 0 or self.lengths[index] == 0.0:
+            return self.points[max(index, 0)].copy()
+        fraction = (s - self.arc[index]) / self.lengths[index]
+        return self.points[index] + fraction * (self.points[index + 1] - self.points[index])
+
+    def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
+        """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``."""
+        start, end = self.points[:-1], self.points[1:]
+        span = end - start
+        fraction = np.clip(((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
+                           / np.maximum(self.lengths ** 2, 1e-12), 0.0, 1.0)
+        nearest = start + fraction[:, None] * span
+        gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
+        arcs = self.arc[:-1] + fraction * self.lengths
+        gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
+        best = int(np.argmin(gaps))
+        if not np.isfinite(gaps[best]):
+            return near, float(np.hypot(*(self.point_at(near) - (x, y))))
+        return float(arcs[best]), float(gaps[best])
+
+    def next_stop(self, s: float, *, capture: float) -> float:
+        """Arc length of the next sharp corner not yet reached, else of the path's end."""
+        for corner in self.corners:
+            if corner > s + capture:
+                return corner
+        return self.total
+
+    def samples(self, s: float, length: float, *, step: float = 0.1) -> np.ndarray:
+        """Points every ``step`` along the path from ``s`` for ``length`` metres."""
+        end = min(s + length, self.total)
+        count = max(math.ceil((end - s) / step), 0) + 1
+        return np.array([self.point_at(a) for a in np.linspace(s, end, count)])
+
+
+def wrapped(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def clamped(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_speed: float
+    max_turn_rate: float
+
+
+def turn_towards(error: float, limits: Limits, tuning: Tuning) -> float:
+    """A turn rate on the spot that closes a heading error without crawling at the end."""
+    rate = clamped(tuning.turn_gain * error, limits.max_turn_rate)
+    if abs(rate) < tuning.min_turn_rate:
+        rate = math.copysign(min(tuning.min_turn_rate, limits.max_turn_rate), error)
+    return rate
+
+
+def pursue(path: PolylinePath, s: float, pose: Pose, limits: Limits, tuning: Tuning) -> Twist:
+    """Pure pursuit of the path from arc length ``s``, stopping to turn at sharp corners."""
+    x, y, yaw = pose
+    stop = path.next_stop(s, capture=tuning.corner_capture)
+    target = path.point_at(min(s + tuning.lookahead, stop))
+    distance = math.hypot(target[0] - x, target[1] - y)
+    error = wrapped(math.atan2(target[1] - y, target[0] - x) - yaw)
+    if abs(error) > tuning.rotate_in_place_above:
+        return 0.0, turn_towards(error, limits, tuning)
+    to_stop = max(stop - s, 0.0)
+    speed = min(limits.max_speed, max(tuning.creep_speed, tuning.approach_gain * to_stop))
+    speed *= 1.0 - 0.5 * abs(error) / tuning.rotate_in_place_above
+    turn = 2.0 * speed * math.sin(error) / max(distance, 1e-3)
+    if abs(turn) > limits.max_turn_rate:
+        speed *= limits.max_turn_rate / abs(turn)
+        turn = math.copysign(limits.max_turn_rate, turn)
+    return speed, turn
+
+
+class Navigator:
+    """One navigation goal at a time, driven step by step by the engine (see module docstring).
+
+    ``status``, ``error_code``, ``error_msg``, ``distance_remaining``, ``recoveries`` and
+    ``path`` describe the current (or last) goal, like NavigateToPose's feedback and result.
+    """
+
+    def __init__(self, occupancy_map: OccupancyMapLike, *, max_speed: float = 0.5,
+                 max_turn_rate: float = 1.0, xy_tolerance: float = 0.3,
+                 yaw_tolerance: float = 0.262, rng: np.random.Generator,
+                 tuning: Tuning | None = None) -> None:
+        self.tuning = tuning or Tuning()
+        self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
+        self.xy_tolerance = xy_tolerance
+        self.yaw_tolerance = yaw_tolerance
+        self.rng = rng
+        self.costmap = Costmap(occupancy_map, person_radius=self.tuning.person_radius)
+        self.planner = Planner(self.costmap, goal_tolerance=xy_tolerance)
+        self.status: NavigationStatus = "idle"
+        self.error_code = 0
+        self.error_msg = ""
+        self.distance_remaining = 0.0
+        self.recoveries = 0
+        self.path: list[tuple[float, float]] = []
+        self._observed_at = -math.inf
+        self._people: list[tuple[float, float]] = []
+        self._reset_goal(goal=None, now=0.0, abort_after_s=None)
+
+    def _reset_goal(self, *, goal: Pose | None, now: float, abort_after_s: float | None) -> None:
+        self._goal = goal
+        self._abort_at = None if abort_after_s is None else now + abort_after_s
+        self._track: PolylinePath | None = None
+        self._s = 0.0
+        self._arrival_radius = self.xy_tolerance
+        self._turning_to_goal = False
+        self._replan_needed = True
+        self._planned_at = -math.inf
+        self._planned_version = -1
+        self._blocked_since: float | None = None
+        self._blocked_code = 0
+        self._blocked_msg = ""
+        self._retry_at = -math.inf
+        self._waits = 0
+        self._anchor: tuple[float, float, float] | None = None
+        self._backed_up = False
+        self._backing_until = -math.inf
+
+    # ------------------------------------------------------------------ the engine's calls
+    def start(self, x: float, y: float, yaw: float, *, now: float,
+              abort_after_s: float | None = None) -> None:
+        """Navigate to (x, y, yaw); a goal already running is replaced."""
+        self._reset_goal(goal=(x, y, yaw), now=now, abort_after_s=abort_after_s)
+        self.status, self.error_code, self.error_msg = "running", 0, ""
+        self.recoveries, self.path, self.distance_remaining = 0, [], 0.0
+        if not all(math.isfinite(value) for value in (x, y, yaw)):
+            self._abort(ComputePathToPoseError.GOAL_OUTSIDE_MAP,
+                        f"goal ({x}, {y}, {yaw}) is not a finite pose")
+
+    def cancel(self) -> None:
+        if self.status == "running":
+            self.status = "canceled"
+            self._reset_goal(goal=None, now=0.0, abort_after_s=None)
+
+    def clear_costmaps(self) -> None:
+        """Forget every person mark; a running goal replans on its next step."""
+        self.costmap.clear()
+        self._replan_needed = True
+
+    def command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
+        """The (v, w) for this step; observes people first, stops unless a goal is running."""
+        self._people = people
+        self._observe(pose, now)
+        if self.status != "running":
+            return STOP
+        if not all(math.isfinite(value) for value in pose):
+            return self._abort(NavigateToPoseError.TF_ERROR, "the robot's pose is unknown")
+        if self._abort_at is not None and now >= self._abort_at:
+            return self._abort(NavigateToPoseError.UNKNOWN,
+                               "navigation aborted: the simulator's random navigation failure")
+        if now < self._backing_until:
+            return -self.tuning.backup_speed, 0.0
+        if self._turning_to_goal:
+            return self._turn_to_goal(pose)
+        if self._blocked_since is not None:
+            return self._while_blocked(pose, now)
+        if self._replan_due(pose, now) and not self._replan(pose, now):
+            return STOP
+        return self._follow(pose, now)
+
+    # ------------------------------------------------------------------ planning
+    def _replan_due(self, pose: Pose, now: float) -> bool:
+        if self._track is None or self._replan_needed:
+            return True
+        self._s, off = self._track.locate(pose[0], pose[1], near=self._s)
+        if off > self.tuning.off_path:
+            return True
+        return (now - self._planned_at >= self.tuning.replan_period
+                and self.costmap.version != self._planned_version)
+
+    def _replan(self, pose: Pose, now: float) -> bool:
+        """Plan from the pose; False when navigation aborted or now waits for people."""
+        assert self._goal is not None
+        start, goal = (pose[0], pose[1]), (self._goal[0], self._goal[1])
+        result = self.planner.plan(start, goal)
+        self._planned_at, self._planned_version = now, self.costmap.version
+        self._replan_needed = False
+        if result.succeeded:
+            self._take(result)
+            return True
+        without_people = self.planner.plan(start, goal, with_people=False)
+        if not without_people.succeeded:
+            self._abort(without_people.error_code, without_people.error_msg)
+            return False
+        self._block(now, result.error_code, f"{result.error_msg} (people are in the way)")
+        return False
+
+    def _take(self, result: PlanResult) -> None:
+        assert result.waypoints is not None and result.goal is not None and self._goal is not None
+        self._track = PolylinePath(result.waypoints, sharp_corner=self.tuning.sharp_corner)
+        self._s = 0.0
+        self.path = list(result.waypoints)
+        self.distance_remaining = path_length(result.waypoints)
+        snapped = math.dist(result.goal, self._goal[:2])
+        self._arrival_radius = max(self.xy_tolerance - snapped, 0.05)
+
+    # ------------------------------------------------------------------ following
+    def _follow(self, pose: Pose, now: float) -> Twist:
+        assert self._track is not None
+        x, y, _ = pose
+        self._s, _ = self._track.locate(x, y, near=self._s)
+        self.distance_remaining = max(self._track.total - self._s, 0.0)
+        end = self._track.points[-1]
+        if math.hypot(end[0] - x, end[1] - y) <= self._arrival_radius:
+            self._turning_to_goal = True
+            return self._turn_to_goal(pose)
+        if self._person_ahead():
+            self._block(now, FollowPathError.FAILED_TO_MAKE_PROGRESS,
+                        "a person stands on the path ahead")
+            return STOP
+        recovery = self._check_progress(pose, now)
+        if recovery is not None:
+            return recovery
+        return pursue(self._track, self._s, pose, self.limits, self.tuning)
+
+    def _turn_to_goal(self, pose: Pose) -> Twist:
+        assert self._goal is not None
+        error = wrapped(self._goal[2] - pose[2])
+        if abs(error) <= self.yaw_tolerance:
+            self.status, self.distance_remaining = "succeeded", 0.0
+            return STOP
+        return 0.0, turn_towards(error, self.limits, self.tuning)
+
+    def _person_ahead(self) -> bool:
+        people = self.costmap.visible_people
+        if not people or self._track is None:
+            return False
+        tuning = self.tuning
+        reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
+        samples = self._track.samples(self._s, reach)
+        spots = np.asarray(people, dtype=np.float64)
+        gaps = np.hypot(spots[:, None, 0] - samples[None, :, 0],
+                        spots[:, None, 1] - samples[None, :, 1])
+        return bool(np.any(gaps.min(axis=1) < tuning.person_across))
+
+    # ------------------------------------------------------------------ recoveries
+    def _block(self, now: float, code: int, message: str) -> None:
+        """The way is blocked by people: wait (a recovery), then try again."""
+        if self._blocked_since is None:
+            self._blocked_since, self._waits = now, 0
+        self._blocked_code, self._blocked_msg = int(code), message
+        self.recoveries += 1
+        self._waits += 1
+        self._retry_at = now + float(self.rng.uniform(*self.tuning.wait))
+
+    def _while_blocked(self, pose: Pose, now: float) -> Twist:
+        assert self._blocked_since is not None
+        self._anchor = (pose[0], pose[1], now)  # waiting is not a lack of progress
+        patience = self.tuning.blocked_patience
+        if now - self._blocked_since > patience:
+            return self._abort(self._blocked_code,
+                               f"{self._blocked_msg}; blocked for {patience:.0f} s")
+        if now < self._retry_at:
+            return STOP
+        if self._waits % 2 == 0:  # every other try, forget marks that may be stale
+            self.costmap.clear()
+            self._observe(pose, now, force=True)
+        if not self._replan(pose, now):
+            return STOP
+        if self._person_ahead():
+            self._block(now, FollowPathError.FAILED_TO_MAKE_PROGRESS,
+                        "a person stands on the path ahead")
+            return STOP
+        self._blocked_since = None
+        return self._follow(pose, now)
+
+    def _check_progress(self, pose: Pose, now: float) -> Twist | None:
+        """None while the robot moves on, else a recovery (backing up) or an abort."""
+        x, y, _ = pose
+        tuning = self.tuning
+        anchor = self._anchor
+        if anchor is None or math.hypot(x - anchor[0], y - anchor[1]) >= tuning.progress_distance:
+            self._anchor, self._backed_up = (x, y, now), False
+            return None
+        still = now - anchor[2]
+        if still > 2.0 * tuning.progress_window:
+            return self._abort(FollowPathError.FAILED_TO_MAKE_PROGRESS,
+                               f"the robot has not moved {tuning.progress_distance:.2f} m in "
+                               f"{2.0 * tuning.progress_window:.0f} s")
+        if still > tuning.progress_window and not self._backed_up:
+            self._backed_up, self._replan_needed = True, True
+            self.recoveries += 1
+            self.costmap.clear()
+            self._backing_until = now + tuning.backup_time
+            return -tuning.backup_speed, 0.0
+        return None
+
+    # ------------------------------------------------------------------ bookkeeping
+    def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
+        if not force and 0.0 <= now - self._observed_at < self.tuning.observe_period:
+            return
+        if not all(math.isfinite(value) for value in pose):
+            return
+        self._observed_at = now
+        self.costmap.observe(pose[0], pose[1], pose[2], self._people, now)
+
+    def _abort(self, code: int, message: str) -> Twist:
+        self.status, self.error_code, self.error_msg = "aborted", int(code), message
+        return STOP

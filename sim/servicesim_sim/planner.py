@@ -1,0 +1,283 @@
+"""The global planner: cheapest paths on the costmap, shortened by line of sight.
+
+Design intent:
+
+* The search is Dijkstra's algorithm run by ``scipy.sparse.csgraph`` (a binary heap in compiled
+  code) on the costmap's 8-connected grid. Measured on the competition map (0.1 m cells,
+  ~97 000 traversable): a full single-source search takes ~12 ms, while the same search made
+  goal-directed (A* with the octile heuristic, as reduced edge costs plus a search limit) takes
+  ~7 ms but needs ~5 ms per goal to reweight the edges; a pure-Python heap A* takes hundreds of
+  milliseconds. So the planner runs plain Dijkstra, and the octile distance is only the length of
+  a grid step.
+* The graph's shape (which cells join which) is built once from the static layer. Only the edge
+  weights follow the people marks: stepping onto a cell costs its length times
+  ``1 + cost_weight * cost / 252`` and a lethal cell cannot be entered; weights are recomputed
+  once per costmap change.
+* A start in lethal cost (the robot pressed against a wall or a person) first escapes to the
+  nearest non-lethal cell; a lethal goal snaps to the nearest non-lethal cell close enough that
+  reaching it still meets the goal tolerance, else the plan fails with GOAL_OCCUPIED.
+* The cell path is shortened greedily: a waypoint is dropped when the straight segment that
+  replaces it crosses no cell costlier than the stretch of path it replaces, so shortening never
+  brings the path nearer a wall or a person.
+* Failures carry Nav2's ComputePathToPose error codes (nav2_msgs, Kilted) and a sentence.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from servicesim_sim.costmap import INSCRIBED, MAX_INFLATED, Costmap
+
+Point = tuple[float, float]
+
+# The 8 grid steps: (row offset, column offset).
+STEPS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
+
+
+class ComputePathToPoseError(IntEnum):
+    """nav2_msgs/action/ComputePathToPose result codes (Nav2 Kilted)."""
+
+    NONE = 0
+    UNKNOWN = 200
+    INVALID_PLANNER = 201
+    TF_ERROR = 202
+    START_OUTSIDE_MAP = 203
+    GOAL_OUTSIDE_MAP = 204
+    START_OCCUPIED = 205
+    GOAL_OCCUPIED = 206
+    TIMEOUT = 207
+    NO_VALID_PATH = 208
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A plan: waypoints from the start to ``goal`` (the goal actually reached), or a failure."""
+
+    waypoints: list[Point] | None
+    error_code: int = ComputePathToPoseError.NONE
+    error_msg: str = ""
+    goal: Point | None = None
+
+    @property
+    def succeeded(self) -> bool:
+        return self.waypoints is not None
+
+
+def failure(code: ComputePathToPoseError, message: str) -> PlanResult:
+    return PlanResult(waypoints=None, error_code=int(code), error_msg=message)
+
+
+class GridGraph:
+    """The 8-connected graph of the cells the static layer lets the robot's centre enter."""
+
+    def __init__(self, static_costs: np.ndarray) -> None:
+        rows, cols = static_costs.shape
+        self.shape = (rows, cols)
+        index = np.arange(rows * cols).reshape(rows, cols)
+        open_cells = static_costs < INSCRIBED
+        sources, targets, lengths = [], [], []
+        for d_row, d_col in STEPS:
+            here = (slice(max(-d_row, 0), rows - max(d_row, 0)),
+                    slice(max(-d_col, 0), cols - max(d_col, 0)))
+            there = (slice(max(d_row, 0), rows - max(-d_row, 0)),
+                     slice(max(d_col, 0), cols - max(-d_col, 0)))
+            both = open_cells[here] & open_cells[there]
+            sources.append(index[here][both])
+            targets.append(index[there][both])
+            lengths.append(np.full(int(both.sum()), math.hypot(d_row, d_col)))
+        sources_all = np.concatenate(sources)
+        order = np.argsort(sources_all, kind="stable")
+        self.targets = np.concatenate(targets)[order]
+        self.lengths = np.concatenate(lengths)[order]
+        self.indptr = np.searchsorted(sources_all[order], np.arange(rows * cols + 1))
+
+    def weighted(self, costs: np.ndarray, *, cost_weight: float) -> sparse.csr_matrix:
+        """The graph with each step weighted by the cost of the cell it enters."""
+        entered = costs.ravel()[self.targets].astype(np.float64)
+        weights = self.lengths * (1.0 + cost_weight * entered / MAX_INFLATED)
+        weights[entered >= INSCRIBED] = np.inf
+        size = self.shape[0] * self.shape[1]
+        return sparse.csr_matrix((weights, self.targets, self.indptr), shape=(size, size))
+
+
+class Planner:
+    """Plans on one costmap; build it once and call :meth:`plan` as often as needed.
+
+    Args:
+        costmap: static walls and people marks
+        cost_weight: how many grid steps a step onto a cell of cost 252 is worth, beyond its own
+        goal_tolerance: a lethal goal may snap this close (less a 5 cm margin) to a free cell
+        escape_radius: how far a lethal start may escape to a free cell
+    """
+
+    def __init__(self, costmap: Costmap, *, cost_weight: float = 4.0,
+                 goal_tolerance: float = 0.3, escape_radius: float = 0.6) -> None:
+        self.costmap = costmap
+        self.cost_weight = cost_weight
+        self.goal_snap = max(goal_tolerance - 0.05, 0.0)
+        self.escape_radius = escape_radius
+        self.graph = GridGraph(costmap.static)
+        self._weighted: dict[bool, tuple[int, sparse.csr_matrix]] = {}
+
+    def plan(self, start: Point, goal: Point, *, with_people: bool = True) -> PlanResult:
+        """A path from ``start`` to ``goal``; ``with_people=False`` ignores the people marks."""
+        frame = self.costmap.frame
+        start_cell, goal_cell = frame.cell_of(*start), frame.cell_of(*goal)
+        if not frame.contains(*start_cell):
+            return failure(ComputePathToPoseError.START_OUTSIDE_MAP,
+                           f"start ({start[0]:.2f}, {start[1]:.2f}) is outside the map")
+        if not frame.contains(*goal_cell):
+            return failure(ComputePathToPoseError.GOAL_OUTSIDE_MAP,
+                           f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map")
+        costs = self.costmap.costs() if with_people else self.costmap.static
+        source = self._nearest_open(costs, start_cell, self.escape_radius)
+        if source is None:
+            return failure(ComputePathToPoseError.START_OCCUPIED,
+                           f"start ({start[0]:.2f}, {start[1]:.2f}) is in an obstacle with no "
+                           f"free space within {self.escape_radius:.2f} m")
+        target = self._nearest_open(costs, goal_cell, self.goal_snap)
+        if target is None:
+            return failure(ComputePathToPoseError.GOAL_OCCUPIED,
+                           f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is in an obstacle with no "
+                           f"free space within {self.goal_snap:.2f} m")
+        cells = self._cheapest_cells(costs, source, target, with_people=with_people)
+        if cells is None:
+            return failure(ComputePathToPoseError.NO_VALID_PATH,
+                           f"no path from ({start[0]:.2f}, {start[1]:.2f}) to "
+                           f"({goal[0]:.2f}, {goal[1]:.2f}): the goal is cut off")
+        return self._result(costs, cells, start, goal, goal_cell=goal_cell)
+
+    # ------------------------------------------------------------------ search
+    def _cheapest_cells(self, costs: np.ndarray, source: tuple[int, int],
+                        target: tuple[int, int], *, with_people: bool) -> np.ndarray | None:
+        cols = self.graph.shape[1]
+        source_index, target_index = source[0] * cols + source[1], target[0] * cols + target[1]
+        if source_index == target_index:
+            return np.array([source_index])
+        distances, predecessors = csgraph.dijkstra(
+            self._graph(costs, with_people=with_people), directed=True, indices=source_index,
+            return_predecessors=True)
+        if not np.isfinite(distances[target_index]):
+            return None
+        chain = [target_index]
+        while chain[-1] != source_index:
+            chain.append(int(predecessors[chain[-1]]))
+        return np.array(chain[::-1])
+
+    def _graph(self, costs: np.ndarray, *, with_people: bool) -> sparse.csr_matrix:
+        version = self.costmap.version if with_people else -1
+        cached = self._weighted.get(with_people)
+        if cached is None or cached[0] != version:
+            cached = (version, self.graph.weighted(costs, cost_weight=self.cost_weight))
+            self._weighted[with_people] = cached
+        return cached[1]
+
+    def _nearest_open(self, costs: np.ndarray, cell: tuple[int, int],
+                      radius: float) -> tuple[int, int] | None:
+        """``cell`` when the robot may stand there, else the nearest such cell within radius."""
+        if costs[cell] < INSCRIBED and self._statically_open(cell):
+            return cell
+        reach = int(radius / self.costmap.frame.resolution)
+        row0, col0 = max(cell[0] - reach, 0), max(cell[1] - reach, 0)
+        window = costs[row0:cell[0] + reach + 1, col0:cell[1] + reach + 1]
+        static = self.costmap.static[row0:cell[0] + reach + 1, col0:cell[1] + reach + 1]
+        rows, cols = np.nonzero((window < INSCRIBED) & (static < INSCRIBED))
+        if rows.size == 0:
+            return None
+        gaps = np.hypot(rows + row0 - cell[0], cols + col0 - cell[1])
+        best = int(np.argmin(gaps))
+        if gaps[best] > reach:
+            return None
+        return int(rows[best] + row0), int(cols[best] + col0)
+
+    def _statically_open(self, cell: tuple[int, int]) -> bool:
+        return bool(self.costmap.static[cell] < INSCRIBED)
+
+    # ------------------------------------------------------------------ result
+    def _result(self, costs: np.ndarray, cells: np.ndarray, start: Point, goal: Point, *,
+                goal_cell: tuple[int, int]) -> PlanResult:
+        cols = self.graph.shape[1]
+        rows_, cols_ = cells // cols, cells % cols
+        kept = shortcut(costs, rows_, cols_)
+        xs, ys = self.costmap.frame.centres(rows_[kept], cols_[kept])
+        points = [(float(x), float(y)) for x, y in zip(xs, ys, strict=True)]
+        reached_goal = goal if (int(rows_[-1]), int(cols_[-1])) == goal_cell else points[-1]
+        first = (int(rows_[0]), int(cols_[0]))
+        waypoints = [start, *points[1:-1], reached_goal]
+        if first != self.costmap.frame.cell_of(*start):
+            waypoints.insert(1, points[0])  # the escape from a lethal start
+        return PlanResult(waypoints=_without_repeats(waypoints), goal=reached_goal)
+
+
+def shortcut(costs: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> list[int]:
+    """Indices of the cells kept when a cell path is shortened by line of sight.
+
+    From each kept cell the next kept one is the farthest (found by doubling, then bisection)
+    whose straight segment crosses no cell costlier than the path between them; a last pass
+    drops any kept cell whose neighbours see each other.
+    """
+    path_costs = costs[rows, cols]
+    kept = [0]
+    last = len(rows) - 1
+    while kept[-1] < last:
+        here = kept[-1]
+        good, step = here + 1, 1
+        bad = None
+        while good < last:
+            probe = min(here + 2 * step, last)
+            if _straight_ok(costs, rows, cols, path_costs, here, probe):
+                good, step = probe, 2 * step
+            else:
+                bad = probe
+                break
+        while bad is not None and bad - good > 1:
+            middle = (good + bad) // 2
+            if _straight_ok(costs, rows, cols, path_costs, here, middle):
+                good = middle
+            else:
+                bad = middle
+        kept.append(good)
+    return _pruned(costs, rows, cols, path_costs, kept)
+
+
+def _pruned(costs: np.ndarray, rows: np.ndarray, cols: np.ndarray, path_costs: np.ndarray,
+            kept: list[int]) -> list[int]:
+    """``kept`` without the vertices whose neighbours see each other (left-over stair steps)."""
+    pruned = [kept[0]]
+    for index, vertex in enumerate(kept[1:-1], start=1):
+        if not _straight_ok(costs, rows, cols, path_costs, pruned[-1], kept[index + 1]):
+            pruned.append(vertex)
+    if len(kept) > 1:
+        pruned.append(kept[-1])
+    return pruned
+
+
+def _straight_ok(costs: np.ndarray, rows: np.ndarray, cols: np.ndarray, path_costs: np.ndarray,
+                 first: int, last: int) -> bool:
+    """Whether the segment between two path cells is no costlier than the path between them."""
+    span = max(abs(int(rows[last] - rows[first])), abs(int(cols[last] - cols[first])))
+    t = np.linspace(0.0, 1.0, 2 * span + 1)
+    line_rows = np.rint(rows[first] + t * (rows[last] - rows[first])).astype(np.intp)
+    line_cols = np.rint(cols[first] + t * (cols[last] - cols[first])).astype(np.intp)
+    return bool(costs[line_rows, line_cols].max() <= path_costs[first:last + 1].max())
+
+
+def _without_repeats(points: list[Point]) -> list[Point]:
+    result = [points[0]]
+    for point in points[1:]:
+        if math.dist(point, result[-1]) > 1e-6:
+            result.append(point)
+    if len(result) == 1:
+        result.append(points[-1])
+    return result
+
+
+def path_length(waypoints: list[Point]) -> float:
+    return sum(math.dist(a, b) for a, b in itertools.pairwise(waypoints))
