@@ -38,7 +38,7 @@ WALKER_SPEED_RANGE = (0.9, 1.2)  # m/s
 WALKER_STOP_DISTANCE = 1.5  # a robot this close in front stops a walker ...
 WALKER_STOP_HALF_ANGLE = math.radians(60.0)  # ... when within this angle of its heading
 WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
-WALKER_IDLER_CLEARANCE = 0.8  # ... and this far from idlers
+WALKER_IDLER_CLEARANCE = 0.6  # ... and this far from idlers
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
@@ -239,11 +239,12 @@ class RouteGrid:
         sources = np.unique(waypoints)
         _, predecessors = dijkstra(self.graph, directed=False, indices=sources,
                                    return_predecessors=True)
-        path = [waypoints[0]]
+        route = [self.points[waypoints[:1]]]
         for start, end in zip(waypoints, [*waypoints[1:], waypoints[0]], strict=True):
             row = predecessors[int(np.searchsorted(sources, start))]
-            path.extend(self._leg(row, start, end))
-        return self._straightened(self.points[path])
+            leg = self._straightened(self.points[[start, *self._leg(row, start, end)]])
+            route.append(leg[1:])
+        return np.vstack(route)
 
     def _waypoints(self, rng: np.random.Generator, count: int) -> list[int]:
         chosen = [int(self.nodes[rng.integers(self.nodes.size)])]
@@ -265,7 +266,7 @@ class RouteGrid:
         return leg[::-1]
 
     def _straightened(self, points: np.ndarray) -> np.ndarray:
-        """Drop every corner that a clear straight line can skip."""
+        """The path's ends, and those of its corners that no clear straight line can skip."""
         kept = [0]
         while kept[-1] < len(points) - 1:
             here, reach = kept[-1], kept[-1] + 1
@@ -273,9 +274,7 @@ class RouteGrid:
                     points[here], points[reach + 1], self.walkable):
                 reach += 1
             kept.append(reach)
-        line = points[kept]
-        steps = np.hypot(*np.diff(line, axis=0).T)
-        return np.vstack([line[:1], line[1:][steps > 1e-9]])
+        return points[kept]
 
 
 # ----------------------------------------------------------------------------------- walkers
@@ -293,6 +292,8 @@ class Walker:
     def on(cls, person: Person, route: np.ndarray, *, speed: float,
            start: float) -> Walker:
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(route, axis=0).T))])
+        if not along[-1] > 0.0:
+            raise ValueError(f"{person.name}: a walker's route needs some length")
         walker = cls(person=person, route=route, along=along, speed=speed, travelled=0.0)
         walker.advance(start * along[-1])
         return walker
