@@ -2,53 +2,39 @@
 
 The detector judges a blue shirt over red trousers and reads distance as 550·1.5 / height px;
 these tests look at the pictures the same way, with colour thresholds rather than exact values.
-The map is a stand-in with the shape of ``world.OccupancyMap``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from scipy import ndimage
 
 from servicesim_sim.camera import CEILING, FLOOR, FrontCamera, outfit, render_front_camera
+from servicesim_sim.world import OccupancyMap
 
 RESOLUTION = 0.05
 GUEST = "human_20843"
 WIDTH, HEIGHT = 640, 480
 
 
-@dataclass
-class GridMap:
-    """Stand-in for ``world.OccupancyMap``: row 0 at origin_y, rows grow with +y."""
-
-    grid: np.ndarray
-    resolution: float
-    origin_x: float
-    origin_y: float
-
-    def blocked_mask(self) -> np.ndarray:
-        return (self.grid < 0) | (self.grid >= 50)
-
-
-def hall(*, inner_wall_x: float | None = None) -> GridMap:
+def hall(*, inner_wall_x: float | None = None) -> OccupancyMap:
     """A 20 x 20 m hall, walls at x, y = 0 and 20; optionally a wall across it at x."""
     grid = np.zeros((440, 440), dtype=np.int8)  # 22 x 22 m from (-1, -1)
     grid[:20, :] = grid[-20:, :] = grid[:, :20] = grid[:, -20:] = 100
     if inner_wall_x is not None:
         col = round((inner_wall_x + 1.0) / RESOLUTION)
         grid[:, col:col + 2] = 100
-    return GridMap(grid=grid, resolution=RESOLUTION, origin_x=-1.0, origin_y=-1.0)
+    return OccupancyMap(grid=grid, resolution=RESOLUTION, origin_x=-1.0, origin_y=-1.0)
 
 
 HALL = hall()
 
 
 def picture(robot: tuple[float, float, float], people: list[tuple[str, str, float, float]],
-            occupancy_map: GridMap = HALL) -> np.ndarray:
+            occupancy_map: OccupancyMap = HALL) -> np.ndarray:
     return render_front_camera(robot=robot, people=people, guest_name=GUEST,
                                occupancy_map=occupancy_map)
 

@@ -1,7 +1,7 @@
 """The simulator's walkers and idlers on a small office map.
 
-The map is a stand-in with the shape of ``world.OccupancyMap``: a 20 x 12 m building with three
-rooms off a long wall, an open hall with a pillar, and unknown space outside.
+The map is a 20 x 12 m building with three rooms off a long wall, an open hall with a pillar,
+and unknown space outside.
 """
 
 from __future__ import annotations
@@ -9,39 +9,17 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from scipy import ndimage
 
 from servicesim_sim.people import IDLER, WALKER, Crowd, Person
+from servicesim_sim.world import OccupancyMap
 
 RESOLUTION = 0.05
 ORIGIN = (-2.0, -2.0)
 KEEP_CLEAR = [(2.0, 2.0, 1.5), (10.0, 6.0, 1.5)]
-
-
-@dataclass
-class GridMap:
-    """Stand-in for ``world.OccupancyMap``: row 0 at origin_y, rows grow with +y."""
-
-    grid: np.ndarray
-    resolution: float
-    origin_x: float
-    origin_y: float
-
-    def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
-        return (math.floor((y - self.origin_y) / self.resolution),
-                math.floor((x - self.origin_x) / self.resolution))
-
-    def blocked_mask(self) -> np.ndarray:
-        return (self.grid < 0) | (self.grid >= 50)
-
-    def is_free(self, x: float, y: float) -> bool:
-        row, col = self.world_to_cell(x, y)
-        inside = 0 <= row < self.grid.shape[0] and 0 <= col < self.grid.shape[1]
-        return inside and 0 <= int(self.grid[row, col]) < 50
 
 
 def wall(grid: np.ndarray, x0: float, y0: float, x1: float, y1: float) -> None:
@@ -51,7 +29,7 @@ def wall(grid: np.ndarray, x0: float, y0: float, x1: float, y1: float) -> None:
     grid[r0:r1 + 1, c0:c1 + 1] = 100
 
 
-def office_map() -> GridMap:
+def office_map() -> OccupancyMap:
     grid = np.full((320, 480), -1, dtype=np.int8)  # 24 x 16 m
     wall(grid, 0.0, 0.0, 20.0, 12.0)
     grid[42:279, 42:439] = 0  # inside the outer walls
@@ -62,11 +40,11 @@ def office_map() -> GridMap:
     wall(grid, 6.5, 0.0, 6.6, 4.0)
     wall(grid, 13.0, 0.0, 13.1, 4.0)
     wall(grid, 14.0, 8.0, 15.0, 9.0)  # a pillar in the hall
-    return GridMap(grid=grid, resolution=RESOLUTION, origin_x=ORIGIN[0], origin_y=ORIGIN[1])
+    return OccupancyMap(grid=grid, resolution=RESOLUTION, origin_x=ORIGIN[0], origin_y=ORIGIN[1])
 
 
-def crowd(seed: int, *, walkers: int = 5, idlers: int = 12, occupancy_map: GridMap | None = None,
-          taken: set[str] | None = None) -> Crowd:
+def crowd(seed: int, *, walkers: int = 5, idlers: int = 12,
+          occupancy_map: OccupancyMap | None = None, taken: set[str] | None = None) -> Crowd:
     return Crowd(occupancy_map or office_map(), rng=np.random.default_rng(seed), walkers=walkers,
                  idlers=idlers, taken_names=taken or set(), keep_clear=KEEP_CLEAR)
 
@@ -103,7 +81,7 @@ def test_names_are_unique_five_digit_humans_and_avoid_taken_names() -> None:
     assert roles.count(WALKER) == 5 and roles.count(IDLER) == 12
 
 
-def body_is_free(occupancy_map: GridMap, x: float, y: float, radius: float) -> bool:
+def body_is_free(occupancy_map: OccupancyMap, x: float, y: float, radius: float) -> bool:
     """The centre and eight points on a circle of ``radius`` around it lie on free cells."""
     ring = [(x + radius * math.cos(a), y + radius * math.sin(a))
             for a in np.linspace(0.0, 2.0 * math.pi, 8, endpoint=False)]
@@ -209,7 +187,7 @@ def test_idlers_stand_apart_off_walls_and_out_of_keep_clear_discs(seed: int) -> 
     assert [(p.x, p.y) for p in idlers_of(people)] == [tuple(s) for s in spots]
 
 
-def two_rooms_and_a_corridor() -> GridMap:
+def two_rooms_and_a_corridor() -> OccupancyMap:
     """Two 4 x 4 m rooms joined by a 6 m corridor 1.6 m wide: room enough for an idler."""
     grid = np.full((200, 400), -1, dtype=np.int8)
     wall(grid, 0.0, 0.0, 4.1, 4.1)
@@ -218,10 +196,10 @@ def two_rooms_and_a_corridor() -> GridMap:
     grid[42:120, 42:120] = 0
     grid[42:120, 242:320] = 0
     grid[66:97, 100:262] = 0  # the corridor, y 1.3..2.85
-    return GridMap(grid=grid, resolution=RESOLUTION, origin_x=ORIGIN[0], origin_y=ORIGIN[1])
+    return OccupancyMap(grid=grid, resolution=RESOLUTION, origin_x=ORIGIN[0], origin_y=ORIGIN[1])
 
 
-def robot_can_cross(occupancy_map: GridMap, idlers: list[tuple[float, float]]) -> bool:
+def robot_can_cross(occupancy_map: OccupancyMap, idlers: list[tuple[float, float]]) -> bool:
     """Whether a robot needing 0.3 m from walls and 0.55 m from idlers gets between rooms.
 
     It can when one connected stretch of the space open to it reaches into both rooms.
