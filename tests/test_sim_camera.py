@@ -162,6 +162,12 @@ def test_a_nearer_wall_looks_taller_and_the_floor_and_ceiling_differ() -> None:
     assert CEILING != FLOOR
 
 
+@pytest.mark.filterwarnings("error")
+def test_a_robot_against_a_wall_sees_nothing_but_wall() -> None:
+    image = picture((20.0, 10.0, 0.0), [])  # right on the face of the wall at x = 20
+    assert wall_rows(image, WIDTH // 2) == HEIGHT
+
+
 def test_a_bad_camera_size_is_refused() -> None:
     with pytest.raises(ValueError, match="hfov"):
         FrontCamera(HALL, hfov=0.0)

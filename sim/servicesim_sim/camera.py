@@ -145,7 +145,7 @@ class FrontCamera:
                 origin=(start_row, start_col), direction=(sin[rays], cos[rays]),
                 last=along[first], hit=(rows[found, first], cols[found, first]))
             pending, done = np.delete(pending, found), done + MARCH_CHUNK
-        depths = np.minimum(ranges * resolution, MAX_RANGE) * np.cos(self._ray_angles)
+        depths = np.clip(ranges * resolution, resolution, MAX_RANGE) * np.cos(self._ray_angles)
         return depths, along_x
 
     def _entry(self, *, origin: tuple[float, float], direction: tuple[np.ndarray, np.ndarray],
