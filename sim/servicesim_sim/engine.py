@@ -36,6 +36,7 @@ PERSON_BODY_RADIUS = 0.25
 PERSON_APPROXIMATION_M = 0.75
 OBJECT_APPROXIMATION_M = 0.35
 CMD_VEL_TIMEOUT_S = 0.5
+CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
 TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
 NAV_ABORT_WINDOW_S = (1.0, 10.0)  # when a randomly aborted goal gives up
 
@@ -71,6 +72,8 @@ class SimEngine:
         self._localised = False
         self._refused: dict[int, NavigationState] = {}
         self._cmd_vel = (0.0, 0.0, -math.inf)
+        self._nav_command = (0.0, 0.0)
+        self._next_control = 0.0
         self._drifts = list(scenario.drift_times)
         self._seen_revision = -1
 
@@ -184,6 +187,7 @@ class SimEngine:
         if self._knobs.random() < self.scenario.difficulty.nav_abort_probability:
             abort_after = float(self._knobs.uniform(*NAV_ABORT_WINDOW_S))
         self.navigator.start(x, y, yaw, now=self.sim_time, abort_after_s=abort_after)
+        self._next_control = self.sim_time
         return self._ticket
 
     def cancel_navigation(self, ticket: int) -> None:
@@ -221,8 +225,11 @@ class SimEngine:
 
     def _drive_command(self) -> tuple[float, float]:
         if self.navigator.status == "running":
-            return self.navigator.command(pose=self.robot.pose, people=self._obstacles(),
-                                          now=self.sim_time)
+            if self.sim_time >= self._next_control - 1e-9:
+                self._next_control = self.sim_time + CONTROLLER_PERIOD_S
+                self._nav_command = self.navigator.command(
+                    pose=self.robot.pose, people=self._obstacles(), now=self.sim_time)
+            return self._nav_command
         v, w, when = self._cmd_vel
         if self.sim_time - when <= CMD_VEL_TIMEOUT_S:
             return v, w
