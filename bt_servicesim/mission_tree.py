@@ -26,6 +26,7 @@ LEAF_MODULES = (
     "bt_servicesim.sim_time",
     "bt_servicesim.goals",
     "bt_servicesim.readiness",
+    "bt_servicesim.area_conditions",
 )
 
 

@@ -18,11 +18,18 @@ behaviour in this package makes in ``setup(node=...)``.
 from typing import Any, ClassVar
 
 import py_trees
-from py_trees.ports import BehaviourWithPorts, PortInformation, PortsMixin
+from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation, PortsMixin
 from rclpy.clock import Clock
 from rclpy.node import Node
 
-__all__ = ["SimStopwatch", "SimTimeout", "SimWait", "node_from_setup_kwargs", "sim_now_s"]
+__all__ = [
+    "SimStopwatch",
+    "SimTimeout",
+    "SimWait",
+    "clock_from_setup_kwargs",
+    "node_from_setup_kwargs",
+    "sim_now_s",
+]
 
 _NS_PER_S = 1e9
 
@@ -47,6 +54,17 @@ def node_from_setup_kwargs(behaviour_name: str, kwargs: dict[str, Any]) -> Node:
     if not isinstance(node, Node):
         raise TypeError(f"{behaviour_name}: setup(node=...) expects an rclpy Node, got {node!r}")
     return node
+
+
+def clock_from_setup_kwargs(behaviour_name: str, kwargs: dict[str, Any]) -> Clock:
+    """The clock of whatever ``setup(node=...)`` was given: an rclpy node, or any object with
+    ``get_clock()`` (a test's manual clock). Behaviours that only measure time use this."""
+    if "node" not in kwargs:
+        raise KeyError(f"{behaviour_name}: setup() needs the rclpy node, e.g. tree.setup(node=node)")
+    node = kwargs["node"]
+    if not callable(getattr(node, "get_clock", None)):
+        raise TypeError(f"{behaviour_name}: setup(node=...) expects an rclpy Node, got {node!r}")
+    return node.get_clock()
 
 
 def sim_now_s(clock: Clock) -> float:
@@ -98,8 +116,7 @@ class SimWait(BehaviourWithPorts):
 
     def setup(self, **kwargs: Any) -> None:
         """Take the clock from ``kwargs["node"]``."""
-        node = node_from_setup_kwargs(self.name, kwargs)
-        self._stopwatch = SimStopwatch(node.get_clock())
+        self._stopwatch = SimStopwatch(clock_from_setup_kwargs(self.name, kwargs))
 
     def initialise(self) -> None:
         """Start the stopwatch."""
@@ -130,15 +147,19 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator):
     """FAILURE, stopping the child, once the child has run for over ``seconds`` sim seconds.
 
     Until then the child's status passes through unchanged. The time counts from the
-    decorator's own initialise, i.e. from the first tick of this round of activity.
+    decorator's own initialise, i.e. from the first tick of this round of activity. The limit
+    is an input port, so a tree file can wire it to a key (``seconds="{time_limit}"``) that the
+    run command sets; unwired, the constructor's value applies.
 
     Args:
         name: the decorator's name
         child: the decorated behaviour
-        seconds: the time limit, in sim seconds
+        seconds: the time limit, in sim seconds, when the ``seconds`` port is not wired
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: ClassVar[Ports] = {
+        "seconds": PortInformation(data_type=float, required=False),
+    }
     OUTPUT_PORTS: ClassVar[Ports] = {}
 
     def __init__(
@@ -154,14 +175,18 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator):
 
     def setup(self, **kwargs: Any) -> None:
         """Take the clock from ``kwargs["node"]``."""
-        node = node_from_setup_kwargs(self.name, kwargs)
-        self._stopwatch = SimStopwatch(node.get_clock())
+        self._stopwatch = SimStopwatch(clock_from_setup_kwargs(self.name, kwargs))
 
     def initialise(self) -> None:
         """Start the stopwatch."""
         if self._stopwatch is None:
             raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
         self._stopwatch.restart()
+        if self._blackboard_client is not None:  # built from XML: the port may be wired
+            try:
+                self.seconds = float(self.get_input("seconds"))
+            except NoDataAvailable:
+                pass  # not wired: keep the constructor's limit
         self.feedback_message = f"time limit {self.seconds:.1f} sim s"
 
     def update(self) -> py_trees.common.Status:

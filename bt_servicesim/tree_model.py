@@ -24,7 +24,7 @@ import py_trees
 from bt_servicesim.mission_tree import register_leaves
 
 MODEL_PATTERN = re.compile(r"\n?[ \t]*<TreeNodesModel>.*?</TreeNodesModel>[ \t]*\n?", re.DOTALL)
-CONDITIONS = {"GuestInRange", "RobotStateReady"}
+CONDITIONS = {"GuestInRange", "RobotInArea", "RobotStateReady"}
 BTCPP_BUILTINS = {"Sequence", "Fallback", "Parallel", "SubTree", "BehaviorTree", "root",
                   "TreeNodesModel"}
 

@@ -56,7 +56,7 @@ class ManualClock:
 
 
 class Script:
-    """Outcomes per leaf, by the end of its dotted name (``"GoToStart.NavigateToGoal"``).
+    """Outcomes per leaf, by its name and any of its ancestors' (``"GoToStart.NavigateToGoal"``).
 
     An outcome is a Status, or ``(Status, n)``: RUNNING for ``n`` ticks, then the Status.
     A leaf with no outcomes left succeeds at once. Every activation is logged in ``calls``.
@@ -69,18 +69,44 @@ class Script:
 
     def next_outcome(self, name: str) -> tuple[Status, int]:
         self.calls.append(name)
-        for suffix, queue in self.outcomes.items():
-            if (name == suffix or name.endswith("." + suffix)) and queue:
+        for key, queue in self.outcomes.items():
+            if matches(name, key) and queue:
                 outcome = queue.pop(0)
                 return outcome if isinstance(outcome, tuple) else (outcome, 0)
         return Status.SUCCESS, 0
 
-    def count(self, suffix: str) -> int:
-        return sum(1 for name in self.calls if name == suffix or name.endswith("." + suffix))
+    def count(self, key: str) -> int:
+        return sum(1 for name in self.calls if matches(name, key))
 
 
-def _scripted_leaf(tag: str, ports: set[str], script: Script) -> type:
-    port_info = {port: PortInformation(data_type=object, required=False) for port in ports}
+def matches(name: str, key: str) -> bool:
+    """Whether a dotted behaviour name fits a key such as ``"GoToStart.NavigateToGoal"``: the
+    key's last part is the leaf's own name, its other parts ancestors' names, in order."""
+    *ancestors, leaf = key.split(".")
+    *path, own = name.split(".")
+    if own != leaf:
+        return False
+    position = 0
+    for ancestor in ancestors:
+        try:
+            position = path.index(ancestor, position) + 1
+        except ValueError:
+            return False
+    return True
+
+
+def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None) -> type:
+    """A stand-in whose ports are the real leaf's; its settings (``seconds``, ``grace``...)
+    become constant string inputs."""
+    real_inputs = set(real.input_ports()) if real is not None else set()
+    real_outputs = set(real.output_ports()) if real is not None else set()
+
+    def port_info(names: set[str], data_type: type) -> dict[str, PortInformation]:
+        return {port: PortInformation(data_type=data_type, required=False) for port in names}
+
+    settings = ports - real_inputs - real_outputs
+    inputs = {**port_info(ports & real_inputs, object), **port_info(settings, str)}
+    outputs = port_info(ports & real_outputs, object)
 
     def initialise(self: Any) -> None:
         self._outcome, self._running_ticks = script.next_outcome(self.name)
@@ -99,7 +125,7 @@ def _scripted_leaf(tag: str, ports: set[str], script: Script) -> type:
         script.terminated[self.name].append(new_status)
 
     def body(namespace: dict[str, Any]) -> None:
-        namespace.update(INPUT_PORTS=dict(port_info), OUTPUT_PORTS=dict(port_info),
+        namespace.update(INPUT_PORTS=inputs, OUTPUT_PORTS=outputs,
                          initialise=initialise, update=update, terminate=terminate)
 
     return types.new_class(f"Scripted{tag}", (BehaviourWithPorts,), {"register": False}, body)
@@ -124,5 +150,5 @@ def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[...
     registry: dict[str, Callable[..., Any]] = {tag: real[tag] for tag in KEEP_REAL}
     for tag, ports in leaf_ports(tree_file).items():
         if tag not in KEEP_REAL:
-            registry[tag] = _scripted_leaf(tag, ports, script)
+            registry[tag] = _scripted_leaf(tag, ports, script, real.get(tag))
     return registry

@@ -14,10 +14,12 @@ import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.mission_tree import DEFAULT_TREE
-from tests.mission_script import ManualClock, Script, scripted_registry
+from tests.mission_script import ManualClock, Script, matches, scripted_registry
 
 Status = py_trees.common.Status
 TICK_S = 0.1
+#: The robot never stands inside the pick-up area with the guest in range before navigation ends.
+NOT_IN_AREA = {"RobotInPickUpArea": [Status.FAILURE] * 100_000}
 
 
 @pytest.fixture(autouse=True)
@@ -65,7 +67,8 @@ def test_a_running_task_is_resumed_when_new_task_is_refused() -> None:
 
 
 def test_navigation_failures_climb_the_recovery_ladder_then_succeed() -> None:
-    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE, Status.FAILURE]})
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE, Status.FAILURE],
+                     **NOT_IN_AREA})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     assert script.count("GoToPickUpArea.NavigateToGoal") == 3
@@ -74,11 +77,35 @@ def test_navigation_failures_climb_the_recovery_ladder_then_succeed() -> None:
 
 
 def test_navigation_that_never_works_fails_the_mission_after_the_ladder() -> None:
-    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 10})
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 10, **NOT_IN_AREA})
     status, _ = run_mission(script)
     assert status == Status.FAILURE
     assert script.count("GoToPickUpArea.NavigateToGoal") == 4
     assert script.count("CallPickUpGuest") == 0
+
+
+def test_the_approach_stops_once_inside_the_area_with_the_guest_in_range() -> None:
+    script = Script({
+        "RobotInPickUpArea": [Status.FAILURE] * 5,
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 1000)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[navigate][-1] == Status.INVALID  # the goal was cancelled
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 1
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_arriving_without_the_guest_in_range_waits_for_navigation_to_finish() -> None:
+    script = Script({
+        "GuestInRangeOnArrival": [Status.FAILURE] * 100_000,
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 30)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert Status.SUCCESS in script.terminated[navigate]
 
 
 def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
@@ -114,7 +141,7 @@ def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None
     assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
     assert script.count("ComputeDropOffGoal") == 2
     assert Status.INVALID in script.terminated[
-        next(c for c in script.calls if c.endswith("GoToDropOffArea.NavigateToGoal"))]
+        next(c for c in script.calls if matches(c, "GoToDropOffArea.NavigateToGoal"))]
 
 
 def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> None:
@@ -138,11 +165,11 @@ def test_a_failed_drop_off_repositions_and_tries_again() -> None:
 
 
 def test_the_time_limit_ends_a_hopeless_mission_and_stops_navigation() -> None:
-    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 10**6)]})
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 10**6)], **NOT_IN_AREA})
     status, clock = run_mission(script, time_limit_s=30.0)
     assert status == Status.FAILURE
     assert 30.0 <= clock.nanoseconds / 1e9 - 1.0 <= 31.0
-    navigate = next(c for c in script.calls if c.endswith("GoToPickUpArea.NavigateToGoal"))
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
     assert script.terminated[navigate][-1] == Status.INVALID
 
 
