@@ -15,6 +15,7 @@ decorator :class:`SimTimeout`, and :func:`node_from_setup_kwargs`, the check eve
 behaviour in this package makes in ``setup(node=...)``.
 """
 
+import contextlib
 from typing import Any, ClassVar
 
 import py_trees
@@ -60,7 +61,9 @@ def clock_from_setup_kwargs(behaviour_name: str, kwargs: dict[str, Any]) -> Cloc
     """The clock of whatever ``setup(node=...)`` was given: an rclpy node, or any object with
     ``get_clock()`` (a test's manual clock). Behaviours that only measure time use this."""
     if "node" not in kwargs:
-        raise KeyError(f"{behaviour_name}: setup() needs the rclpy node, e.g. tree.setup(node=node)")
+        raise KeyError(
+            f"{behaviour_name}: setup() needs the rclpy node, e.g. tree.setup(node=node)"
+        )
     node = kwargs["node"]
     if not callable(getattr(node, "get_clock", None)):
         raise TypeError(f"{behaviour_name}: setup(node=...) expects an rclpy Node, got {node!r}")
@@ -183,10 +186,8 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator):
             raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
         self._stopwatch.restart()
         if self._blackboard_client is not None:  # built from XML: the port may be wired
-            try:
+            with contextlib.suppress(NoDataAvailable):  # not wired: the constructor's limit
                 self.seconds = float(self.get_input("seconds"))
-            except NoDataAvailable:
-                pass  # not wired: keep the constructor's limit
         self.feedback_message = f"time limit {self.seconds:.1f} sim s"
 
     def update(self) -> py_trees.common.Status:
