@@ -3,6 +3,12 @@
 Split from :mod:`bt_servicesim.run` so the command checks its input before rclpy is imported.
 The run waits (in wall time, bounded) for the simulator's clock and referee, ticks the tree on
 sim time until it ends, then waits briefly for the referee's last word and writes the report.
+
+Beside the report, :class:`RunRecords` keeps the run's records in the run directory: the tree's
+snapshot log (``tree_log.jsonl``) and its final tick (``final_tree.txt``) when the executive is
+a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS traffic (``run.mcap``).
+They are written on every way out, Ctrl-C included; a record that cannot be written costs a
+warning line, never the report.
 """
 
 from __future__ import annotations
@@ -10,8 +16,10 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
+import py_trees
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -19,8 +27,10 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from servicesim_competition.srv import NewTask
 
+from bt_servicesim.dump import tree_text
 from bt_servicesim.executive import Executive
 from bt_servicesim.progress import ProgressView
+from bt_servicesim.recording import MCAP_NAME, McapRecorder, TaskTopic, TreeTopic
 from bt_servicesim.referee_monitor import RefereeMonitor
 from bt_servicesim.run import (
     EXIT_BAD_INPUT,
@@ -33,6 +43,15 @@ from bt_servicesim.run import (
     write_report,
 )
 from bt_servicesim.simulator_process import SimulatorProcess
+from bt_servicesim.trajectory import (
+    TRAJECTORY_NAME,
+    TrajectoryRecorder,
+    boxes_from_blackboard,
+    render_trajectory,
+)
+from bt_servicesim.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
+
+FINAL_TREE_NAME = "final_tree.txt"
 
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
 SIM_TIME_BACKSTOP_S = 60.0  # sim seconds past the time limit before the run gives up itself
@@ -66,8 +85,10 @@ class MissionRun:
         executor.add_node(node)
         monitor = RefereeMonitor(node)
         executive = self.make_executive(node)
+        records = RunRecords(node=node, executive=executive, out=self.settings.out,
+                             tree_file=self.settings.tree)
         try:
-            code = self._run(node, executor, monitor, executive)
+            code = self._run(node, executor, monitor, executive, records)
         except KeyboardInterrupt:
             executive.interrupt()
             self._spin_for(executor, 0.5)
@@ -75,6 +96,7 @@ class MissionRun:
             code = EXIT_INTERRUPTED
         finally:
             self.simulator.stop()
+        records.finish(title=self._title(monitor))
         self._finish(monitor, code)
         executor.shutdown()
         node.destroy_node()
@@ -82,16 +104,18 @@ class MissionRun:
         return code
 
     def _run(self, node: Node, executor: SingleThreadedExecutor, monitor: RefereeMonitor,
-             executive: Executive) -> int:
+             executive: Executive, records: RunRecords) -> int:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
             return refused
         executive.setup()
         executive.start()
-        view = ProgressView(headless=self.settings.headless)
+        view = ProgressView(headless=self.settings.headless,
+                            tree_root=records.tree.root if records.tree else None)
         limit_ns = int((self.settings.time_limit_s + SIM_TIME_BACKSTOP_S) * 1e9)
         while not executive.finished:
             executor.spin_once(timeout_sec=0.05)
+            records.note_phase(executive.phase())
             view.update(executive=executive, monitor=monitor, sim_time_s=_sim_seconds(node))
             if self.simulator.exit_code() is not None:
                 self.failure = f"the simulator exited: {self.simulator.last_error()}"
@@ -125,6 +149,16 @@ class MissionRun:
         node.destroy_client(client)
         return None
 
+    def _title(self, monitor: RefereeMonitor) -> str:
+        fields = monitor.report_fields()
+        world = self.settings.world.stem if self.settings.world else "ServiceSim office"
+        seed = "shipped task" if self.settings.seed is None else f"seed {self.settings.seed}"
+        outcome = "completed" if fields["completed"] else "not completed"
+        done = sum(1 for checkpoint in fields["checkpoints"] if checkpoint["done"])
+        return (f"{world}, {seed}, {self.settings.executive} executive: {outcome}, "
+                f"{done}/4 checkpoints, score {fields['score']:.1f}, "
+                f"{fields['sim_time_s']:.0f} s sim")
+
     def _finish(self, monitor: RefereeMonitor, code: int) -> None:
         report: dict[str, Any] = {
             **monitor.report_fields(),
@@ -154,3 +188,48 @@ class MissionRun:
 
 def _sim_seconds(node: Node) -> float:
     return node.get_clock().now().nanoseconds / 1e9
+
+
+class RunRecords:
+    """The run's records in its directory (see the module docstring), made on ``node``."""
+
+    def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path) -> None:
+        self.out = out
+        self.tree = behaviour_tree_of(executive)
+        self.mcap = McapRecorder(node=node, path=out / MCAP_NAME)
+        self.task = TaskTopic(node=node)
+        self.trajectory = TrajectoryRecorder(node=node)
+        self.tree_log: TreeLog | None = None
+        if self.tree is not None:
+            self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
+                                    sim_time_s=lambda: _sim_seconds(node),
+                                    tree_file=str(tree_file))
+            self.tree_log.listeners.append(TreeTopic(node=node).publish)
+            self.tree.add_post_tick_handler(self.tree_log)
+
+    def note_phase(self, phase: str) -> None:
+        self.trajectory.note_phase(phase)
+
+    def finish(self, *, title: str) -> None:
+        """Write what is written at the end and close the rest; a failure is a warning."""
+        steps: list[tuple[str, Callable[[], None]]] = [
+            (MCAP_NAME, self.mcap.close),
+            (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
+        ]
+        if self.tree is not None and self.tree_log is not None:
+            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
+        for name, step in steps:
+            try:
+                step()
+            except Exception as error:  # a record is not worth losing the report for
+                print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
+
+    def _render_trajectory(self, title: str) -> None:
+        self.trajectory.close()
+        boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
+        render_trajectory(self.trajectory.trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
+                          title=title)
+
+    def _write_final_tree(self) -> None:
+        assert self.tree is not None
+        (self.out / FINAL_TREE_NAME).write_text(tree_text(self.tree.root), encoding="utf-8")

@@ -268,11 +268,13 @@ def _draw_paths(axes: Any, trace: RunTrace) -> None:
                       label="other people" if index == 0 else None)
         if points:
             axes.plot(*points[-1], "o", color=PEOPLE_COLOUR, markersize=3)
-    for points, colour, label in ((trace.guest, GUEST_COLOUR, "guest"),
-                                  (trace.robot, ROBOT_COLOUR, "robot")):
+    # the guest follows the robot's trail: drawn on top, dashed, so both stay visible
+    for points, colour, label, style in ((trace.robot, ROBOT_COLOUR, "robot", "-"),
+                                         (trace.guest, GUEST_COLOUR, "guest", "--")):
         if points:
             xs, ys = zip(*points, strict=True)
-            axes.plot(xs, ys, color=colour, linewidth=1.8, label=label)
+            axes.plot(xs, ys, style, color=colour, linewidth=2.2 if style == "-" else 1.4,
+                      label=label)
     if trace.start is not None:
         axes.plot(*trace.start, "s", color=ROBOT_COLOUR, markersize=8, label="robot start")
 

@@ -283,3 +283,9 @@ def _json_lines(stream: TextIO) -> Iterator[tuple[int, dict[str, Any]]]:
         if not isinstance(line, dict):
             raise ValueError(f"line {number}: not a JSON object")
         yield number, line
+
+
+def behaviour_tree_of(executive: object) -> py_trees.trees.BehaviourTree | None:
+    """The executive's py_trees tree, or ``None`` for an executive that is not a tree."""
+    tree = getattr(executive, "tree", None)
+    return tree if isinstance(tree, py_trees.trees.BehaviourTree) else None
