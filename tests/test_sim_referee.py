@@ -130,3 +130,26 @@ def test_a_guest_not_following_does_not_move() -> None:
     guest.record_robot(9.0, 3.0)
     guest.step(1.0, robot_x=9.0, robot_y=3.0)
     assert (guest.x, guest.y) == (2.0, 3.0)
+
+
+def test_a_guest_steps_out_of_the_way_of_a_robot_coming_too_close() -> None:
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0)
+    guest.start_following(1.2, 0.0)
+    guest.stop_following(GuestState.DROPPED_OFF)
+    robot_x = 1.2
+    for _ in range(100):  # the robot drives at the guest at 0.5 m/s for 2 s
+        robot_x -= 0.01
+        guest.step(0.02, robot_x=robot_x, robot_y=0.0)
+        assert guest.distance_to(robot_x, 0.0) > 0.8
+    assert guest.x < -0.5
+
+
+def test_a_waiting_guest_stays_put_and_a_wall_turns_the_step_aside() -> None:
+    waiting = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0)
+    waiting.step(0.1, robot_x=0.5, robot_y=0.0)
+    assert (waiting.x, waiting.y) == (0.0, 0.0)
+    walled = Guest(name="human_00002", x=0.0, y=0.0, yaw=0.0,
+                   wall_clearance=lambda x, y: 1.0 if x >= -0.001 else 0.0)  # a wall at x < 0
+    walled.stop_following(GuestState.DRIFTED)
+    walled.step(0.1, robot_x=0.5, robot_y=0.0)
+    assert walled.x >= -0.001 and walled.y != 0.0

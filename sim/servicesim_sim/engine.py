@@ -59,10 +59,11 @@ class SimEngine:
         self.sim_time = 0.0
         self.task_started_at: float | None = None
         self.referee = Referee()
+        walls = WallClearance(world.map)
         self.robot = Robot(x=scenario.start_x, y=scenario.start_y, yaw=scenario.start_yaw,
-                           walls=WallClearance(world.map))
+                           walls=walls)
         self.guest = Guest(name=scenario.guest_name, x=scenario.guest_x, y=scenario.guest_y,
-                           yaw=scenario.guest_yaw)
+                           yaw=scenario.guest_yaw, wall_clearance=walls.at)
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
                            taken_names={scenario.guest_name}, keep_clear=self._keep_clear())

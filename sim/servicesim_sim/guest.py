@@ -6,18 +6,27 @@ same doors and corridors the robot took. It walks at up to 0.8 m/s, stops when i
 1.2 m of the robot, and stops following for good (until picked up again) in two ways the
 referee cares about: the robot gets more than 4.0 m ahead ("too fast"), or a scheduled drift
 makes it wander off its task and stay where it is.
+
+Whatever its state, a guest who is not waiting to be picked up steps out of the robot's way
+when it comes closer than 0.9 m — straight back, or aside where a wall is behind them — as a
+person would: a robot turning back past the person it guides, or leaving the spot where it
+dropped them off, does not walk through them.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable
 from enum import Enum
 
 FOLLOW_SPEED = 0.8  # m/s
 STOP_DISTANCE = 1.2  # m from the robot
 LOST_DISTANCE = 4.0  # m: the robot is "too fast" beyond this
 TRAIL_SPACING = 0.05  # m between trail points
+YIELD_DISTANCE = 0.9  # m: closer than this, the guest steps out of the robot's way
+WALL_CLEARANCE = 0.3  # m: the guest keeps this far from walls when stepping aside
+YIELD_DIRECTIONS = (0.0, 0.6, -0.6, 1.2, -1.2, 1.57, -1.57)  # rad off "straight away"
 
 
 class GuestState(Enum):
@@ -31,8 +40,10 @@ class GuestState(Enum):
 class Guest:
     """Position and state of the guest; :meth:`step` moves them."""
 
-    def __init__(self, *, name: str, x: float, y: float, yaw: float) -> None:
+    def __init__(self, *, name: str, x: float, y: float, yaw: float,
+                 wall_clearance: Callable[[float, float], float] | None = None) -> None:
         self.name = name
+        self.wall_clearance = wall_clearance
         self.x, self.y, self.yaw = x, y, yaw
         self.state = GuestState.WAITING
         self.trail: deque[tuple[float, float]] = deque()
@@ -67,7 +78,12 @@ class Guest:
             self.trail.append((robot_x, robot_y))
 
     def step(self, dt: float, *, robot_x: float, robot_y: float) -> None:
-        """Walk along the trail towards the robot, stopping 1.2 m short of it."""
+        """Walk along the trail towards the robot, stopping 1.2 m short of it; step aside when
+        the robot comes too close."""
+        if self.state is not GuestState.WAITING and self.distance_to(robot_x, robot_y) < (
+                YIELD_DISTANCE):
+            self._step_aside(dt, robot_x=robot_x, robot_y=robot_y)
+            return
         if not self.following:
             return
         budget = FOLLOW_SPEED * dt
@@ -85,3 +101,14 @@ class Guest:
             self.x += budget * math.cos(self.yaw)
             self.y += budget * math.sin(self.yaw)
             budget = 0.0
+
+    def _step_aside(self, dt: float, *, robot_x: float, robot_y: float) -> None:
+        """Move away from the robot at walking speed, onto a spot clear of walls."""
+        away = math.atan2(self.y - robot_y, self.x - robot_x)
+        step = FOLLOW_SPEED * dt
+        for offset in YIELD_DIRECTIONS:
+            heading = away + offset
+            x, y = self.x + step * math.cos(heading), self.y + step * math.sin(heading)
+            if self.wall_clearance is None or self.wall_clearance(x, y) >= WALL_CLEARANCE:
+                self.x, self.y = x, y
+                return
