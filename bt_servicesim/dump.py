@@ -12,8 +12,9 @@ py_trees behaviours of the same kinds. The same shape is the header of a run's s
 a replay, the live view and ``final_tree.txt`` all draw exactly what a dump of the live tree
 draws. Text written to a file or a pipe carries no terminal escape codes.
 
-The dot source is deterministic for a given tree file (unicode symbols are pinned, whatever the
-terminal's encoding), so a committed drawing can be checked against its tree file. ``svg`` and
+The dot source is deterministic for a given tree file (py_trees' ASCII symbols are pinned,
+whatever the terminal's encoding: ``M`` marks memory), so a committed drawing can be checked
+against its tree file. ``svg`` and
 ``png`` need Graphviz's ``dot`` program; without it the command says so in one line and exits 1.
 Bad input (a missing or broken tree file, an unwritable ``--out``) is one line and exit 2.
 """
@@ -271,10 +272,14 @@ def tree_text(root: py_trees.behaviour.Behaviour, *, symbols: str = "unicode",
 
 # -------------------------------------------------------------------------------- graphviz
 @contextmanager
-def _unicode_symbols() -> Iterator[None]:
-    """py_trees picks dot's memory symbol from stdout's encoding; files are UTF-8 regardless."""
+def _ascii_symbols() -> Iterator[None]:
+    """py_trees picks dot's symbols from stdout's encoding at import; pin its ASCII ones.
+
+    The unicode memory symbol (a circled M) is missing from the fonts Graphviz finds on many
+    machines and renders as a box; ``M`` renders everywhere and keeps the source deterministic.
+    """
     original = py_trees.console.has_unicode
-    py_trees.console.has_unicode = lambda *_args, **_kwargs: True
+    py_trees.console.has_unicode = lambda *_args, **_kwargs: False
     try:
         yield
     finally:
@@ -283,7 +288,7 @@ def _unicode_symbols() -> Iterator[None]:
 
 def dot_source(root: py_trees.behaviour.Behaviour) -> str:
     """py_trees' dot graph of the tree, nodes labelled with short names; deterministic."""
-    with _unicode_symbols():
+    with _ascii_symbols():
         graph = py_trees.display.dot_tree(root)
     graph.set_name(py_trees.utilities.get_valid_filename(short_label(root.name)) or "tree")
     for node in graph.get_nodes():
