@@ -1,17 +1,22 @@
-"""``python -m bt_servicesim.replay``: the logged tree at a tick, at a time, and step by step.
+"""Seeing the tree over time: ``python -m bt_servicesim.replay`` and the live view of a run.
 
 The run is the errand tree of tests/test_tree_log.py; what replay prints is compared with the
-live tree drawn at the same tick.
+live tree drawn at the same tick. The live view draws to a stream that says it is a terminal.
 """
 
 from __future__ import annotations
 
 import io
+import os
 from pathlib import Path
 
 import pytest
+from py_trees.common import Status
 
 from bt_servicesim import replay
+from bt_servicesim.dump import plain, walk
+from bt_servicesim.live_view import HOME, LiveTreeView
+from bt_servicesim.progress import ProgressView
 from tests.test_tree_log import RecordedRun, clean_blackboard  # noqa: F401 - fixture
 
 
@@ -108,3 +113,55 @@ def test_a_directory_without_a_log_is_one_line_and_exit_2(
     code, _, err = replay_output(capsys, str(tmp_path))
     assert code == 2
     assert "no tree_log.jsonl" in err and err.count("\n") == 1
+
+
+class Terminal(io.StringIO):
+    """A stream that says it is a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_the_live_view_redraws_when_the_tree_changes_and_only_then(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)  # finished; its tree is drawn as it ended
+    terminal = Terminal()
+    view = LiveTreeView(root=run.tree.root, stream=terminal, redraw_period_s=0.0)
+    assert view.draw(status_line="status A")
+    assert not view.draw(status_line="status A")  # nothing changed
+    assert view.draw(status_line="status B")
+    run.tree.root.children[-1].feedback_message = "lingering on"
+    assert view.draw(status_line="status B")
+    assert view.redraws == 3
+    frames = terminal.getvalue().split(HOME)[1:]
+    assert "Errand" in plain(frames[0]) and "status A" in frames[0]
+    assert "lingering on" in plain(frames[2])
+
+
+def test_the_live_view_waits_its_redraw_period(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    view = LiveTreeView(root=run.tree.root, stream=Terminal(), redraw_period_s=3600.0)
+    assert view.draw(status_line="first")
+    assert not view.draw(status_line="second")  # changed, but not due for an hour
+    view.close(status_line="final")  # the last frame is always drawn
+    assert view.redraws == 2
+
+
+def test_the_live_view_fits_the_terminal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    run = RecordedRun(tmp_path)
+    for behaviour in walk(run.tree.root):
+        behaviour.status = Status.RUNNING  # everything expanded
+        behaviour.feedback_message = "a long feedback message " * 4
+    monkeypatch.setattr("shutil.get_terminal_size", lambda: os.terminal_size((40, 6)))
+    lines = LiveTreeView(root=run.tree.root, stream=Terminal()).screen("status")
+    assert len(lines) == 5 and lines[-1] == "status"
+    assert lines[-2].startswith("... (") and "more lines" in lines[-2]
+    assert all(len(plain(line)) <= 40 for line in lines)
+
+
+def test_progress_shows_the_live_tree_on_a_terminal_but_not_headless(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    assert ProgressView(headless=False, stream=Terminal(), tree_root=run.tree.root).tree_view
+    assert ProgressView(headless=True, stream=Terminal(), tree_root=run.tree.root).tree_view \
+        is None
+    assert ProgressView(headless=False, stream=io.StringIO(), tree_root=run.tree.root) \
+        .tree_view is None  # a pipe gets plain lines
