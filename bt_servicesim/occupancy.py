@@ -202,13 +202,13 @@ class OccupancyGrid2D:
     ) -> np.ndarray:
         """For each end (xs[i], ys[i]), whether the straight line from (x, y) keeps ``clearance``.
 
-        The lines are sampled every half cell.
+        The lines are sampled every cell, which is exact enough for a clearance of a few cells.
         """
         xs, ys = np.atleast_1d(np.asarray(xs, float)), np.atleast_1d(np.asarray(ys, float))
         if xs.size == 0:
             return np.zeros(0, dtype=bool)
         longest = float(np.max(np.hypot(xs - x, ys - y)))
-        steps = max(2, math.ceil(longest / (self.resolution / 2.0)) + 1)
+        steps = max(2, math.ceil(longest / self.resolution) + 1)
         t = np.linspace(0.0, 1.0, steps)[None, :]
         room = self._clearances_at(x + (xs[:, None] - x) * t, y + (ys[:, None] - y) * t)
         return np.all(room >= max(clearance, np.finfo(np.float32).tiny), axis=1)
@@ -312,12 +312,14 @@ class RouteTree:
         best = self._best_node(x, y)
         if best is None:
             return np.zeros((0, 2))
-        node, points = best[0], []
+        node, nodes = best[0], []
         stop_at = self.distances[node] - max_length
         while node >= 0 and self.distances[node] >= stop_at:
-            points.append(self.grid.cell_to_world(Cell(*self.node_cells[node])))
+            nodes.append(node)
             node = int(self.predecessors[node])
-        return np.asarray(points, dtype=float)
+        centres = (self.node_cells[nodes] + 0.5) * self.grid.resolution
+        return np.column_stack([self.grid.origin_x + centres[:, 1],
+                                self.grid.origin_y + centres[:, 0]])
 
     def _best_node(self, x: float, y: float) -> tuple[int, float] | None:
         """The node within one lattice step of (x, y) minimising route length plus the last hop."""
