@@ -7,7 +7,7 @@ decides from its own sensors. From them it keeps the robot's path, the guest's p
 other person's path, and the moments worth marking, each where it happened:
 
 * the referee's checkpoints as they are reached (pick-up and drop-off among them), and the
-  task being sent back from drop-off to pick-up (the guest was lost);
+  task being sent back from drop-off to pick-up (the guest drifted or fell behind);
 * drifts, from the referee's drift counter, at the guest's position;
 * re-acquiring the guest: the guest following again after being lost or drifting;
 * the mission tree's phase changes (BeginTask, Pickup, DropOff, ReturnToStart), at the robot.
@@ -43,7 +43,7 @@ ROBOT_COLOUR, GUEST_COLOUR, PEOPLE_COLOUR = "#d62728", "#1f77b4", "#9a9a9a"
 BOX_COLOURS = {"pick_up_box": "#2ca02c", "drop_off_box": "#9467bd"}
 EVENT_STYLE = {  # kind: (marker, colour)
     "checkpoint": ("*", "#ff7f0e"),
-    "lost": ("X", "#000000"),
+    "back to pick-up": ("X", "#000000"),
     "drift": ("v", "#8c564b"),
     "re-acquired": ("P", "#17becf"),
     "phase": ("o", ROBOT_COLOUR),
@@ -51,6 +51,7 @@ EVENT_STYLE = {  # kind: (marker, colour)
 CHECKPOINT_LABELS = {"go_to_pick_up": "at pick-up", "pick_up_guest": "pick-up",
                      "drop_off_guest": "drop-off", "return_to_start": "back at start"}
 Point2D = tuple[float, float]
+MAX_LISTED_EVENTS = 30
 
 
 @dataclass(frozen=True)
@@ -181,7 +182,7 @@ class TrajectoryRecorder:
                 where = self._guest_or_robot() if name == "drop_off_guest" else self._robot()
                 self._mark("checkpoint", CHECKPOINT_LABELS.get(name, name), where)
             elif was and not done and name == "pick_up_guest":
-                self._mark("lost", "guest lost", self._guest_or_robot())
+                self._mark("back to pick-up", "back to pick-up", self._guest_or_robot())
         drifts_before = last.drifts if last is not None else 0
         for _ in range(max(0, state.drifts - drifts_before)):
             self._mark("drift", "drift", self._guest_or_robot())
@@ -280,17 +281,23 @@ def _draw_paths(axes: Any, trace: RunTrace) -> None:
 
 
 def _draw_events(axes: Any, events: list[RunEvent]) -> None:
+    """A numbered marker per event, and the numbered list beside the legend."""
     labelled: set[str] = set()
-    for event in events:
+    lines = []
+    for number, event in enumerate(events, start=1):
         marker, colour = EVENT_STYLE.get(event.kind, ("o", "#000000"))
         legend = None if event.kind in labelled else event.kind
         labelled.add(event.kind)
         axes.plot(event.x, event.y, marker, color=colour, markersize=11 if marker == "*" else 8,
                   markeredgecolor="black", markeredgewidth=0.6, label=legend)
-        below = event.kind == "phase"  # phase names below the path, the rest above
-        axes.annotate(f"{event.label} {event.sim_time_s:.0f}s", (event.x, event.y),
-                      xytext=(4, -11 if below else 5), textcoords="offset points", fontsize=7,
-                      rotation=-30 if below else 30)
+        axes.annotate(str(number), (event.x, event.y), xytext=(4, 4),
+                      textcoords="offset points", fontsize=7, fontweight="bold")
+        lines.append(f"{number:>2} {event.sim_time_s:6.1f} s  {event.label}")
+    if len(lines) > MAX_LISTED_EVENTS:
+        lines = [*lines[:MAX_LISTED_EVENTS - 1], f"... {len(lines) - MAX_LISTED_EVENTS + 1} more"]
+    if lines:
+        axes.text(1.02, 0.52, "\n".join(["   sim time  event", *lines]), transform=axes.transAxes,
+                  va="top", ha="left", family="monospace", fontsize=7.5)
 
 
 def _frame(axes: Any, trace: RunTrace, boxes: Mapping[str, Box]) -> None:

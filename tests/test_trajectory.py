@@ -147,6 +147,7 @@ def play(story: Story, recorder: TrajectoryRecorder) -> None:
         story.deliver(story.actors, actors_at(guest, state, walker_x=3.0 + 0.3 * step), recorder)
         if step == 24:
             story.deliver(story.referee, referee([True, True, False, False], drifts=1), recorder)
+    story.deliver(story.referee, referee([True, False, False, False], drifts=1), recorder)
     story.deliver(story.referee, referee([True, True, True, False], drifts=1), recorder)
 
 
@@ -163,7 +164,8 @@ def test_the_recorder_collects_paths_and_marks_what_happened_where(story: Story)
     assert events == [
         ("phase", "BeginTask"), ("phase", "Pickup"), ("checkpoint", "at pick-up"),
         ("checkpoint", "pick-up"), ("phase", "DropOff"), ("drift", "drift"),
-        ("re-acquired", "re-acquired"), ("checkpoint", "drop-off")]
+        ("re-acquired", "re-acquired"), ("back to pick-up", "back to pick-up"),
+        ("checkpoint", "pick-up"), ("checkpoint", "drop-off")]
     pick_up = trace.events[3]
     assert (pick_up.x, pick_up.y) == (6.0, 2.0)  # where the robot was at step 16
     assert pick_up.sim_time_s == pytest.approx(9.0)
