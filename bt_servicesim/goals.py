@@ -10,7 +10,7 @@ taken from the competition's rules (README of the reference).
 
 Each behaviour reads its input ports, computes in ``update`` — pure and non-blocking; on the
 1200x1200 office map the heaviest, :class:`DropOffGoal` and :class:`ExplorationWaypoints`,
-take about 35-40 ms (under 0.1 s for every one of the 70 target areas), the others a few
+take about 40 ms (at most about 0.1 s, for the largest target areas), the others a few
 milliseconds — and writes its output port: SUCCESS with the result, or FAILURE with a feedback
 message naming the missing input or why no goal exists.
 """
@@ -83,6 +83,8 @@ SEARCH_RINGS = (WAYPOINT_SPACING, 2.0 * WAYPOINT_SPACING)
 """Radii of the rings searched around the spot where a lost guest was last seen."""
 JITTER = 0.3
 """Largest jitter offset on either axis."""
+STAY_MARGIN = 0.1
+"""A robot whose trailing guest has this :func:`trailing_margin` may stay where it is."""
 GUEST_BERTH = 0.6
 """A robot's last leg keeps this far from where the guest stands (people are obstacles)."""
 SIGHT_LOOKBACK = 20.0
@@ -231,14 +233,31 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPla
     goal cannot choose the arrival side — the route does — so a thin box approached across is
     left to the reposition after a refusal (:func:`drop_off_reposition_goal`).
 
-    If no spot works (e.g. the box lies in a dead end), the goal falls back to the reachable
-    point inside the box nearest its centre and the plan's margin says how far off the guest is.
+    While guiding, the guest trails about 1.2 m behind the robot along its heading, so plans
+    whose last leg passes within :data:`GUEST_BERTH` of that spot (driving back through the
+    guest) are left out. The robot may already be in place — the mission asks again after a
+    refused drop-off and a reposition — so staying put is a candidate too, when the guest's
+    spot behind leaves them at least :data:`STAY_MARGIN` deep: it wins over any move of no
+    clearly better margin. If no spot works (e.g. the box lies in a dead
+    end), the goal falls back to the reachable point inside the box nearest its centre and the
+    plan's margin says how far off the guest is.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
         return None
-    plan = _best_plan(_trailing_plans(box, grid, routes, robot))
+    stay = _staying_plan(box, robot)
+    plans = list(_trailing_plans(box, grid, routes, robot, keep=_clear_of(stay.guest_spot)))
+    if stay.margin >= STAY_MARGIN:
+        plans.append(stay)
+    plan = _best_plan(plans)
     return plan if plan is not None else _inside_fallback(box, grid, robot, routes)
+
+
+def _staying_plan(box: Box, robot: Pose2D) -> TrailingPlan:
+    """Stay put: the guest is taken to trail GUEST_TRAIL behind along the robot's heading."""
+    heading = _heading(robot)
+    spot = (robot.x - GUEST_TRAIL * heading[0], robot.y - GUEST_TRAIL * heading[1])
+    return TrailingPlan(robot, spot, trailing_margin(box, *spot, heading), 0.0)
 
 
 def _guest_spots(box: Box, spacing: float = 0.2) -> list[Point]:
@@ -345,26 +364,33 @@ def drop_off_reposition_goal(
     - *pull forward*: drive s metres straight on (0.5 to 3 m, as far as the way is clear); the
       guest follows the trail and ends s metres further along the same line — the cheap fix
       when the guest stopped short of the box;
-    - *drive through*: a fresh :func:`drop_off_goal` plan from here, at least 0.5 m away, which
-      for a thin box typically crosses it along its long axis and stops past the far side;
-      plans whose last leg passes within :data:`GUEST_BERTH` of the guest (the robot would
-      have to drive back through them) are left out.
+    - *drive through*: a fresh :func:`drop_off_goal` plan from here (which keeps clear of the
+      guest), at least 0.5 m away; for a thin box it typically crosses along the long axis and
+      stops past the far side.
 
     The deepest wins (the shorter move among near-equals). None only if no move is possible.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
         return None
-    ux, uy = _heading(robot)
-    guest = (robot.x - GUEST_TRAIL * ux, robot.y - GUEST_TRAIL * uy)
+    clear_of_guest = _clear_of(_staying_plan(box, robot).guest_spot)
 
     def feasible(plan: TrailingPlan) -> bool:
-        goal = (plan.goal.x, plan.goal.y)
-        return (math.dist(goal, (robot.x, robot.y)) >= 0.5
-                and _distance_to_segment(guest, plan.guest_spot, goal) >= GUEST_BERTH)
+        far_enough = math.dist((plan.goal.x, plan.goal.y), (robot.x, robot.y)) >= 0.5
+        return far_enough and clear_of_guest(plan)
 
     through = list(_trailing_plans(box, grid, routes, robot, keep=feasible))
     return _best_plan([*_forward_pulls(box, grid, robot), *through])
+
+
+def _clear_of(guest: Point) -> Callable[[TrailingPlan], bool]:
+    """Whether a plan's last leg keeps GUEST_BERTH from the guest standing at ``guest``."""
+
+    def keeps_clear(plan: TrailingPlan) -> bool:
+        goal = (plan.goal.x, plan.goal.y)
+        return _distance_to_segment(guest, plan.guest_spot, goal) >= GUEST_BERTH
+
+    return keeps_clear
 
 
 def _distance_to_segment(point: Point, start: Point, end: Point) -> float:

@@ -210,6 +210,23 @@ def test_drop_off_goal_behind_a_door_is_approached_through_the_door(robot: Pose2
     assert grid.clear_lines(8.1, crossing_y, [goal.x], [goal.y], 0.2)[0]
 
 
+@pytest.mark.parametrize("shape", [(3.0, 3.0), (1.8, 1.5)])
+def test_drop_off_goal_keeps_a_robot_already_in_place_where_it_is(
+    shape: tuple[float, float],
+) -> None:
+    grid, box = open_room(), centred_box(*shape)
+    planned = output(run(DropOffGoal(), box=box, occupancy=grid, robot_pose=SIDES["west"]))
+    for arrived in (planned, Pose2D(planned.x - 0.2, planned.y + 0.1, planned.yaw + 0.1)):
+        Blackboard.clear()
+        again = output(run(DropOffGoal(), box=box, occupancy=grid, robot_pose=arrived))
+        assert again == arrived
+    Blackboard.clear()
+    facing_away = Pose2D(planned.x, planned.y, planned.yaw + math.pi)  # the guest ahead: move
+    moved = output(run(DropOffGoal(), box=box, occupancy=grid, robot_pose=facing_away))
+    assert math.dist((moved.x, moved.y), (planned.x, planned.y)) > 1.0
+    assert depth(box, *trailing_spot(moved)) >= 0.3
+
+
 def test_drop_off_reposition_pulls_a_guest_who_stopped_short_deeper_in() -> None:
     grid, box = open_room(), centred_box(1.8, 1.5)
     robot = Pose2D(7.5, 7.0, 0.0)  # the guest, 1.2 m behind, stands 0.2 m inside the edge
