@@ -238,9 +238,9 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPla
     guest) are left out. The robot may already be in place — the mission asks again after a
     refused drop-off and a reposition — so staying put is a candidate too, when the guest's
     spot behind leaves them at least :data:`STAY_MARGIN` deep: it wins over any move of no
-    clearly better margin. If no spot works (e.g. the box lies in a dead
-    end), the goal falls back to the reachable point inside the box nearest its centre and the
-    plan's margin says how far off the guest is.
+    clearly better margin. If no spot works (e.g. the box lies in a dead end), the goal falls
+    back to the reachable point inside the box nearest its centre and the plan's margin says
+    how far off the guest is.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
@@ -343,6 +343,7 @@ def _best_plan(plans: Iterable[TrailingPlan], tie: float = 0.05) -> TrailingPlan
 def _inside_fallback(
     box: Box, grid: OccupancyGrid2D, robot: Pose2D, routes: RouteTree
 ) -> TrailingPlan | None:
+    """The robot inside the box near its centre, the guest wherever that leaves them."""
     goal = pickup_goal(box, grid, robot)
     if goal is None:
         return None
@@ -394,6 +395,7 @@ def _clear_of(guest: Point) -> Callable[[TrailingPlan], bool]:
 
 
 def _distance_to_segment(point: Point, start: Point, end: Point) -> float:
+    """Distance from ``point`` to the segment from ``start`` to ``end``."""
     dx, dy = end[0] - start[0], end[1] - start[1]
     length_squared = dx * dx + dy * dy
     t = 0.0 if length_squared == 0.0 else (
@@ -403,6 +405,7 @@ def _distance_to_segment(point: Point, start: Point, end: Point) -> float:
 
 
 def _forward_pulls(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> list[TrailingPlan]:
+    """Plans driving 0.5 to 3 m straight on, as far as the way is clear and the goal free."""
     ux, uy = _heading(robot)
     reaches = np.arange(0.5, 3.0 + 1e-9, 0.1)
     xs, ys = robot.x + reaches * ux, robot.y + reaches * uy
@@ -491,10 +494,9 @@ class _Coverage:
                  open_space: np.ndarray) -> None:
         self.grid, self.window, self.reachable = grid, window, reachable
         self.xs, self.ys = np.meshgrid(window.xs, window.ys)
-        gap, nearest = ndimage.distance_transform_edt(~reachable, return_indices=True)
-        gap = gap * grid.resolution  # metres to the nearest reachable cell
-        self.nearest_rows, self.nearest_cols = nearest
-        self.gap = gap
+        cells, nearest = ndimage.distance_transform_edt(~reachable, return_indices=True)
+        gap = cells * grid.resolution  # metres to the nearest reachable cell
+        self.gap, (self.nearest_rows, self.nearest_cols) = gap, nearest
         near_box = distance_to_box(box, self.xs, self.ys) <= EXPLORATION_REACH
         self.targets = open_space & near_box & (gap <= RFID_RANGE)
         self.needed = np.where(gap <= COVER_RADIUS, COVER_RADIUS, RFID_RANGE) + 1e-6
@@ -527,6 +529,8 @@ class _Coverage:
             self._add(self._best_cover(int(first[0][0]), int(first[0][1]), uncovered))
 
     def _best_cover(self, row: int, col: int, uncovered: np.ndarray) -> Point:
+        """Of the reachable spots (0.15 m lattice) covering target (row, col), the one that
+        covers most uncovered targets; the nearest reachable cell is always a candidate."""
         span = math.ceil(2.0 * RFID_RANGE / self.grid.resolution)
         rows = slice(max(row - span, 0), row + span + 1)
         cols = slice(max(col - span, 0), col + span + 1)
@@ -602,11 +606,11 @@ def guest_search_waypoints(
                                      within=reachable)
             if spot is not None and all(math.dist(spot, p) >= GUEST_TRAIL for p in points):
                 points.append(spot)
-    return _tour(robot, points[:1], first=lambda p: True) + _headed(points[0], points[1:])
+    return _headed((robot.x, robot.y), points)
 
 
 def _headed(previous: Point, points: list[Point]) -> list[Pose2D]:
-    """Poses for ``points`` in order, each facing away from the point before it."""
+    """Poses for ``points`` in order, each facing the way from the point before it."""
     poses = []
     for point in points:
         poses.append(Pose2D(point[0], point[1],
@@ -648,6 +652,7 @@ class _Computation(BehaviourWithPorts, register=False):
         return Status.SUCCESS
 
     def compute(self, **inputs: Any) -> Any:
+        """The output for the inputs (by port name); None, with a feedback message, if none."""
         raise NotImplementedError
 
     def _read_inputs(self) -> dict[str, Any] | None:
