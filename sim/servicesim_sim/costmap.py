@@ -160,6 +160,15 @@ class Costmap:
             return LETHAL
         return int(self.costs()[row, col])
 
+    def costs_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Combined costs under many world points; lethal outside the grid."""
+        frame = self.frame
+        rows = np.floor((np.asarray(ys) - frame.origin_y) / frame.resolution).astype(np.intp)
+        cols = np.floor((np.asarray(xs) - frame.origin_x) / frame.resolution).astype(np.intp)
+        inside = (rows >= 0) & (rows < frame.rows) & (cols >= 0) & (cols < frame.cols)
+        costs = self.costs()[np.clip(rows, 0, frame.rows - 1), np.clip(cols, 0, frame.cols - 1)]
+        return np.where(inside, costs, LETHAL)
+
     # ------------------------------------------------------------------ people
     def observe(self, robot_x: float, robot_y: float, robot_yaw: float,
                 people_xy: list[tuple[float, float]] | np.ndarray, now: float) -> None:
@@ -219,21 +228,27 @@ class Costmap:
         return visible
 
     def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
-        """Whether each ray from the robot to a target's surface misses every wall cell."""
+        """Whether each ray from the robot to a target's surface misses every wall cell.
+
+        Rays are sampled every half map cell, all rays in one flat array (no padding).
+        """
         offsets = targets - robot
-        lengths = np.hypot(offsets[:, 0], offsets[:, 1]) - self.person_radius
+        distance = np.maximum(np.hypot(offsets[:, 0], offsets[:, 1]), 1e-9)
+        lengths = distance - self.person_radius
         step = 0.5 * self.map.resolution
-        samples = np.arange(self.lidar.min_range, float(lengths.max()) + step, step)
-        along = samples[None, :] <= lengths[:, None]
-        unit = offsets / np.maximum(lengths + self.person_radius, 1e-9)[:, None]
-        xs = robot[0] + unit[:, :1] * samples[None, :]
-        ys = robot[1] + unit[:, 1:] * samples[None, :]
+        counts = np.floor(np.maximum(lengths - self.lidar.min_range, 0.0) / step).astype(
+            np.intp) + 1
+        owner = np.repeat(np.arange(len(targets)), counts)
+        index = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+        along = self.lidar.min_range + index * step
+        xs = robot[0] + offsets[owner, 0] / distance[owner] * along
+        ys = robot[1] + offsets[owner, 1] / distance[owner] * along
         cols = np.floor((xs - self.map.origin_x) / self.map.resolution).astype(np.intp)
         rows = np.floor((ys - self.map.origin_y) / self.map.resolution).astype(np.intp)
         height, width = self._walls.shape
         inside = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
-        walls = self._walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)]
-        return ~np.any(along & (walls | ~inside), axis=1)
+        hits = self._walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)] | ~inside
+        return np.bincount(owner, weights=hits, minlength=len(targets)) == 0
 
     def _hidden_by_people(self, robot: np.ndarray, targets: np.ndarray,
                           occluders: np.ndarray) -> np.ndarray:

@@ -10,8 +10,12 @@ Design intent:
   the path and turns there (so it keeps the path through doors instead of cutting the corner),
   and slows down before corners and the goal. Within the goal tolerance (0.3 m) it stops and
   turns to the goal yaw (0.262 rad), like Nav2's stateful goal checker.
-* The costmap sees people through the lidar, ten sweeps a sim second. The path is replanned
-  every second when the costmap changed, and when the robot strays from it.
+* The costmap sees people through the lidar, ten sweeps a sim second. The robot replans when
+  it strays from its path, and reconsiders its path when the costmap changed: within a second
+  when people now obstruct the next 4 m (taking the way round unless it is over 5 m longer),
+  else every 5 s (taking only a way at least 1 m and 10 % shorter). So the robot neither
+  dithers between routes as people come and go nor replans at every change (a plan takes
+  ~15 ms on the full map).
 * A person within 0.7 m ahead on the path (between the robot's front and their body) stops the
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
@@ -31,7 +35,7 @@ from typing import Literal
 
 import numpy as np
 
-from servicesim_sim.costmap import Costmap, OccupancyMapLike
+from servicesim_sim.costmap import INSCRIBED, Costmap, OccupancyMapLike
 from servicesim_sim.planner import ComputePathToPoseError, Planner, PlanResult, path_length
 
 NavigationStatus = Literal["idle", "running", "succeeded", "aborted", "canceled"]
@@ -77,7 +81,12 @@ class Tuning:
     turn_gain: float = 2.0
     min_turn_rate: float = 0.2
     observe_period: float = 0.1
-    replan_period: float = 1.0
+    replan_period: float = 1.0  # replan this often while people obstruct the path ...
+    obstruction_horizon: float = 4.0  # ... this far ahead,
+    detour_allowance: float = 5.0  # taking a new way round them up to this much longer;
+    refresh_period: float = 5.0  # replan this often when the costmap changed anyhow,
+    shortcut_gain: float = 1.0  # taking the new path only when it is this much shorter ...
+    shortcut_fraction: float = 0.1  # ... and at least this share of the way left
     off_path: float = 0.6
     person_gap: float = 0.7  # from the robot's front to a person's body
     robot_front: float = 0.25
@@ -144,10 +153,11 @@ class PolylinePath:
         return self.total
 
     def samples(self, s: float, length: float, *, step: float = 0.1) -> np.ndarray:
-        """Points every ``step`` along the path from ``s`` for ``length`` metres."""
+        """Points every ``step`` (or closer) along the path from ``s`` for ``length`` metres."""
         end = min(s + length, self.total)
-        count = max(math.ceil((end - s) / step), 0) + 1
-        return np.array([self.point_at(a) for a in np.linspace(s, end, count)])
+        arcs = np.linspace(s, end, max(math.ceil((end - s) / step), 0) + 1)
+        return np.column_stack((np.interp(arcs, self.arc, self.points[:, 0]),
+                                np.interp(arcs, self.arc, self.points[:, 1])))
 
 
 def wrapped(angle: float) -> float:
@@ -223,7 +233,7 @@ class Navigator:
         self._goal = goal
         self._abort_at = None if abort_after_s is None else now + abort_after_s
         self._track: PolylinePath | None = None
-        self._s = 0.0
+        self._s = self._off_path = 0.0
         self._arrival_radius = self.xy_tolerance
         self._turning_to_goal = False
         self._replan_needed = True
@@ -276,19 +286,61 @@ class Navigator:
             return self._turn_to_goal(pose)
         if self._blocked_since is not None:
             return self._while_blocked(pose, now)
-        if self._replan_due(pose, now) and not self._replan(pose, now):
-            return STOP
+        if self._track is not None:
+            self._s, self._off_path = self._track.locate(pose[0], pose[1], near=self._s)
+            if self._person_ahead():  # stop first: replanning round them comes after a wait
+                self._block(now, FollowPathError.FAILED_TO_MAKE_PROGRESS,
+                            "a person stands on the path ahead")
+                return STOP
+        if self._replan_required():
+            if not self._replan(pose, now):
+                return STOP
+        elif self._reconsider_due(now):
+            self._reconsider(pose, now)
         return self._follow(pose, now)
 
     # ------------------------------------------------------------------ planning
-    def _replan_due(self, pose: Pose, now: float) -> bool:
-        if self._track is None or self._replan_needed:
-            return True
-        self._s, off = self._track.locate(pose[0], pose[1], near=self._s)
-        if off > self.tuning.off_path:
-            return True
-        return (now - self._planned_at >= self.tuning.replan_period
-                and self.costmap.version != self._planned_version)
+    def _replan_required(self) -> bool:
+        """No path yet, the path was dropped, or the robot strayed from it."""
+        return self._track is None or self._replan_needed or self._off_path > self.tuning.off_path
+
+    def _reconsider_due(self, now: float) -> bool:
+        """The costmap changed since the last plan: a second ago if people now obstruct the
+        next few metres of the path, else five."""
+        if self.costmap.version == self._planned_version:
+            return False
+        since = now - self._planned_at
+        return since >= self.tuning.refresh_period or (
+            since >= self.tuning.replan_period and self._path_obstructed())
+
+    def _path_obstructed(self) -> bool:
+        """Whether the next metres of the path now cross lethal or inscribed cost."""
+        assert self._track is not None
+        ahead = self._track.samples(self._s, self.tuning.obstruction_horizon)
+        return bool(np.any(self.costmap.costs_at(ahead[:, 0], ahead[:, 1]) >= INSCRIBED))
+
+    def _reconsider(self, pose: Pose, now: float) -> None:
+        """Plan afresh, but keep the current path unless the new one is worth the switch.
+
+        Round people obstructing the path the new way is taken unless it is a long detour
+        (a person crossing will likely be gone; one who stays stops the robot, which then
+        waits and goes round). Otherwise only a clearly shorter way is taken, so the robot
+        does not dither between routes as people come and go.
+        """
+        assert self._track is not None and self._goal is not None
+        obstructed = self._path_obstructed()
+        result = self.planner.plan((pose[0], pose[1]), (self._goal[0], self._goal[1]))
+        self._planned_at, self._planned_version = now, self.costmap.version
+        if result.waypoints is None:
+            return
+        tuning = self.tuning
+        remaining = self._off_path + self._track.total - self._s
+        if obstructed:
+            worth = tuning.detour_allowance
+        else:
+            worth = -max(tuning.shortcut_gain, tuning.shortcut_fraction * remaining)
+        if path_length(result.waypoints) <= remaining + worth:
+            self._take(result)
 
     def _replan(self, pose: Pose, now: float) -> bool:
         """Plan from the pose; False when navigation aborted or now waits for people."""
@@ -310,7 +362,7 @@ class Navigator:
     def _take(self, result: PlanResult) -> None:
         assert result.waypoints is not None and result.goal is not None and self._goal is not None
         self._track = PolylinePath(result.waypoints, sharp_corner=self.tuning.sharp_corner)
-        self._s = 0.0
+        self._s = self._off_path = 0.0
         self.path = list(result.waypoints)
         self.distance_remaining = path_length(result.waypoints)
         snapped = math.dist(result.goal, self._goal[:2])
@@ -326,10 +378,6 @@ class Navigator:
         if math.hypot(end[0] - x, end[1] - y) <= self._arrival_radius:
             self._turning_to_goal = True
             return self._turn_to_goal(pose)
-        if self._person_ahead():
-            self._block(now, FollowPathError.FAILED_TO_MAKE_PROGRESS,
-                        "a person stands on the path ahead")
-            return STOP
         recovery = self._check_progress(pose, now)
         if recovery is not None:
             return recovery

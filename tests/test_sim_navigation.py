@@ -1,0 +1,447 @@
+"""The simulator's navigation: costmap, planner and path follower on small synthetic maps.
+
+Maps are drawn in metres on a 0.05 m grid (the default map's resolution). The follower is
+checked by integrating its own commands with a unicycle that, like the simulator's robot,
+refuses a translation that would push its 0.25 m contact disc into a wall.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from servicesim_sim.costmap import INSCRIBED, LETHAL, MAX_INFLATED, Costmap, Inflation
+from servicesim_sim.navigation import (
+    FollowPathError,
+    NavigateToPoseError,
+    Navigator,
+    PolylinePath,
+)
+from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length
+from servicesim_sim.world import OccupancyMap
+
+RESOLUTION = 0.05
+FOOTPRINT = (0.5, 0.4)  # length x width, metres
+CONTACT_RADIUS = 0.25
+People = Callable[[float], list[tuple[float, float]]]
+
+
+# --------------------------------------------------------------------------- maps
+def room(width: float, height: float) -> np.ndarray:
+    """A free rectangle inside a 0.1 m thick wall, as a grid."""
+    grid = np.zeros((round(height / RESOLUTION), round(width / RESOLUTION)), dtype=np.int8)
+    grid[:2, :] = grid[-2:, :] = grid[:, :2] = grid[:, -2:] = 100
+    return grid
+
+
+def wall(grid: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: int = 100) -> None:
+    """Fill the rectangle [x0, x1] x [y0, y1] (metres)."""
+    grid[round(y0 / RESOLUTION):round(y1 / RESOLUTION),
+         round(x0 / RESOLUTION):round(x1 / RESOLUTION)] = value
+
+
+def occupancy(grid: np.ndarray) -> OccupancyMap:
+    return OccupancyMap(grid=grid, resolution=RESOLUTION, origin_x=0.0, origin_y=0.0)
+
+
+def door_map() -> OccupancyMap:
+    """10 x 6 m, split at x = 5 by a wall with a 1 m door spanning y 2.5..3.5."""
+    grid = room(10.0, 6.0)
+    wall(grid, 4.9, 0.0, 5.1, 2.5)
+    wall(grid, 4.9, 3.5, 5.1, 6.0)
+    return occupancy(grid)
+
+
+def corridor_map(width: float) -> OccupancyMap:
+    """A 12 m corridor of the given free width, along x."""
+    return occupancy(room(12.0, width + 0.2))
+
+
+# --------------------------------------------------------------------------- the robot
+class Unicycle:
+    """A differential-drive base stopped by walls like the simulator's robot."""
+
+    def __init__(self, occupancy_map: OccupancyMap, x: float, y: float, yaw: float) -> None:
+        self.map = occupancy_map
+        self.clearance = ndimage.distance_transform_edt(~occupancy_map.blocked_mask()) * RESOLUTION
+        self.x, self.y, self.yaw = x, y, yaw
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        return self.x, self.y, self.yaw
+
+    def step(self, v: float, w: float, dt: float) -> None:
+        x = self.x + v * dt * math.cos(self.yaw)
+        y = self.y + v * dt * math.sin(self.yaw)
+        if self.clearance[self.map.world_to_cell(x, y)] > CONTACT_RADIUS:
+            self.x, self.y = x, y
+        self.yaw += w * dt
+
+    def footprint_clear(self) -> bool:
+        """Whether the 0.5 x 0.4 m footprint covers only free cells."""
+        along, across = np.meshgrid(np.linspace(-FOOTPRINT[0] / 2, FOOTPRINT[0] / 2, 26),
+                                    np.linspace(-FOOTPRINT[1] / 2, FOOTPRINT[1] / 2, 21))
+        cos, sin = math.cos(self.yaw), math.sin(self.yaw)
+        xs = self.x + along * cos - across * sin
+        ys = self.y + along * sin + across * cos
+        cols = np.floor(xs / RESOLUTION).astype(int)
+        rows = np.floor(ys / RESOLUTION).astype(int)
+        return not self.map.blocked_mask()[rows, cols].any()
+
+
+def navigator(occupancy_map: OccupancyMap) -> Navigator:
+    return Navigator(occupancy_map, rng=np.random.default_rng(7))
+
+
+def drive(nav: Navigator, robot: Unicycle, *, people: People = lambda now: [],
+          start_at: float = 0.0, until: float = 120.0, dt: float = 0.05,
+          log: list[tuple[float, float, float]] | None = None) -> float:
+    """Step the robot on the navigator's commands while the goal runs; the sim time it ends.
+
+    ``log`` collects (now, v, w) of every step.
+    """
+    now = start_at
+    while nav.status == "running" and now < until:
+        v, w = nav.command(pose=robot.pose, people=people(now), now=now)
+        assert abs(v) <= 0.5 + 1e-9 and abs(w) <= 1.0 + 1e-9
+        if log is not None:
+            log.append((now, v, w))
+        robot.step(v, w, dt)
+        now += dt
+    return now
+
+
+def yaw_error(a: float, b: float) -> float:
+    return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
+def segments_clear(costmap: Costmap, waypoints: list[tuple[float, float]]) -> bool:
+    """Whether every point along the path is below inscribed cost."""
+    for (x0, y0), (x1, y1) in itertools.pairwise(waypoints):
+        for t in np.linspace(0.0, 1.0, max(2, int(math.dist((x0, y0), (x1, y1)) / 0.02))):
+            if costmap.cost_at(x0 + t * (x1 - x0), y0 + t * (y1 - y0)) >= INSCRIBED:
+                return False
+    return True
+
+
+# --------------------------------------------------------------------------- costmap
+def test_inflation_is_lethal_on_obstacles_inscribed_to_the_robot_radius_then_fades() -> None:
+    costs = Inflation(robot_radius=0.25, inflation_radius=0.4).costs(
+        np.array([0.0, 0.1, 0.25, 0.26, 0.3, 0.35, 0.4, 0.41, 2.0]))
+    assert list(costs[:3]) == [LETHAL, INSCRIBED, INSCRIBED]
+    assert MAX_INFLATED >= costs[3] > costs[4] > costs[5] > costs[6] > 0
+    assert list(costs[7:]) == [0, 0]
+
+
+def test_the_costmap_inflates_walls() -> None:
+    costmap = Costmap(corridor_map(3.0))  # walls fill y < 0.1 and y > 3.1
+    assert costmap.cost_at(6.0, 0.05) == LETHAL
+    assert costmap.cost_at(6.0, 0.12) >= INSCRIBED and costmap.cost_at(6.0, 0.3) >= INSCRIBED
+    assert 0 < costmap.cost_at(6.0, 0.4) < INSCRIBED
+    assert costmap.cost_at(6.0, 0.7) == 0 and costmap.cost_at(6.0, 1.6) == 0
+    assert costmap.cost_at(-1.0, 1.6) == LETHAL  # off the grid
+
+
+def test_the_grid_is_cropped_to_the_walls_and_coarser_than_the_map() -> None:
+    grid = np.full((400, 400), -1, dtype=np.int8)
+    grid[100:160, 100:300] = room(10.0, 3.0)
+    costmap = Costmap(occupancy(grid), crop_margin=0.5)
+    assert costmap.frame.resolution == pytest.approx(0.1)
+    assert costmap.frame.rows == 40 and costmap.frame.cols == 110  # (3 m + 2 x 0.5) / 0.1 ...
+    assert costmap.frame.origin_x == pytest.approx(5.0 - 0.5)
+
+
+def test_a_person_in_view_is_marked_and_inflated() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=2.0)
+    assert [(mark.x, mark.y, mark.seen_at) for mark in costmap.marks] == [(6.0, 1.6, 2.0)]
+    assert costmap.cost_at(6.0, 1.6) == LETHAL
+    assert costmap.cost_at(6.0, 2.0) >= INSCRIBED  # within person + robot radius
+    assert 0 < costmap.cost_at(6.0, 2.2) < INSCRIBED
+    assert costmap.cost_at(6.0, 2.5) == 0
+
+
+def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_seen() -> None:
+    grid = room(12.0, 3.2)
+    wall(grid, 7.0, 0.0, 7.2, 2.0)  # a wall stub between the robot and (8, 1)
+    costmap = Costmap(occupancy(grid))
+    behind, walled, hidden, shield = (0.5, 2.5), (8.0, 1.0), (10.0, 2.5), (5.0, 2.5)
+    costmap.observe(3.0, 2.5, 0.0, [behind, walled, hidden, shield], now=0.0)
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [shield]
+
+
+def test_people_beyond_the_lidar_range_are_not_seen() -> None:
+    grid = np.zeros((40, 700), dtype=np.int8)  # 35 x 2 m at 0.05 m
+    grid[:2, :] = grid[-2:, :] = 100
+    costmap = Costmap(occupancy(grid))
+    costmap.observe(1.0, 1.0, 0.0, [(20.0, 1.0), (34.0, 1.0)], now=0.0)
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(20.0, 1.0)]
+
+
+def test_a_mark_out_of_view_stays_until_cleared() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(3.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
+    costmap.observe(3.0, 1.6, math.pi, [], now=1.0)  # turned away; the person left
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(6.0, 1.6)]
+    assert costmap.cost_at(6.0, 1.6) == LETHAL
+    costmap.clear()
+    assert costmap.marks == ()
+    assert costmap.cost_at(6.0, 1.6) == 0
+
+
+def test_a_mark_seen_free_again_is_removed_and_a_mover_leaves_one_mark() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
+    costmap.observe(1.0, 1.6, 0.0, [(8.0, 1.0)], now=0.1)  # walked on, still in view
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(8.0, 1.0)]
+    costmap.observe(1.0, 1.6, 0.0, [], now=0.2)
+    assert costmap.marks == ()
+    assert costmap.cost_at(6.0, 1.6) == 0
+
+
+def test_the_costmap_version_changes_only_when_the_marks_do() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
+    version = costmap.version
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.1)
+    assert costmap.version == version
+    costmap.observe(1.0, 1.6, 0.0, [(6.5, 1.6)], now=0.2)
+    assert costmap.version > version
+
+
+# --------------------------------------------------------------------------- planner
+def test_plan_goes_around_a_wall() -> None:
+    grid = room(10.0, 6.0)
+    wall(grid, 4.9, 0.0, 5.1, 4.5)  # the way round is above y = 4.5
+    costmap = Costmap(occupancy(grid))
+    plan = Planner(costmap).plan((2.0, 1.0), (8.0, 1.0))
+    assert plan.succeeded and plan.error_code == 0
+    assert plan.waypoints[0] == (2.0, 1.0) and plan.waypoints[-1] == (8.0, 1.0)
+    assert max(y for _, y in plan.waypoints) > 4.5 + 0.25  # passes the wall's end, clear
+    assert segments_clear(costmap, plan.waypoints)
+    assert 2 * math.hypot(3.0, 3.75) < path_length(plan.waypoints) < 11.5
+
+
+def test_plan_through_a_door_keeps_to_its_middle() -> None:
+    costmap = Costmap(door_map())
+    plan = Planner(costmap).plan((1.5, 1.0), (8.5, 5.0))
+    assert plan.succeeded
+    assert segments_clear(costmap, plan.waypoints)
+    track = PolylinePath(plan.waypoints, sharp_corner=0.6)
+    crossing = [track.point_at(s) for s in np.arange(0.0, track.total, 0.01)]
+    y_at_wall = [y for x, y in crossing if 4.85 <= x <= 5.15]
+    assert y_at_wall and all(abs(y - 3.0) <= 0.15 for y in y_at_wall)
+
+
+def test_plan_to_a_walled_in_goal_finds_no_path() -> None:
+    grid = room(10.0, 6.0)
+    wall(grid, 6.0, 2.0, 9.0, 5.0)
+    wall(grid, 6.2, 2.2, 8.8, 4.8, value=0)  # a closed box: free inside, no way in
+    plan = Planner(Costmap(occupancy(grid))).plan((2.0, 3.0), (7.5, 3.5))
+    assert plan.waypoints is None
+    assert plan.error_code == ComputePathToPoseError.NO_VALID_PATH == 208
+    assert "no path" in plan.error_msg
+
+
+def test_a_goal_in_a_wall_is_occupied_but_one_just_beside_it_snaps() -> None:
+    costmap = Costmap(door_map())
+    planner = Planner(costmap)
+    inside = planner.plan((1.5, 1.0), (5.0, 1.0))
+    assert inside.waypoints is None and inside.error_code == 206
+    assert "goal (5.00, 1.00)" in inside.error_msg
+    beside = planner.plan((1.5, 1.0), (4.75, 1.0))  # 0.15 m from the wall: lethal, snaps
+    assert beside.succeeded and beside.goal != (4.75, 1.0)
+    assert math.dist(beside.goal, (4.75, 1.0)) <= 0.25
+    assert costmap.cost_at(*beside.goal) < INSCRIBED
+
+
+def test_a_start_pressed_against_a_wall_escapes_first() -> None:
+    costmap = Costmap(door_map())
+    plan = Planner(costmap).plan((4.72, 1.0), (1.5, 1.0))
+    assert plan.succeeded
+    assert plan.waypoints[0] == (4.72, 1.0)
+    assert costmap.cost_at(4.72, 1.0) >= INSCRIBED
+    assert costmap.cost_at(*plan.waypoints[1]) < INSCRIBED
+    assert segments_clear(costmap, plan.waypoints[1:])
+
+
+def test_start_and_goal_off_the_map_are_reported() -> None:
+    planner = Planner(Costmap(door_map()))
+    assert planner.plan((50.0, 1.0), (1.5, 1.0)).error_code == 203
+    assert planner.plan((1.5, 1.0), (1.5, -9.0)).error_code == 204
+
+
+def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
+    planner = Planner(costmap)
+    around = planner.plan((1.0, 1.6), (11.0, 1.6))
+    assert around.succeeded and segments_clear(costmap, around.waypoints)
+    track = PolylinePath(around.waypoints, sharp_corner=0.6)
+    closest = min(math.dist(track.point_at(s), (6.0, 1.6)) for s in np.arange(0, track.total, 0.02))
+    assert closest >= 0.3 + 0.25
+    straight = planner.plan((1.0, 1.6), (11.0, 1.6), with_people=False)
+    assert straight.waypoints == [(1.0, 1.6), (11.0, 1.6)]
+
+
+# --------------------------------------------------------------------------- navigator
+def test_the_robot_reaches_the_goal_through_a_door_without_touching_a_wall() -> None:
+    occupancy_map = door_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.5, 1.0, math.pi)
+    nav.start(8.5, 5.0, -math.pi / 2, now=0.0)
+    touched = []
+
+    def watch(now: float) -> list[tuple[float, float]]:
+        touched.append(not robot.footprint_clear())
+        return []
+
+    drive(nav, robot, people=watch)
+    assert nav.status == "succeeded" and nav.error_code == 0 and nav.distance_remaining == 0.0
+    assert math.dist(robot.pose[:2], (8.5, 5.0)) <= 0.3
+    assert yaw_error(robot.yaw, -math.pi / 2) <= 0.262
+    assert not any(touched)
+    assert nav.path[-1] == (8.5, 5.0)
+    assert nav.command(pose=robot.pose, people=[], now=999.0) == (0.0, 0.0)
+
+
+def test_a_walled_in_goal_aborts_with_no_valid_path() -> None:
+    grid = room(10.0, 6.0)
+    wall(grid, 6.0, 2.0, 9.0, 5.0)
+    wall(grid, 6.2, 2.2, 8.8, 4.8, value=0)
+    nav = navigator(occupancy(grid))
+    nav.start(7.5, 3.5, 0.0, now=0.0)
+    assert nav.command(pose=(2.0, 3.0, 0.0), people=[], now=0.0) == (0.0, 0.0)
+    assert nav.status == "aborted"
+    assert nav.error_code == ComputePathToPoseError.NO_VALID_PATH
+    assert nav.error_msg
+
+
+def test_a_goal_in_a_wall_aborts_with_goal_occupied() -> None:
+    nav = navigator(door_map())
+    nav.start(5.0, 1.0, 0.0, now=0.0)
+    nav.command(pose=(1.5, 1.0, 0.0), people=[], now=0.0)
+    assert (nav.status, nav.error_code) == ("aborted", ComputePathToPoseError.GOAL_OCCUPIED)
+
+
+def test_a_person_stepping_onto_the_path_stops_the_robot_which_then_goes_round() -> None:
+    occupancy_map = corridor_map(3.0)
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 1.6, 0.0)
+    nav.start(11.0, 1.6, 0.0, now=0.0)
+    person: list[tuple[float, float]] = []
+    appeared: list[float] = []
+    gaps = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        if not person and robot.x > 4.0:
+            person.append((robot.x + 1.1, robot.y))  # steps in 0.55 m ahead of the front
+            appeared.append(now)
+        if person:
+            gaps.append(math.dist(robot.pose[:2], person[0]))
+        return person
+
+    log: list[tuple[float, float, float]] = []
+    drive(nav, robot, people=people, log=log)
+    assert nav.status == "succeeded"
+    assert nav.recoveries >= 1
+    soon_after = [(v, w) for now, v, w in log if appeared[0] + 0.15 <= now <= appeared[0] + 0.45]
+    assert soon_after and all(twist == (0.0, 0.0) for twist in soon_after)  # stopped, waits
+    assert min(gaps) > 0.3 + CONTACT_RADIUS
+
+
+def test_a_person_blocking_a_corridor_makes_the_robot_wait_then_abort() -> None:
+    occupancy_map = corridor_map(1.4)  # a person in the middle leaves 0.4 m each side
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    ended = drive(nav, robot, people=lambda now: [(6.0, 0.8)], until=60.0)
+    assert nav.status == "aborted"
+    assert nav.error_code == ComputePathToPoseError.NO_VALID_PATH
+    assert "people" in nav.error_msg and "20 s" in nav.error_msg
+    assert 20.0 < ended < 23.0
+    assert nav.recoveries >= 5  # one per wait, a wait is 0.5..1.5 s
+    assert [(mark.x, mark.y) for mark in nav.costmap.marks] == [(6.0, 0.8)]
+    assert robot.x < 6.0 - 0.3 - CONTACT_RADIUS
+
+
+def test_the_robot_goes_on_once_the_blocking_person_leaves() -> None:
+    occupancy_map = corridor_map(1.4)
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    drive(nav, robot, people=lambda now: [(6.0, 0.8)] if now < 5.0 else [], until=90.0)
+    assert nav.status == "succeeded"
+    assert nav.recoveries >= 1
+    assert nav.costmap.marks == ()  # seen free again
+
+
+def test_a_new_goal_preempts_the_running_one() -> None:
+    occupancy_map = door_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.5, 1.0, 0.0)
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    ended = drive(nav, robot, until=3.0)
+    assert nav.status == "running" and nav.path[-1] == (8.5, 5.0)
+    nav.start(1.0, 5.0, math.pi, now=ended)
+    assert (nav.status, nav.path, nav.recoveries) == ("running", [], 0)
+    drive(nav, robot, start_at=ended, until=ended + 60.0)
+    assert nav.status == "succeeded" and nav.path[-1] == (1.0, 5.0)
+    assert math.dist(robot.pose[:2], (1.0, 5.0)) <= 0.3
+
+
+def test_cancel_stops_the_robot() -> None:
+    occupancy_map = door_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.5, 1.0, 0.0)
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    ended = drive(nav, robot, until=2.0)
+    assert nav.command(pose=robot.pose, people=[], now=ended) != (0.0, 0.0)
+    nav.cancel()
+    assert nav.status == "canceled" and nav.error_code == 0
+    assert nav.command(pose=robot.pose, people=[], now=ended + 0.05) == (0.0, 0.0)
+
+
+def test_abort_after_s_aborts_at_that_sim_time() -> None:
+    occupancy_map = door_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.5, 1.0, 0.0)
+    nav.start(8.5, 5.0, 0.0, now=10.0, abort_after_s=4.0)
+    ended = drive(nav, robot, start_at=10.0)
+    assert nav.status == "aborted" and nav.error_code == NavigateToPoseError.UNKNOWN == 9000
+    assert 14.0 < ended <= 14.15
+    assert nav.error_msg
+
+
+def test_a_robot_that_cannot_move_backs_up_then_aborts_failing_to_make_progress() -> None:
+    nav = navigator(door_map())
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    commands = []
+    now = 0.0
+    while nav.status == "running" and now < 40.0:
+        commands.append(nav.command(pose=(1.5, 1.0, 0.6), people=[], now=now))
+        now += 0.05
+    assert nav.status == "aborted" and nav.error_code == FollowPathError.FAILED_TO_MAKE_PROGRESS
+    assert 20.0 < now < 21.0
+    assert nav.recoveries == 1 and any(v < 0.0 for v, _ in commands)
+
+
+def test_an_unknown_pose_aborts_with_tf_error() -> None:
+    nav = navigator(door_map())
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    nav.command(pose=(math.nan, 1.0, 0.0), people=[], now=0.0)
+    assert (nav.status, nav.error_code) == ("aborted", NavigateToPoseError.TF_ERROR)
+
+
+def test_clear_costmaps_forgets_people_and_idle_commands_are_zero() -> None:
+    nav = navigator(corridor_map(3.0))
+    assert nav.status == "idle"
+    assert nav.command(pose=(1.0, 1.6, 0.0), people=[(6.0, 1.6)], now=0.0) == (0.0, 0.0)
+    assert len(nav.costmap.marks) == 1
+    nav.clear_costmaps()
+    assert nav.costmap.marks == ()
