@@ -41,6 +41,9 @@ def _decorator_class(tag: str) -> type | None:
 
 
 def _type_name(data_type: object) -> str:
+    """``Pose2D``, ``float``; generics in full without module paths: ``list[Pose2D]``."""
+    if getattr(data_type, "__args__", None):
+        return re.sub(r"\b[\w.]+\.(\w+)", r"\1", str(data_type))
     return getattr(data_type, "__name__", str(data_type))
 
 
@@ -81,8 +84,8 @@ def model_for(tree_file: Path) -> str:
 
 def with_model(text: str, model: str) -> str:
     """The file's text with its model replaced (or added before ``</root>``)."""
-    stripped = MODEL_PATTERN.sub("\n", text)
-    return stripped.replace("</root>", "\n" + model + "\n</root>", 1).replace("\n\n\n", "\n\n")
+    head, tail = MODEL_PATTERN.sub("\n", text).rsplit("</root>", 1)
+    return head.rstrip() + "\n\n" + model + "\n</root>" + tail
 
 
 def main(argv: Sequence[str] | None = None) -> int:
