@@ -27,7 +27,7 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from servicesim_competition.srv import NewTask
 
-from bt_servicesim.dump import tree_text
+from bt_servicesim.dump import ShadowTree
 from bt_servicesim.executive import Executive
 from bt_servicesim.progress import ProgressView
 from bt_servicesim.recording import MCAP_NAME, McapRecorder, TaskTopic, TreeTopic
@@ -216,7 +216,7 @@ class RunRecords:
             (MCAP_NAME, self.mcap.close),
             (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
         ]
-        if self.tree is not None and self.tree_log is not None:
+        if self.tree_log is not None:
             steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
         for name, step in steps:
             try:
@@ -231,5 +231,9 @@ class RunRecords:
                           title=title)
 
     def _write_final_tree(self) -> None:
-        assert self.tree is not None
-        (self.out / FINAL_TREE_NAME).write_text(tree_text(self.tree.root), encoding="utf-8")
+        """The last *ticked* state: after Ctrl-C the live tree has been stopped (all INVALID)."""
+        assert self.tree_log is not None
+        shadow = ShadowTree(self.tree_log.shape)
+        nodes, tip = self.tree_log.latest
+        shadow.show(nodes, tip=tip)
+        (self.out / FINAL_TREE_NAME).write_text(shadow.text(), encoding="utf-8")

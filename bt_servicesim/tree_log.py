@@ -122,6 +122,11 @@ class TreeLog:
         """How many tick lines were written."""
         return self._records
 
+    @property
+    def latest(self) -> tuple[dict[str, NodeState], str | None]:
+        """Every node's state and the tip as of the last record (an interrupt does not count)."""
+        return dict(self._last_nodes), self._last_tip
+
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
         """The post-tick handler: log this tick if anything changed."""
         record = self.capture(tick=tree.count + 1)  # py_trees counts after the handlers

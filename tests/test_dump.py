@@ -24,6 +24,7 @@ REPO = Path(__file__).resolve().parents[1]
 DOCS_DOT = REPO / "docs" / "images" / "mission_tree.dot"
 DOCS_SVG = REPO / "docs" / "images" / "mission_tree.svg"
 SVG = "{http://www.w3.org/2000/svg}"
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning:pydot")  # pydot's parser
 
 SMALL_TREE = """<root BTCPP_format="4" main_tree_to_execute="Errand">
   <BehaviorTree ID="Errand">

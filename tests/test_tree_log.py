@@ -17,7 +17,7 @@ import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from py_trees.ports import BehaviourWithPorts, PortInformation
 
-from bt_servicesim.dump import NodeState, TreeShape, tree_text, walk
+from bt_servicesim.dump import NodeState, ShadowTree, TreeShape, tree_text, walk
 from bt_servicesim.tree_log import TreeLog, TreeLogError, read_tree_log
 
 Status = py_trees.common.Status
@@ -179,3 +179,21 @@ def test_a_broken_log_is_one_clear_error_naming_the_file(tmp_path: Path, content
     with pytest.raises(TreeLogError, match=problem) as raised:
         read_tree_log(path)
     assert str(path) in str(raised.value) and "\n" not in str(raised.value)
+
+
+def test_the_latest_state_survives_an_interrupt(tmp_path: Path) -> None:
+    """After Ctrl-C the live tree is stopped (all INVALID); the log still knows the last tick."""
+    tree = errand_tree(tmp_path)
+    log = TreeLog(tree=tree, path=tmp_path / "tree_log.jsonl", sim_time_s=lambda: 7.0)
+    tree.add_post_tick_handler(log)
+    for _ in range(4):
+        tree.tick()
+    drawn = tree_text(tree.root)
+    tree.root.stop(Status.INVALID)  # what stopping a running tree does to it
+    assert all(behaviour.status == Status.INVALID for behaviour in walk(tree.root))
+    nodes, tip = log.latest
+    shadow = ShadowTree(log.shape)
+    shadow.show(nodes, tip=tip)
+    assert shadow.text() == drawn
+    assert tip == "Errand.Deliver.Deliver.Detour"
+    log.close()
