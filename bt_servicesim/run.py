@@ -15,14 +15,22 @@ import json
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from bt_servicesim.mission_tree import DEFAULT_TREE, MissionTreeError, load_mission_tree
 from bt_servicesim.ros_environment import apply_localhost_defaults
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+    from bt_servicesim.executive import Executive
+
+ExecutiveFactory = Callable[["Node"], "Executive"]
+EXECUTIVES = ("bt", "baseline")  # the behaviour tree, and the seed's state machine
 
 EXIT_COMPLETED, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 DEFAULT_TIME_LIMIT_S = 900.0
@@ -69,8 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="mission time limit in sim seconds (default 900)")
     parser.add_argument("--headless", action="store_true",
                         help="plain log lines instead of a live view")
-    parser.add_argument("--executive", choices=("bt",), default="bt",
-                        help="which executive runs the mission")
+    parser.add_argument("--executive", choices=EXECUTIVES, default="bt",
+                        help="which executive runs the mission: the behaviour tree (bt) or "
+                        "the seed's state machine (baseline)")
     parser.add_argument("--sim-arg", action="append", default=[], metavar="ARG",
                         help="extra argument passed to the simulator (repeatable)")
     return parser
@@ -99,21 +108,41 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         settings = settings_from(args)
-        root = load_mission_tree(settings.tree, time_limit_s=settings.time_limit_s)
+        make_executive = executive_factory(settings)
         settings.out.mkdir(parents=True, exist_ok=True)
     except (UsageError, MissionTreeError, OSError) as error:
         print(f"python -m bt_servicesim.run: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     apply_localhost_defaults()
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 101))
-    from bt_servicesim.executive import MissionExecutive  # rclpy only once the input is good
-    from bt_servicesim.mission_run import MissionRun
+    from bt_servicesim.mission_run import MissionRun  # rclpy only once the input is good
 
     return MissionRun(
-        settings=settings,
-        make_executive=lambda node: MissionExecutive(node=node, root=root),
-        extra_sim_args=tuple(args.sim_arg),
+        settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
     ).execute()
+
+
+def executive_factory(settings: RunSettings) -> ExecutiveFactory:
+    """Check what the chosen executive needs (the tree file) and say how to make it on a node.
+
+    rclpy is imported only when the factory is called, after every input has been checked.
+    """
+    if settings.executive == "baseline":
+        def make_baseline(node: Node) -> Executive:
+            from bt_servicesim.baseline import SeedStateMachine
+
+            return SeedStateMachine(node=node, seed=settings.seed,
+                                    time_limit_s=settings.time_limit_s)
+
+        return make_baseline
+    root = load_mission_tree(settings.tree, time_limit_s=settings.time_limit_s)
+
+    def make_tree(node: Node) -> Executive:
+        from bt_servicesim.executive import MissionExecutive
+
+        return MissionExecutive(node=node, root=root)
+
+    return make_tree
 
 
 def write_report(path: Path, report: dict[str, Any]) -> None:

@@ -1,0 +1,305 @@
+"""The seed's state machine against fake referee and navigation servers over DDS.
+
+The fake simulator serves the competition's services and a NavigateToPose action from a thread
+of its own; the test publishes ``/clock`` and spins the baseline's node between clock steps, so
+the baseline runs on sim time exactly as in a run. Each test prefixes every name with a
+namespace of its own, so that servers of earlier tests that DDS still remembers cannot answer.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import py_trees
+import pytest
+from builtin_interfaces.msg import Time
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rosgraph_msgs.msg import Clock
+from servicesim_competition import srv
+from servicesim_competition.action import NavigateToPose
+from std_srvs.srv import Empty
+
+from bt_servicesim.baseline import SEED_STATES, SeedStateMachine
+from bt_servicesim.geometry import Pose2D
+
+Status = py_trees.common.Status
+_names = itertools.count()
+
+PICK_UP_BOX = (-1.5, 0.0, 1.5, 3.0)  # centre (0.0, 1.5)
+DROP_OFF_BOX = (4.0, 10.0, 6.0, 11.0)  # centre (5.0, 10.5)
+START = (10.975, 3.75, math.pi)
+
+
+@dataclass
+class Event:
+    """Something the fake simulator saw, at the sim time the test had published."""
+
+    what: str
+    sim_time: float
+    detail: Any = None
+
+
+@dataclass
+class FakeSimulator:
+    """Referee services and navigation, scripted; every request is logged as an :class:`Event`."""
+
+    context: object
+    namespace: str
+    goal_outcomes: list[str] = field(default_factory=list)  # succeed, abort or hang
+    pickup_success: bool = False
+    dropoff_success: bool = False
+    task_given: bool = True
+    events: list[Event] = field(default_factory=list)
+    sim_time: float = 0.0
+    stopping: bool = False
+
+    def __post_init__(self) -> None:
+        self.node = Node(f"fake_simulator_{next(_names)}", context=self.context)
+        ns = self.namespace
+        self.node.create_service(srv.NewTask, f"{ns}/servicesim/new_task", self.new_task)
+        self.node.create_service(srv.RoomInfo, f"{ns}/servicesim/room_info", self.room_info)
+        self.node.create_service(srv.PickUpGuest, f"{ns}/servicesim/pickup_guest", self.pickup)
+        self.node.create_service(srv.DropOffGuest, f"{ns}/servicesim/dropoff_guest",
+                                 self.dropoff)
+        self.node.create_service(Empty, f"{ns}/servicebot/move_base/clear_costmaps", self.clear)
+        self.server = ActionServer(
+            self.node, NavigateToPose, f"{ns}/servicebot/navigate_to_pose",
+            execute_callback=self.navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
+            cancel_callback=self.on_cancel,
+        )
+        self.executor = MultiThreadedExecutor(num_threads=4, context=self.context)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+
+    def log(self, what: str, detail: Any = None) -> None:
+        self.events.append(Event(what, self.sim_time, detail))
+
+    def named(self, what: str) -> list[Event]:
+        return [event for event in self.events if event.what == what]
+
+    def new_task(self, request: Any, response: Any) -> Any:
+        self.log("new_task")
+        if self.task_given:
+            response.pick_up_location, response.drop_off_location = "PickUp", "DropOff"
+            response.guest_name = "human_20843"
+            pose = Pose2D(*START).to_pose()
+            response.robot_start_pose = pose
+        return response
+
+    def room_info(self, request: Any, response: Any) -> Any:
+        self.log("room_info", request.name)
+        box = PICK_UP_BOX if request.name == "PickUp" else DROP_OFF_BOX
+        response.min.x, response.min.y, response.max.x, response.max.y = box
+        return response
+
+    def pickup(self, request: Any, response: Any) -> Any:
+        self.log("pickup_guest", (request.guest_name, request.robot_name))
+        response.success = self.pickup_success
+        return response
+
+    def dropoff(self, request: Any, response: Any) -> Any:
+        self.log("dropoff_guest", request.guest_name)
+        response.success = self.dropoff_success
+        return response
+
+    def clear(self, request: Any, response: Any) -> Any:
+        self.log("clear_costmaps")
+        return response
+
+    def on_cancel(self, handle: Any) -> CancelResponse:
+        self.log("cancel")
+        return CancelResponse.ACCEPT
+
+    def navigate(self, handle: Any) -> Any:
+        self.log("goal", Pose2D.from_pose(handle.request.pose.pose))
+        outcome = self.goal_outcomes.pop(0) if self.goal_outcomes else "succeed"
+        while outcome == "hang" and not handle.is_cancel_requested and not self.stopping:
+            time.sleep(0.005)
+        if handle.is_cancel_requested:
+            handle.canceled()
+        elif outcome == "abort":
+            handle.abort()
+        else:
+            handle.succeed()
+        return NavigateToPose.Result()
+
+    def shutdown(self) -> None:
+        self.stopping = True
+        self.executor.shutdown()
+        self.thread.join(timeout=5.0)
+        self.node.destroy_node()
+
+
+def clock_message(seconds: float) -> Clock:
+    whole = math.floor(seconds)
+    return Clock(clock=Time(sec=whole, nanosec=round((seconds - whole) * 1e9) % 1_000_000_000))
+
+
+class Driver:
+    """The baseline on a sim-time node; the test steps the clock and spins between steps."""
+
+    STEP_S = 0.05
+
+    def __init__(self, context: object, namespace: str, **kwargs: Any) -> None:
+        self.node = Node(f"baseline_{next(_names)}", context=context, parameter_overrides=[
+            Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+        self.clock = self.node.create_publisher(Clock, "/clock", 10)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.machine = SeedStateMachine(node=self.node, seed=7, namespace=namespace, **kwargs)
+        self.machine.setup()
+        self.sim_time = 1.0
+
+    def step(self, simulator: FakeSimulator) -> None:
+        self.sim_time += self.STEP_S
+        simulator.sim_time = self.sim_time
+        self.clock.publish(clock_message(self.sim_time))
+        for _ in range(3):
+            self.executor.spin_once(timeout_sec=0.002)
+
+    def run_until(self, simulator: FakeSimulator, done: Callable[[], bool],
+                  sim_limit_s: float = 120.0) -> None:
+        while self.sim_time < 1.5:  # let the clock arrive before the machine starts
+            self.step(simulator)
+        self.machine.start()
+        while not done():
+            assert self.sim_time < sim_limit_s, f"stuck in {self.machine.phase()}: " \
+                                                f"{self.machine.activity()}"
+            self.step(simulator)
+
+    def step_until(self, simulator: FakeSimulator, done: Callable[[], bool]) -> None:
+        """Keep stepping for up to 5 wall seconds, for an answer that is on its way."""
+        deadline = time.monotonic() + 5.0
+        while not done() and time.monotonic() < deadline:
+            self.step(simulator)
+
+    def shutdown(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+
+@pytest.fixture
+def namespace() -> str:
+    return f"/baseline_test_{next(_names)}"
+
+
+@pytest.fixture
+def simulator(ros_context: object, namespace: str) -> Iterator[FakeSimulator]:
+    simulator = FakeSimulator(context=ros_context, namespace=namespace)
+    yield simulator
+    simulator.shutdown()
+
+
+@pytest.fixture
+def driver(ros_context: object, namespace: str) -> Iterator[Driver]:
+    driver = Driver(ros_context, namespace)
+    yield driver
+    driver.shutdown()
+
+
+def finished(driver: Driver) -> Callable[[], bool]:
+    return lambda: driver.machine.finished
+
+
+def assert_seed_goal(goal: Pose2D, x: float, y: float) -> None:
+    """Centre (or start) shifted −1 m in x, within the ±0.1 m jitter, facing −x."""
+    assert goal.x == pytest.approx(x - 1.0, abs=0.1)
+    assert goal.y == pytest.approx(y, abs=0.1)
+    assert abs(math.cos(goal.yaw) + 1.0) < 1e-6
+
+
+def test_four_states_in_order_with_failed_pickup_and_dropoff_moving_on(
+    driver: Driver, simulator: FakeSimulator
+) -> None:
+    driver.run_until(simulator, finished(driver))
+    machine = driver.machine
+    assert machine.outcome == Status.SUCCESS
+    assert machine.states_entered == list(SEED_STATES)
+    assert [event.what for event in simulator.events if event.what != "cancel"] == [
+        "new_task",
+        "room_info", "clear_costmaps", "goal", "pickup_guest",
+        "room_info", "clear_costmaps", "goal", "dropoff_guest",
+        "clear_costmaps", "goal",
+    ]
+    assert simulator.named("pickup_guest")[0].detail == ("human_20843", "servicebot")
+    assert machine.ignored_answers == [("pickup_guest", False), ("dropoff_guest", False)]
+
+
+def test_goals_are_centre_and_start_minus_one_metre(
+    driver: Driver, simulator: FakeSimulator
+) -> None:
+    driver.run_until(simulator, finished(driver))
+    pick_up, drop_off, start = (event.detail for event in simulator.named("goal"))
+    assert_seed_goal(pick_up, 0.0, 1.5)
+    assert_seed_goal(drop_off, 5.0, 10.5)
+    assert_seed_goal(start, START[0], START[1])
+    assert (pick_up.x, pick_up.y) != (-1.0, 1.5), "the goal is jittered"
+
+
+def test_each_attempt_clears_costmaps_then_waits_half_a_second(
+    driver: Driver, simulator: FakeSimulator
+) -> None:
+    simulator.goal_outcomes = ["abort", "abort", "succeed"]
+    driver.run_until(simulator, lambda: len(simulator.named("pickup_guest")) == 1)
+    clears, goals = simulator.named("clear_costmaps"), simulator.named("goal")
+    assert len(goals) == 3 and len(clears) == 3
+    for clear, goal in zip(clears, goals, strict=True):
+        assert goal.sim_time - clear.sim_time >= 0.5 - 1e-6
+    gaps = [later.sim_time - earlier.sim_time for earlier, later in itertools.pairwise(clears)]
+    assert all(gap >= 1.0 - 1e-6 for gap in gaps), f"attempts faster than 1 Hz: {gaps}"
+
+
+def test_a_goal_without_result_is_cancelled_and_resent_after_ten_seconds(
+    driver: Driver, simulator: FakeSimulator
+) -> None:
+    simulator.goal_outcomes = ["hang", "succeed"]
+    driver.run_until(simulator, lambda: len(simulator.named("pickup_guest")) == 1)
+    first, second = simulator.named("goal")[:2]
+    sent = simulator.named("clear_costmaps")[0].sim_time + 0.5  # the server logs goals late
+    assert second.sim_time - first.sim_time >= 10.0
+    cancels = simulator.named("cancel")
+    assert cancels and sent + 10.0 <= cancels[0].sim_time <= second.sim_time
+
+
+def test_interrupt_cancels_the_goal_in_flight(driver: Driver, simulator: FakeSimulator) -> None:
+    simulator.goal_outcomes = ["hang"]
+    driver.run_until(simulator, lambda: len(simulator.named("goal")) == 1)
+    driver.machine.interrupt()
+    driver.step_until(simulator, lambda: bool(simulator.named("cancel")))
+    assert len(simulator.named("cancel")) == 1
+    assert driver.machine.phase() == "Pickup"
+    assert not simulator.named("pickup_guest")
+
+
+def test_refused_task_fails(driver: Driver, simulator: FakeSimulator) -> None:
+    simulator.task_given = False
+    driver.run_until(simulator, finished(driver))
+    assert driver.machine.outcome == Status.FAILURE
+    assert driver.machine.states_entered == ["BeginTask"]
+    assert "new_task" in driver.machine.activity()
+
+
+def test_time_limit_ends_the_run_with_failure(ros_context: object, namespace: str,
+                                              simulator: FakeSimulator) -> None:
+    simulator.goal_outcomes = ["hang"] * 10
+    driver = Driver(ros_context, namespace, time_limit_s=15.0)
+    try:
+        driver.run_until(simulator, finished(driver))
+        assert driver.machine.outcome == Status.FAILURE
+        assert "time limit" in driver.machine.activity()
+        assert 15.0 < driver.sim_time - 1.5 < 16.0
+        driver.step_until(simulator, lambda: bool(simulator.named("cancel")))
+        assert simulator.named("cancel"), "the goal in flight is cancelled"
+    finally:
+        driver.shutdown()
+
