@@ -232,7 +232,7 @@ def test_plan_through_a_door_keeps_to_its_middle() -> None:
     plan = Planner(costmap).plan((1.5, 1.0), (8.5, 5.0))
     assert plan.succeeded
     assert segments_clear(costmap, plan.waypoints)
-    track = PolylinePath(plan.waypoints, sharp_corner=0.6)
+    track = PolylinePath(plan.waypoints)
     crossing = [track.point_at(s) for s in np.arange(0.0, track.total, 0.01)]
     y_at_wall = [y for x, y in crossing if 4.85 <= x <= 5.15]
     assert y_at_wall and all(abs(y - 3.0) <= 0.15 for y in y_at_wall)
@@ -282,7 +282,7 @@ def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
     planner = Planner(costmap)
     around = planner.plan((1.0, 1.6), (11.0, 1.6))
     assert around.succeeded and segments_clear(costmap, around.waypoints)
-    track = PolylinePath(around.waypoints, sharp_corner=0.6)
+    track = PolylinePath(around.waypoints)
     closest = min(math.dist(track.point_at(s), (6.0, 1.6)) for s in np.arange(0, track.total, 0.02))
     assert closest >= 0.3 + 0.25
     straight = planner.plan((1.0, 1.6), (11.0, 1.6), with_people=False)
@@ -290,11 +290,24 @@ def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
 
 
 # --------------------------------------------------------------------------- navigator
-def test_the_robot_reaches_the_goal_through_a_door_without_touching_a_wall() -> None:
-    occupancy_map = door_map()
+def side_door_map() -> OccupancyMap:
+    """A 1 m wide corridor along y 0.1..1.1 and, through a 1 m door at x 5.5..6.5, a room."""
+    grid = room(12.0, 7.0)
+    wall(grid, 0.0, 1.1, 5.5, 1.3)
+    wall(grid, 6.5, 1.1, 12.0, 1.3)
+    return occupancy(grid)
+
+
+@pytest.mark.parametrize(("occupancy_map", "start", "goal"), [
+    (door_map(), (1.5, 1.0, math.pi), (8.5, 5.0, -math.pi / 2)),  # door met at a slant
+    (side_door_map(), (1.0, 0.6, 0.0), (6.0, 4.5, math.pi / 2)),  # turning into it from a corridor
+], ids=["slant", "side"])
+def test_the_robot_reaches_the_goal_through_a_door_without_touching_a_wall(
+        occupancy_map: OccupancyMap, start: tuple[float, float, float],
+        goal: tuple[float, float, float]) -> None:
     nav = navigator(occupancy_map)
-    robot = Unicycle(occupancy_map, 1.5, 1.0, math.pi)
-    nav.start(8.5, 5.0, -math.pi / 2, now=0.0)
+    robot = Unicycle(occupancy_map, *start)
+    nav.start(*goal, now=0.0)
     touched = []
 
     def watch(now: float) -> list[tuple[float, float]]:
@@ -303,11 +316,34 @@ def test_the_robot_reaches_the_goal_through_a_door_without_touching_a_wall() -> 
 
     drive(nav, robot, people=watch)
     assert nav.status == "succeeded" and nav.error_code == 0 and nav.distance_remaining == 0.0
-    assert math.dist(robot.pose[:2], (8.5, 5.0)) <= 0.3
-    assert yaw_error(robot.yaw, -math.pi / 2) <= 0.262
+    assert math.dist(robot.pose[:2], goal[:2]) <= 0.3
+    assert yaw_error(robot.yaw, goal[2]) <= 0.262
     assert not any(touched)
-    assert nav.path[-1] == (8.5, 5.0)
+    assert nav.path[-1] == goal[:2]
     assert nav.command(pose=robot.pose, people=[], now=999.0) == (0.0, 0.0)
+
+
+def test_the_robot_turns_on_the_spot_drives_at_full_speed_and_slows_for_the_goal() -> None:
+    occupancy_map = occupancy(room(10.0, 4.0))
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.5, 2.0, math.pi)  # facing away from the goal
+    nav.start(8.0, 2.0, 0.0, now=0.0)
+    log: list[tuple[float, float, float]] = []
+    poses = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        poses.append(robot.pose)
+        return []
+
+    drive(nav, robot, people=people, log=log)
+    assert nav.status == "succeeded"
+    turning = [(pose, v, w) for pose, (_, v, w) in zip(poses, log, strict=True)
+               if yaw_error(pose[2], 0.0) > 1.0]
+    assert turning and all(v == 0.0 and abs(w) >= 0.2 for _, v, w in turning)
+    assert max(v for _, v, _ in log) == pytest.approx(0.5)
+    for pose, (_, v, _) in zip(poses, log, strict=True):
+        left = math.dist(pose[:2], (8.0, 2.0))
+        assert v <= max(0.8 * left, 0.08) + 1e-9  # slowing down for the goal
 
 
 def test_a_walled_in_goal_aborts_with_no_valid_path() -> None:
@@ -353,6 +389,68 @@ def test_a_person_stepping_onto_the_path_stops_the_robot_which_then_goes_round()
     soon_after = [(v, w) for now, v, w in log if appeared[0] + 0.15 <= now <= appeared[0] + 0.45]
     assert soon_after and all(twist == (0.0, 0.0) for twist in soon_after)  # stopped, waits
     assert min(gaps) > 0.3 + CONTACT_RADIUS
+
+
+def test_a_person_appearing_a_few_metres_ahead_is_passed_without_stopping() -> None:
+    occupancy_map = corridor_map(3.0)
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 1.6, 0.0)
+    nav.start(11.0, 1.6, 0.0, now=0.0)
+    person: list[tuple[float, float]] = []
+    gaps = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        if not person and now >= 2.0:
+            person.append((robot.x + 3.0, robot.y))  # after the first plan, on the path
+        if person:
+            gaps.append(math.dist(robot.pose[:2], person[0]))
+        return person
+
+    drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    assert nav.recoveries == 0  # replanned round in time, never had to stop and wait
+    assert min(gaps) >= 0.3 + 0.25
+
+
+def two_corridor_map() -> OccupancyMap:
+    """12 x 6 m with a block in the middle: 1.4 m corridors below (y 0.1..1.5) and above."""
+    grid = room(12.0, 6.0)
+    wall(grid, 3.0, 1.5, 9.0, 4.5)
+    return occupancy(grid)
+
+
+def test_a_long_detour_is_not_taken_for_a_person_briefly_in_the_way() -> None:
+    occupancy_map = two_corridor_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    heights = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        heights.append(robot.y)
+        return [(5.5, 0.8)] if 2.0 <= now < 4.0 else []  # 3 m ahead, leaves after 2 s
+
+    ended = drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    assert max(heights) < 1.5  # kept to the lower corridor, never went round the top
+    assert ended < 30.0
+
+
+def test_a_person_standing_in_the_lower_corridor_sends_the_robot_round_the_top() -> None:
+    occupancy_map = two_corridor_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    heights = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        heights.append(robot.y)
+        return [(6.0, 0.8)]
+
+    drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    assert max(heights) > 4.5
+    assert nav.recoveries == 0  # seen from the start: the first plan goes round
 
 
 def test_a_person_blocking_a_corridor_makes_the_robot_wait_then_abort() -> None:
