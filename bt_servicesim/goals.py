@@ -69,6 +69,8 @@ TRAIL_ACROSS_ERROR = 0.25
 SPAWN_PADDING = 1.0
 """The guest spawns at a random point of the pick-up box shrunk by this on every side."""
 RFID_RANGE = 2.0
+PICKUP_REACH = 1.7  # m: the referee's 2.0 m pick-up range, less the goal tolerance
+SOCIAL_DISTANCE = 1.1  # m from a person: the referee penalises a robot within 0.75 m of one
 EXPLORATION_REACH = 6.0
 """How far around the pick-up box a search for the guest reaches."""
 WAYPOINT_SPACING = 2.4
@@ -163,20 +165,26 @@ def _best_cell(
 
 # ============================================================================ pick-up
 def pickup_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> Pose2D | None:
-    """A reachable goal INSIDE ``box`` from which the guest's spawn area is nearest.
+    """A reachable goal INSIDE ``box``, within pick-up reach of wherever the guest may stand,
+    but not on top of them.
 
     Checkpoint 1 wants the robot's origin in the box, and navigation stops within
     :data:`GOAL_TOLERANCE` of the goal, so the goal keeps that far from the box's edges when it
-    can (then half, then none). Among those cells the goal minimises the distance to the
-    farthest point where the guest may have spawned: the box centre when it is free, which for a
-    3x3 room is 0.71 m from every spawn point. The robot faces the box centre, or, standing on
-    it, keeps the heading it arrives with.
+    can (then half, then none). The guest spawns somewhere in the box less its padding, and the
+    referee hands them over within 2.0 m: every cell whose farthest spawn point lies within
+    :data:`PICKUP_REACH` qualifies. Among those the goal keeps :data:`SOCIAL_DISTANCE` from the
+    spawn area where it can — the seed drove at the centre, onto the guest, and a robot within
+    0.75 m of a person is penalised every physics step — and is the nearest to the robot. The
+    robot faces the box centre.
     """
     reachable = grid.reachable_from(robot.x, robot.y, ROBOT_CLEARANCE)
     spawn = guest_spawn_area(box)
 
     def cost(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-        return farthest_corner(spawn, xs, ys) + 1e-3 * np.hypot(xs - robot.x, ys - robot.y)
+        beyond_reach = np.maximum(farthest_corner(spawn, xs, ys) - PICKUP_REACH, 0.0)
+        crowding = np.maximum(SOCIAL_DISTANCE - distance_to_box(spawn, xs, ys), 0.0)
+        return 100.0 * beyond_reach + 10.0 * crowding + 1e-2 * np.hypot(xs - robot.x,
+                                                                        ys - robot.y)
 
     for margin in (GOAL_TOLERANCE, GOAL_TOLERANCE / 2.0, 0.0):
         spot = _best_cell(grid, shrunk(box, margin, margin), reachable, cost)

@@ -133,15 +133,19 @@ def test_pickup_goal_brings_every_guest_spawn_point_into_rfid_range(
     farthest = max(math.dist((goal.x, goal.y), (x, y)) for x in spawn
                    for y in np.linspace(box.min_y + 1.0, box.max_y - 1.0, 11))
     assert farthest <= 2.0 - TOLERANCE
+    nearest = min(math.dist((goal.x, goal.y), (x, y)) for x in spawn
+                  for y in np.linspace(box.min_y + 1.0, box.max_y - 1.0, 11))
+    assert nearest >= 0.5  # not driving onto a guest who may stand anywhere in the spawn area
 
 
-def test_pickup_goal_faces_the_box_centre_from_the_robot_side() -> None:
+def test_pickup_goal_stays_on_the_robot_side_facing_the_box_centre() -> None:
     grid, box = open_room(), centred_box(3.0, 3.0)
     for robot in SIDES.values():
         Blackboard.clear()
         goal = output(run(PickupGoal(), box=box, occupancy=grid, robot_pose=robot))
-        towards_centre = math.atan2(box.centre[1] - robot.y, box.centre[0] - robot.x)
-        assert math.dist((goal.x, goal.y), box.centre) < 0.1
+        robot_xy = (robot.x, robot.y)
+        assert math.dist((goal.x, goal.y), robot_xy) < math.dist(box.centre, robot_xy) - 0.5
+        towards_centre = math.atan2(box.centre[1] - goal.y, box.centre[0] - goal.x)
         assert abs(math.remainder(goal.yaw - towards_centre, math.tau)) < 0.05
 
 
