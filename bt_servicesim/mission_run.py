@@ -53,6 +53,7 @@ from bt_servicesim.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 
 FINAL_TREE_NAME = "final_tree.txt"
 
+DISCOVERY_SETTLE_S = 1.0  # wall seconds for the simulator to discover the clients set up
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
 SIM_TIME_BACKSTOP_S = 60.0  # sim seconds past the time limit before the run gives up itself
 
@@ -109,6 +110,7 @@ class MissionRun:
         if refused is not None:
             return refused
         executive.setup()
+        self._spin_for(executor, DISCOVERY_SETTLE_S)
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)

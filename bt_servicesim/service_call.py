@@ -69,8 +69,8 @@ class ServiceCall(BehaviourWithPorts):
         self,
         name: str,
         service: str = "",
-        timeout: float = 10.0,
-        server_timeout: float = 5.0,
+        timeout: float = 30.0,
+        server_timeout: float = 10.0,
         **kwargs: Any,
     ) -> None:
         super().__init__(name=name, **kwargs)
