@@ -12,6 +12,10 @@ compares the behaviour tree with what the competition handed out, not with a str
 * there is no search for a guest out of RFID range and no drift handling;
 * the return goal is the start pose −1 m, which can leave the robot just outside the start box.
 
+BeginTask also publishes the task's start pose on ``/servicebot/initialpose``: in the original
+the competition's launch gave localisation the start pose; here the simulator, like AMCL, needs
+it before any goal can succeed, and the behaviour tree does the same.
+
 What is *not* ported is the seed's way of waiting. The seed blocked in ``sleep`` and
 ``wait_for_result``; here every state is a coroutine (a generator) polled by a timer on the
 node's clock, so waits are in sim time under ``use_sim_time``, futures are polled and nothing
@@ -33,10 +37,12 @@ from typing import Any
 
 import py_trees
 from action_msgs.msg import GoalStatus
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.client import Client
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.task import Future
 from rclpy.timer import Timer
 from servicesim_competition import srv
@@ -44,6 +50,7 @@ from servicesim_competition.action import NavigateToPose
 from std_srvs.srv import Empty
 
 from bt_servicesim.geometry import Box, Pose2D
+from bt_servicesim.initial_pose import INITIAL_POSE_QOS, initial_pose_message
 from bt_servicesim.sim_time import SimStopwatch, sim_now_s
 
 __all__ = ["SEED_STATES", "SeedStateMachine", "seed_goal"]
@@ -99,6 +106,7 @@ class SeedStateMachine:
         self._activity = ""
         self._clients: dict[str, Client] = {}
         self._navigator: ActionClient | None = None
+        self._initial_pose: Publisher | None = None
         self._timer: Timer | None = None
         self._clock: SimStopwatch | None = None
         self._body: Iterator[None] | None = None
@@ -119,6 +127,9 @@ class SeedStateMachine:
         self._clients = {key: self.node.create_client(kind, self.namespace + name)
                          for key, (kind, name) in services.items()}
         self._navigator = ActionClient(self.node, NavigateToPose, self.navigate_action)
+        self._initial_pose = self.node.create_publisher(
+            PoseWithCovarianceStamped, f"{self.namespace}/servicebot/initialpose",
+            INITIAL_POSE_QOS)
 
     def start(self) -> None:
         """Poll the state machine from a timer on the node's (sim) clock."""
@@ -186,8 +197,15 @@ class SeedStateMachine:
         if not answer.pick_up_location:
             raise TaskRefusedError("new_task gave an error answer")
         self._task = answer
+        self._localise(Pose2D.from_pose(answer.robot_start_pose))
         self._activity = (f"task: {answer.guest_name} from {answer.pick_up_location} "
                           f"to {answer.drop_off_location}")
+
+    def _localise(self, start: Pose2D) -> None:
+        if self._initial_pose is None:
+            raise RuntimeError("SeedStateMachine: call setup() before start()")
+        stamp = self.node.get_clock().now().to_msg()
+        self._initial_pose.publish(initial_pose_message(start, stamp=stamp))
 
     def _pickup(self) -> Waiting:
         x, y = yield from self._area_centre(self._task.pick_up_location)
