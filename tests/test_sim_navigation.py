@@ -236,6 +236,10 @@ def test_plan_through_a_door_keeps_to_its_middle() -> None:
     crossing = [track.point_at(s) for s in np.arange(0.0, track.total, 0.01)]
     y_at_wall = [y for x, y in crossing if 4.85 <= x <= 5.15]
     assert y_at_wall and all(abs(y - 3.0) <= 0.15 for y in y_at_wall)
+    from_the_door = Planner(costmap).plan((5.0, 3.0), (8.5, 5.0))
+    to_the_door = Planner(costmap).plan((1.5, 1.0), (5.0, 3.0))
+    assert from_the_door.succeeded and to_the_door.succeeded
+    assert to_the_door.goal == (5.0, 3.0)  # a goal in a doorway is free, not snapped
 
 
 def test_plan_to_a_walled_in_goal_finds_no_path() -> None:
@@ -270,10 +274,16 @@ def test_a_start_pressed_against_a_wall_escapes_first() -> None:
     assert segments_clear(costmap, plan.waypoints[1:])
 
 
-def test_start_and_goal_off_the_map_are_reported() -> None:
-    planner = Planner(Costmap(door_map()))
+def test_start_and_goal_off_the_map_or_deep_in_a_wall_are_reported() -> None:
+    grid = room(10.0, 6.0)
+    wall(grid, 6.0, 2.0, 9.0, 5.0)  # a solid 3 x 3 m block
+    planner = Planner(Costmap(occupancy(grid)))
     assert planner.plan((50.0, 1.0), (1.5, 1.0)).error_code == 203
     assert planner.plan((1.5, 1.0), (1.5, -9.0)).error_code == 204
+    deep = planner.plan((7.5, 3.5), (1.5, 1.0))
+    assert deep.waypoints is None
+    assert deep.error_code == ComputePathToPoseError.START_OCCUPIED == 205
+    assert "start (7.50, 3.50)" in deep.error_msg
 
 
 def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
@@ -529,11 +539,26 @@ def test_a_robot_that_cannot_move_backs_up_then_aborts_failing_to_make_progress(
     assert nav.recoveries == 1 and any(v < 0.0 for v, _ in commands)
 
 
-def test_an_unknown_pose_aborts_with_tf_error() -> None:
+def test_a_robot_stuck_with_a_person_behind_it_does_not_back_up() -> None:
+    nav = navigator(door_map())
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    commands = []
+    now = 0.0
+    while nav.status == "running" and now < 40.0:  # seen facing them, then behind the robot
+        yaw = math.pi if now < 1.0 else 0.0
+        commands.append(nav.command(pose=(1.5, 1.0, yaw), people=[(0.9, 1.0)], now=now))
+        now += 0.05
+    assert nav.status == "aborted" and nav.error_code == FollowPathError.FAILED_TO_MAKE_PROGRESS
+    assert nav.recoveries >= 1 and all(v >= 0.0 for v, _ in commands)
+
+
+def test_an_unknown_pose_or_goal_aborts() -> None:
     nav = navigator(door_map())
     nav.start(8.5, 5.0, 0.0, now=0.0)
     nav.command(pose=(math.nan, 1.0, 0.0), people=[], now=0.0)
     assert (nav.status, nav.error_code) == ("aborted", NavigateToPoseError.TF_ERROR)
+    nav.start(math.inf, 5.0, 0.0, now=1.0)
+    assert (nav.status, nav.error_code) == ("aborted", ComputePathToPoseError.GOAL_OUTSIDE_MAP)
 
 
 def test_clear_costmaps_forgets_people_and_idle_commands_are_zero() -> None:

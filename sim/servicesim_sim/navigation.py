@@ -22,8 +22,9 @@ Design intent:
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
   other time. Each wait is a recovery. Blocked for 20 s in all, navigation aborts.
-* A robot that has not moved 0.25 m in 10 s backs up a little and replans (a recovery); after
-  20 s without progress navigation aborts.
+* A robot that has not moved 0.25 m in 10 s clears the costmap, backs up 0.15 m when the
+  costmap has room behind it, and replans (a recovery); after 20 s without progress navigation
+  aborts.
 * Failures carry Nav2's numeric codes: the planner's (ComputePathToPose), the follower's
   (FollowPath) or the navigator's own (NavigateToPose), with a sentence for a human.
 """
@@ -285,8 +286,8 @@ class Navigator:
         return self._track is None or self._replan_needed or self._off_path > self.tuning.off_path
 
     def _reconsider_due(self, now: float) -> bool:
-        """The costmap changed since the last plan: a second ago if people now obstruct the
-        next few metres of the path, else five."""
+        """Whether the costmap changed since the last plan, and that plan is a second old with
+        people now obstructing the next few metres of the path, or five seconds old."""
         if self.costmap.version == self._planned_version:
             return False
         since = now - self._planned_at
@@ -430,10 +431,19 @@ class Navigator:
         if still > tuning.progress_window and not self._backed_up:
             self._backed_up, self._replan_needed = True, True
             self.recoveries += 1
+            room_behind = self._room_behind(pose)  # judged on the marks before clearing them
             self.costmap.clear()
-            self._backing_until = now + tuning.backup_time
-            return -tuning.backup_speed, 0.0
+            if room_behind:
+                self._backing_until = now + tuning.backup_time
+                return -tuning.backup_speed, 0.0
         return None
+
+    def _room_behind(self, pose: Pose) -> bool:
+        """Whether the costmap lets the robot's centre where backing up would take it."""
+        x, y, yaw = pose
+        reach = self.tuning.backup_speed * self.tuning.backup_time
+        return self.costmap.cost_at(x - reach * math.cos(yaw),
+                                    y - reach * math.sin(yaw)) < INSCRIBED
 
     # ------------------------------------------------------------------ bookkeeping
     def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
