@@ -175,6 +175,15 @@ def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_
     assert [(mark.x, mark.y) for mark in costmap.marks] == [shield]
 
 
+def test_a_partition_one_cell_thick_hides_people_from_slanted_rays() -> None:
+    grid = room(12.0, 3.2)
+    wall(grid, 6.0, 0.0, 6.05, 2.5)  # 5 cm thick, open above y = 2.5
+    costmap = Costmap(occupancy(grid))
+    slanted = [(9.0, 0.5 + 0.013 * k) for k in range(20)]  # many slopes through the partition
+    costmap.observe(3.0, 2.8, 0.0, [*slanted, (9.0, 2.9)], now=0.0)
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(9.0, 2.9)]
+
+
 def test_people_beyond_the_lidar_range_are_not_seen() -> None:
     grid = np.zeros((40, 700), dtype=np.int8)  # 35 x 2 m at 0.05 m
     grid[:2, :] = grid[-2:, :] = 100

@@ -230,12 +230,13 @@ class Costmap:
     def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Whether each ray from the robot to a target's surface misses every wall cell.
 
-        Rays are sampled every half map cell, all rays in one flat array (no padding).
+        Rays are sampled every map cell, all rays in one flat array (no padding). Samples one
+        cell apart cannot step over a straight wall one cell thick, only clip its corners.
         """
         offsets = targets - robot
         distance = np.maximum(np.hypot(offsets[:, 0], offsets[:, 1]), 1e-9)
         lengths = distance - self.person_radius
-        step = 0.5 * self.map.resolution
+        step = self.map.resolution
         counts = np.floor(np.maximum(lengths - self.lidar.min_range, 0.0) / step).astype(
             np.intp) + 1
         owner = np.repeat(np.arange(len(targets)), counts)
