@@ -590,9 +590,14 @@ def _tour(start: Pose2D, points: list[Point], first: Callable[[Point], bool]) ->
 def guest_search_waypoints(
     last_seen: Pose2D, grid: OccupancyGrid2D, robot: Pose2D
 ) -> list[Pose2D]:
-    """For a guest lost while guided: the last-seen spot, then rings around it.
+    """For a guest lost while guided: back along the robot's trail, the last-seen spot, then
+    rings around it.
 
-    Rings of :data:`SEARCH_RINGS` radii with points about :data:`WAYPOINT_SPACING` apart, each
+    ``last_seen`` is where the robot stood, heading on, when the guest last answered on RFID;
+    a guest who stopped (a drift) or fell behind stands behind that pose, on the trail the robot
+    drove, about :data:`GUEST_TRAIL` back. So the first waypoint lies that far back along the
+    pose's heading (when the robot can reach it). Rings of :data:`SEARCH_RINGS` radii with
+    points about :data:`WAYPOINT_SPACING` apart, each
     ring starting on the robot's side and going round; every point is moved to the nearest cell
     the robot can reach (within 1 m) or dropped, as are points within 1.2 m of an earlier one.
     Empty if the robot can reach nothing near the last-seen spot.
@@ -602,7 +607,10 @@ def guest_search_waypoints(
                                max_radius=RFID_RANGE, within=reachable)
     if centre is None:
         return []
-    points = [centre]
+    behind = grid.nearest_free(last_seen.x - GUEST_TRAIL * math.cos(last_seen.yaw),
+                               last_seen.y - GUEST_TRAIL * math.sin(last_seen.yaw),
+                               clearance=ROBOT_CLEARANCE, max_radius=0.5, within=reachable)
+    points = [behind, centre] if behind is not None else [centre]
     towards_robot = math.atan2(robot.y - centre[1], robot.x - centre[0])
     for radius in SEARCH_RINGS:
         count = math.ceil(2.0 * math.pi * radius / WAYPOINT_SPACING)

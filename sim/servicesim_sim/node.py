@@ -25,7 +25,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import ShutdownException, SingleThreadedExecutor, TimeoutException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
@@ -352,7 +352,7 @@ class SimulatorNode:
         return message
 
     # ----------------------------------------------------------------- loop
-    def run(self, executor: SingleThreadedExecutor) -> None:
+    def run(self, executor: DrainingExecutor) -> None:
         wall_start, sim_start = time.monotonic(), self.engine.sim_time
         speed = self.settings.speed
         while rclpy.ok(context=self.node.context):
@@ -362,12 +362,32 @@ class SimulatorNode:
                     self._score.publish(Score(score=float(self.engine.score())))
             self._publish_io()
             self._wake_sleepers()
-            for _ in range(4):
-                executor.spin_once(timeout_sec=0.0)
+            executor.drain()
             if speed > 0.0:
                 due = wall_start + (self.engine.sim_time - sim_start) / speed
                 while (remaining := due - time.monotonic()) > 0.0:
                     executor.spin_once(timeout_sec=remaining)
+
+
+class DrainingExecutor(SingleThreadedExecutor):
+    """An executor that can run everything ready now, without waiting for more.
+
+    Once per I/O period the simulator handles all pending requests, goal and cancel messages
+    and resumed service/navigation coroutines before stepping on. A fixed number of
+    ``spin_once`` calls would starve them when the sim runs many times faster than real time,
+    and the executive would see its goals accepted late and feedback stall.
+    """
+
+    def drain(self, *, limit: int = 500) -> int:
+        """Run ready callbacks until none is ready (or ``limit`` ran); how many ran."""
+        for count in range(limit):
+            try:
+                handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=0.0)
+            except (TimeoutException, ShutdownException):
+                return count
+            handler()
+            handler.result()  # raise what the callback raised
+        return limit
 
 
 def run_simulator(settings: SimSettings) -> int:
@@ -378,7 +398,7 @@ def run_simulator(settings: SimSettings) -> int:
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     node = Node("servicesim")
     simulator = SimulatorNode(settings, node=node)
-    executor = SingleThreadedExecutor()
+    executor = DrainingExecutor()
     executor.add_node(node)
     node.get_logger().info(
         f"world {settings.world.name}: task {simulator.engine.scenario.pick_up} -> "
