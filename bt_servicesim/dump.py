@@ -30,7 +30,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
@@ -324,15 +324,12 @@ def drawing(root: py_trees.behaviour.Behaviour, *, output_format: str) -> bytes:
 
 
 # ------------------------------------------------------------------------------------ command
-class _OneLineParser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
-
 
 def build_parser() -> argparse.ArgumentParser:
     from bt_servicesim.mission_tree import DEFAULT_TREE
+    from bt_servicesim.run import OneLineArgumentParser
 
-    parser = _OneLineParser(prog="python -m bt_servicesim.dump",
+    parser = OneLineArgumentParser(prog="python -m bt_servicesim.dump",
                             description="Draw a mission tree file.")
     parser.add_argument("--tree", type=Path, default=DEFAULT_TREE,
                         help="tree file (default: the ServiceSim mission)")

@@ -17,9 +17,10 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import NoReturn, TextIO
+from typing import TextIO
 
 from bt_servicesim.dump import ShadowTree
+from bt_servicesim.run import OneLineArgumentParser
 from bt_servicesim.tree_log import LOG_NAME, TreeHistory, TreeLogError, TreeState, read_tree_log
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
@@ -27,13 +28,10 @@ PROG = "python -m bt_servicesim.replay"
 CLEAR_SCREEN = "\x1b[H\x1b[2J"
 
 
-class _OneLineParser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
-
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineParser(prog=PROG, description="Show a recorded run's tree at a moment.")
+    parser = OneLineArgumentParser(prog=PROG,
+                                   description="Show a recorded run's tree at a moment.")
     parser.add_argument("run", type=Path, help=f"run directory (with {LOG_NAME}) or the log file")
     moment = parser.add_mutually_exclusive_group()
     moment.add_argument("--tick", type=int, help="the tree as it was at this tick")

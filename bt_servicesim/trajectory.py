@@ -15,12 +15,19 @@ other person's path, and the moments worth marking, each where it happened:
 :func:`render_trajectory` draws it all over the map with matplotlib (no display needed), with
 the pick-up and drop-off areas the executive computed (``pick_up_box`` and ``drop_off_box`` on
 the blackboard, see :func:`boxes_from_blackboard`).
+
+A recorded run can be drawn again later: ``python -m bt_servicesim.trajectory DIR`` rebuilds
+the trace from ``DIR/run.mcap`` (the same messages, in the order they arrived; the phases from
+the tree snapshots) and the areas from the last blackboard in ``DIR/tree_log.jsonl``.
 """
 
 from __future__ import annotations
 
+import json
+import re
+import sys
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,12 +36,20 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from servicesim_competition.msg import ActorStates, RefereeState
+from std_msgs.msg import String
 
+from bt_servicesim.executive import MISSION_SEQUENCE
 from bt_servicesim.geometry import Box
+from bt_servicesim.recording import MCAP_NAME, RECORDED_TOPICS, TREE_TOPIC
+from bt_servicesim.run import OneLineArgumentParser
+from bt_servicesim.tree_log import LOG_NAME, TreeLogError, read_tree_log
 
 TRAJECTORY_NAME = "trajectory.png"
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -115,28 +130,23 @@ class RunTrace:
     start: Point2D | None = None
 
 
-class TrajectoryRecorder:
-    """Collects a :class:`RunTrace` from the run's topics on ``node`` (sim time stamps)."""
+class TraceBuilder:
+    """Builds a :class:`RunTrace` from the run's messages, handed to its ``on_*`` methods.
 
-    def __init__(self, *, node: Node, min_step_m: float = 0.05) -> None:
-        self.node = node
+    Args:
+        now_s: the sim time now, in seconds (stamps the events)
+        min_step_m: a path point closer than this to the previous one is left out
+    """
+
+    def __init__(self, *, now_s: Callable[[], float], min_step_m: float = 0.05) -> None:
         self.trace = RunTrace()
         self.received: Counter[str] = Counter()  # messages per topic
         self.min_step_m = min_step_m
+        self._now_s = now_s
         self._phase = "-"
         self._unplaced: list[tuple[str, str, float]] = []  # events before the robot's position
         self._referee: RefereeState | None = None
         self._guest_state = ""
-        self._subscriptions = [
-            node.create_subscription(OccupancyGrid, "/servicebot/map", self.on_map, LATCHED),
-            node.create_subscription(Odometry, "/servicebot/odom", self.on_odom, 50),
-            node.create_subscription(ActorStates, "/servicesim/actors", self.on_actors, 10),
-            node.create_subscription(RefereeState, "/servicesim/referee", self.on_referee,
-                                     LATCHED),
-        ]
-
-    def _now_s(self) -> float:
-        return self.node.get_clock().now().nanoseconds / 1e9
 
     def on_map(self, message: OccupancyGrid) -> None:
         self.received["/servicebot/map"] += 1
@@ -206,6 +216,23 @@ class TrajectoryRecorder:
             return
         self.trace.events.append(RunEvent(kind=kind, label=label, sim_time_s=self._now_s(),
                                           x=where[0], y=where[1]))
+
+
+
+class TrajectoryRecorder(TraceBuilder):
+    """A :class:`TraceBuilder` fed by subscriptions on ``node``, stamped by its (sim) clock."""
+
+    def __init__(self, *, node: Node, min_step_m: float = 0.05) -> None:
+        super().__init__(now_s=lambda: node.get_clock().now().nanoseconds / 1e9,
+                         min_step_m=min_step_m)
+        self.node = node
+        self._subscriptions = [
+            node.create_subscription(OccupancyGrid, "/servicebot/map", self.on_map, LATCHED),
+            node.create_subscription(Odometry, "/servicebot/odom", self.on_odom, 50),
+            node.create_subscription(ActorStates, "/servicesim/actors", self.on_actors, 10),
+            node.create_subscription(RefereeState, "/servicesim/referee", self.on_referee,
+                                     LATCHED),
+        ]
 
     def close(self) -> None:
         for subscription in self._subscriptions:
@@ -315,3 +342,86 @@ def _frame(axes: Any, trace: RunTrace, boxes: Mapping[str, Box]) -> None:
         axes.set_xlim(min(xs) - 1.0, max(xs) + 1.0)
         axes.set_ylim(min(ys) - 1.0, max(ys) + 1.0)
     axes.set_aspect("equal")
+
+
+# ---------------------------------------------------------------------- from a recorded run
+_NUMBER = r"(-?[0-9.]+(?:e[-+]?[0-9]+)?)"
+_BOX_REPR = re.compile(
+    rf"Box\(min_x={_NUMBER}, min_y={_NUMBER}, max_x={_NUMBER}, max_y={_NUMBER}\)")
+
+
+def phase_of_tip(tip: str | None) -> str:
+    """The mission phase a tip key lies in: the node under ``Mission`` (as the executive says)."""
+    parts = (tip or "").split(".")
+    if MISSION_SEQUENCE in parts[:-1]:
+        return parts[parts.index(MISSION_SEQUENCE) + 1].split("~")[0]
+    return "-"
+
+
+def trace_from_recording(mcap_path: Path) -> RunTrace:
+    """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived."""
+    types = {topic.name: topic.message_type for topic in RECORDED_TOPICS}
+    now_ns = [0]
+    builder = TraceBuilder(now_s=lambda: now_ns[0] / 1e9)
+    handlers: dict[str, Callable[[Any], None]] = {
+        "/servicebot/map": builder.on_map, "/servicebot/odom": builder.on_odom,
+        "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
+    }
+    with mcap_path.open("rb") as stream:
+        for _schema, channel, message in make_reader(stream).iter_messages():
+            now_ns[0] = message.log_time
+            if channel.topic in handlers:
+                handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
+            elif channel.topic == TREE_TOPIC:
+                snapshot = json.loads(deserialize_message(message.data, String).data)
+                builder.note_phase(phase_of_tip(snapshot.get("tip")))
+    return builder.trace
+
+
+def boxes_from_tree_log(path: Path) -> dict[str, Box]:
+    """The target areas as the snapshot log last saw them on the blackboard."""
+    history = read_tree_log(path)
+    values = history.states[-1].blackboard if history.states else {}
+    boxes = {}
+    for key, text in values.items():
+        found = _BOX_REPR.fullmatch(text)
+        if found is not None:
+            boxes[key] = Box(*(float(number) for number in found.groups()))
+    return boxes_from_blackboard(boxes)
+
+
+def _title_from_report(run: Path) -> str:
+    try:
+        report = json.loads((run / "report.json").read_text())
+        outcome = "completed" if report["completed"] else "not completed"
+        return (f"{run.name}: {outcome}, score {float(report['score']):.1f}, "
+                f"{float(report['sim_time_s']):.0f} s sim")
+    except (OSError, ValueError, KeyError, TypeError):
+        return run.name
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m bt_servicesim.trajectory DIR [--out FILE]``: redraw a recorded run."""
+    parser = OneLineArgumentParser(
+        prog="python -m bt_servicesim.trajectory",
+        description="Draw a recorded run's trajectory picture again, from its run.mcap.")
+    parser.add_argument("run", type=Path, help="run directory (with run.mcap)")
+    parser.add_argument("--out", type=Path, help="PNG to write (default DIR/trajectory.png)")
+    args = parser.parse_args(argv)
+    prog = parser.prog
+    recording, tree_log = args.run / MCAP_NAME, args.run / LOG_NAME
+    try:
+        if not recording.is_file():
+            raise ValueError(f"{args.run}: no {MCAP_NAME} here (was the run given --out?)")
+        trace = trace_from_recording(recording)
+        boxes = boxes_from_tree_log(tree_log) if tree_log.is_file() else {}
+    except (ValueError, McapError, TreeLogError) as error:
+        print(f"{prog}: error: {' '.join(str(error).split())}", file=sys.stderr)
+        return 2
+    render_trajectory(trace, path=args.out or args.run / TRAJECTORY_NAME, boxes=boxes,
+                      title=_title_from_report(args.run))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -10,11 +10,12 @@ from __future__ import annotations
 import array
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import py_trees
 import pytest
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point
@@ -26,14 +27,20 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import ActorStates, RefereeState
 
+from bt_servicesim import trajectory
 from bt_servicesim.geometry import Box
+from bt_servicesim.recording import McapRecorder
 from bt_servicesim.trajectory import (
     LATCHED,
     ROBOT_COLOUR,
     TrajectoryRecorder,
     boxes_from_blackboard,
+    boxes_from_tree_log,
+    phase_of_tip,
     render_trajectory,
+    trace_from_recording,
 )
+from bt_servicesim.tree_log import TreeLog
 
 CHECKPOINTS = ["go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start"]
 WAIT_S = 20.0
@@ -105,11 +112,14 @@ class Story:
 
         self.spin_until(arrived, f"sim time {sim_s}")
 
-    def deliver(self, publisher: Any, message: Any, recorder: TrajectoryRecorder) -> None:
+    def deliver(self, publisher: Any, message: Any, *received: Mapping[str, int]) -> None:
+        """Publish and wait until every counter of received messages has counted it."""
         topic = publisher.topic_name
-        before = recorder.received[topic]
+        before = [counts.get(topic, 0) for counts in received]
         publisher.publish(message)
-        self.spin_until(lambda: recorder.received[topic] > before, f"a message on {topic}")
+        self.spin_until(lambda: all(counts.get(topic, 0) > count
+                                    for counts, count in zip(received, before, strict=True)),
+                        f"a message on {topic}")
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -124,31 +134,34 @@ def story(ros_context: Any) -> Iterator[Story]:
     built.close()
 
 
-def play(story: Story, recorder: TrajectoryRecorder) -> None:
+def play(story: Story, recorder: TrajectoryRecorder,
+         *also: Mapping[str, int]) -> None:
+    """The story; each message is waited for by the recorder (and the ``also`` counters)."""
+    counters = (recorder.received, *also)
     story.at(1.0)
     story.spin_until(lambda: all(p.get_subscription_count() > 0 for p in (
         story.map, story.odom, story.actors, story.referee)), "the recorder's subscriptions")
-    story.deliver(story.map, office_map(), recorder)
+    story.deliver(story.map, office_map(), *counters)
     recorder.note_phase("BeginTask")
-    story.deliver(story.referee, referee([False] * 4), recorder)
+    story.deliver(story.referee, referee([False] * 4), *counters)
     for step in range(40):  # the robot drives east along y = 2, 0.25 m per 0.5 s
         x, y = 2.0 + 0.25 * step, 2.0
         story.at(1.0 + 0.5 * step)
-        story.deliver(story.odom, odom_at(x, y), recorder)
+        story.deliver(story.odom, odom_at(x, y), *counters)
         if step == 10:
             recorder.note_phase("Pickup")
         if step == 12:
-            story.deliver(story.referee, referee([True, False, False, False]), recorder)
+            story.deliver(story.referee, referee([True, False, False, False]), *counters)
         if step == 16:
-            story.deliver(story.referee, referee([True, True, False, False]), recorder)
+            story.deliver(story.referee, referee([True, True, False, False]), *counters)
             recorder.note_phase("DropOff")
         guest = (5.0, 2.5) if step < 16 else (x - 1.2, 2.5)
         state = "waiting" if step < 16 else "drifted" if 24 <= step < 28 else "following"
-        story.deliver(story.actors, actors_at(guest, state, walker_x=3.0 + 0.3 * step), recorder)
+        story.deliver(story.actors, actors_at(guest, state, walker_x=3.0 + 0.3 * step), *counters)
         if step == 24:
-            story.deliver(story.referee, referee([True, True, False, False], drifts=1), recorder)
-    story.deliver(story.referee, referee([True, False, False, False], drifts=1), recorder)
-    story.deliver(story.referee, referee([True, True, True, False], drifts=1), recorder)
+            story.deliver(story.referee, referee([True, True, False, False], drifts=1), *counters)
+    story.deliver(story.referee, referee([True, False, False, False], drifts=1), *counters)
+    story.deliver(story.referee, referee([True, True, True, False], drifts=1), *counters)
 
 
 def test_the_recorder_collects_paths_and_marks_what_happened_where(story: Story) -> None:
@@ -212,3 +225,46 @@ def test_boxes_the_referee_refused_are_not_drawn() -> None:
     assert boxes_from_blackboard({"/pick_up_box": Box(0.0, 0.0, 0.0, 0.0),
                                   "/Pickup/drop_off_box": Box(0.0, 0.0, 1.0, math.pi)}) == {
         "drop_off_box": Box(0.0, 0.0, 1.0, math.pi)}
+
+
+def test_a_recorded_run_is_drawn_again_from_its_mcap(story: Story, tmp_path: Path) -> None:
+    recording = McapRecorder(node=story.node, path=tmp_path / "run.mcap")
+    recorder = TrajectoryRecorder(node=story.node)
+    play(story, recorder, recording.counts)
+    recording.close()
+    live, rebuilt = recorder.trace, trace_from_recording(tmp_path / "run.mcap")
+    assert rebuilt.robot == live.robot and rebuilt.start == live.start
+    assert rebuilt.guest == live.guest and rebuilt.people == live.people
+    assert rebuilt.events == [event for event in live.events if event.kind != "phase"]
+    assert rebuilt.map_image is not None and live.map_image is not None
+    assert np.array_equal(rebuilt.map_image.cells, live.map_image.cells)
+    write_tree_log(tmp_path, {"/pick_up_box": Box(4.0, 1.0, 7.0, 4.0), "/other": 3})
+    assert boxes_from_tree_log(tmp_path / "tree_log.jsonl") == {
+        "pick_up_box": Box(4.0, 1.0, 7.0, 4.0)}
+    assert trajectory.main([str(tmp_path), "--out", str(tmp_path / "again.png")]) == 0
+    with Image.open(tmp_path / "again.png") as image:
+        assert image.format == "PNG" and image.size[0] >= 1000
+
+
+def write_tree_log(directory: Path, blackboard: dict[str, Any]) -> None:
+    """A one-node tree ticked once, with ``blackboard`` as the blackboard's contents."""
+    tree = py_trees.trees.BehaviourTree(py_trees.behaviours.Success(name="Done"))
+    log = TreeLog(tree=tree, path=directory / "tree_log.jsonl", sim_time_s=lambda: 1.0,
+                  blackboard=lambda: blackboard)
+    tree.add_post_tick_handler(log)
+    tree.tick()
+    log.close()
+
+
+def test_redrawing_a_directory_without_a_recording_is_one_line_and_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert trajectory.main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "no run.mcap here" in err and err.count("\n") == 1
+
+
+def test_the_phase_is_read_from_the_tip_as_the_executive_reads_it() -> None:
+    assert phase_of_tip("ServiceSimMission.MissionTimeLimit.Mission.Pickup.Pickup.Go") == "Pickup"
+    assert phase_of_tip("ServiceSimMission.Topics2BB-KeepReading.Topics2BB.Rfid2BB") == "-"
+    assert phase_of_tip("A.Mission") == "-"
+    assert phase_of_tip(None) == "-"
