@@ -147,9 +147,10 @@ def test_the_costmap_inflates_walls() -> None:
     assert costmap.cost_at(-1.0, 1.6) == LETHAL  # off the grid
 
 
-def test_the_grid_is_cropped_to_the_walls_and_coarser_than_the_map() -> None:
+@pytest.mark.parametrize("occupied", [100, 65])  # trinary maps, and scaled maps' 50..100
+def test_the_grid_is_cropped_to_the_walls_and_coarser_than_the_map(occupied: int) -> None:
     grid = np.full((400, 400), -1, dtype=np.int8)
-    grid[100:160, 100:300] = room(10.0, 3.0)
+    grid[100:160, 100:300] = np.where(room(10.0, 3.0) == 100, occupied, 0)
     costmap = Costmap(occupancy(grid), crop_margin=0.5)
     assert costmap.frame.resolution == pytest.approx(0.1)
     assert costmap.frame.rows == 40 and costmap.frame.cols == 110  # (3 m + 2 x 0.5) / 0.1 ...

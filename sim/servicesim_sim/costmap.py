@@ -279,12 +279,13 @@ def _coarse_wall_distance(occupancy_map: OccupancyMapLike, walls: np.ndarray, *,
                           resolution: float, margin: float) -> tuple[GridFrame, np.ndarray]:
     """The costmap's frame and, per coarse cell, metres to the nearest wall cell.
 
-    The frame covers the occupied cells' bounding box plus ``margin``, clipped to the map and
-    grown to whole coarse cells; anything beyond the frame or the map counts as wall.
+    The frame covers the bounding box of the occupied cells (blocked and known) plus
+    ``margin``, clipped to the map and grown to whole coarse cells; anything beyond the frame or
+    the map counts as wall.
     """
     fine = float(occupancy_map.resolution)
     factor = max(1, round(resolution / fine))
-    occupied_rows, occupied_cols = np.nonzero(np.asarray(occupancy_map.grid) == 100)
+    occupied_rows, occupied_cols = np.nonzero(walls & (np.asarray(occupancy_map.grid) >= 0))
     height, width = walls.shape
     if occupied_rows.size:
         pad = math.ceil(margin / fine)
