@@ -1,0 +1,91 @@
+"""What the ROS benchmarks share: a private ROS domain on loopback, the simulator, statistics.
+
+Every benchmark calls :func:`isolate` before it imports rclpy: DDS discovery stays on this
+machine unless the user set ``ROS_AUTOMATIC_DISCOVERY_RANGE``, and the benchmark gets a ROS
+domain of its own (from ``ROS_DOMAIN_ID`` if set, else from the process id), so a test run or an
+evaluation on the same machine cannot answer its requests. The simulator is started exactly as
+the run command starts it (``python -m servicesim_sim``), with its output in a temporary file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+
+EXIT_BAD_INPUT = 2
+REPO = Path(__file__).resolve().parents[1]
+
+
+class OneLineArgumentParser(argparse.ArgumentParser):
+    """argparse, but errors are a single line and exit 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def isolate() -> int:
+    """Loopback discovery and a ROS domain for this benchmark; returns the domain."""
+    if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if not os.environ.get("ROS_DOMAIN_ID", "").isdigit():
+        os.environ["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 101)
+    return int(os.environ["ROS_DOMAIN_ID"])
+
+
+class Simulator:
+    """``python -m servicesim_sim`` as a child process, stopped with SIGINT (then SIGKILL)."""
+
+    def __init__(self, *, speed: float, arguments: Sequence[str] = ()) -> None:
+        self.log = Path(tempfile.gettempdir()) / f"benchmark-sim-{os.getpid()}.log"
+        with self.log.open("wb") as log:
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", "servicesim_sim", "--speed", repr(speed), *arguments],
+                stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                start_new_session=True)
+
+    def check_running(self) -> None:
+        if self.process.poll() is not None:
+            raise SystemExit(f"the simulator exited: {self.last_line()}")
+
+    def last_line(self) -> str:
+        lines = self.log.read_text(errors="replace").strip().splitlines()
+        return lines[-1] if lines else "no output"
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self.log.unlink(missing_ok=True)
+
+
+def spin_until(executor: Any, done: Callable[[], bool], limit_s: float,
+               what: str, simulator: Simulator | None = None) -> None:
+    """Spin until ``done()``; exit with a message naming ``what`` after ``limit_s`` wall s."""
+    deadline = time.monotonic() + limit_s
+    while not done():
+        if simulator is not None:
+            simulator.check_running()
+        if time.monotonic() > deadline:
+            raise SystemExit(f"gave up waiting for {what} after {limit_s:.0f} s")
+        executor.spin_once(timeout_sec=0.05)
+
+
+def milliseconds(seconds: Sequence[float]) -> str:
+    """Median and p99 (and the count) of wall durations, in milliseconds."""
+    ms = np.asarray(seconds) * 1e3
+    return (f"median {np.median(ms):7.3f} ms  p99 {np.percentile(ms, 99):7.3f} ms  "
+            f"(n={len(ms)})")
