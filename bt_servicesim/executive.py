@@ -87,7 +87,7 @@ class MissionExecutive:
     def interrupt(self) -> None:
         """Stop the tree: running behaviours are terminated and cancel what is in flight."""
         self.stop_ticking()
-        self.tree.interrupt()
+        self.tree.root.stop(Status.INVALID)
 
     def phase(self) -> str:
         """The running child of the ``Mission`` sequence (BeginTask, Pickup, ...), else "-"."""

@@ -156,12 +156,31 @@ def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> Non
     assert script.count("CallPickUpGuest") == 1
 
 
-def test_a_failed_drop_off_repositions_and_tries_again() -> None:
+def test_a_drop_off_refused_for_a_drifted_guest_picks_them_up_again() -> None:
     script = Script({"CallDropOffGuest": [Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     assert script.count("CallDropOffGuest") == 2
+    assert script.count("CallPickUpDriftedGuest") == 1
+    assert script.count("ComputeRepositionGoal") == 0
+
+
+def test_a_drop_off_refused_with_the_guest_following_repositions_and_tries_again() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE], "CallPickUpDriftedGuest": [
+        Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallDropOffGuest") == 2
     assert script.count("ComputeRepositionGoal") == 1
+
+
+def test_drop_offs_refused_over_and_over_fail_the_mission_in_the_end() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE] * 100,
+                     "NavigateToRepositionGoal": [Status.FAILURE] * 100})
+    status, _ = run_mission(script)
+    assert status == Status.FAILURE
+    assert script.count("CallDropOffGuest") == 6  # the DropOffRetry budget
+    assert script.count("ComputeReturnGoal") == 0
 
 
 def test_the_time_limit_ends_a_hopeless_mission_and_stops_navigation() -> None:

@@ -199,9 +199,11 @@ class SimulatorNode:
         return response
 
     def _log_call(self, service: str, success: bool, reason: str) -> None:
-        log = self.node.get_logger()
-        (log.info if success else log.warning)(f"{service}: {'ok' if success else 'refused'}: "
-                                               f"{reason}")
+        # rclpy ties a severity to each logging call site, so one call per severity
+        if success:
+            self.node.get_logger().info(f"{service}: ok: {reason}")
+        else:
+            self.node.get_logger().warning(f"{service}: refused: {reason}")
 
     # ----------------------------------------------------------- navigation
     def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
