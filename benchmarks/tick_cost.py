@@ -1,0 +1,146 @@
+"""What one tick of the real mission tree costs, in microseconds.
+
+``python benchmarks/tick_cost.py [--tree FILE] [--drive-ticks N] [--idle-ticks N]`` prints
+
+* scripted: the tree file parsed with scripted leaves (``tests/mission_script.py``: the same
+  ports, outcomes from a script, the real sim-time decorators on a manual clock), ticked through a
+  whole mission in which every navigation leaf stays RUNNING for ``--drive-ticks`` ticks before
+  it succeeds: the composites, decorators and blackboard ports at work, leaves almost free;
+* idle: the same file with the real leaves, set up on an rclpy node whose sim-time clock never
+  runs and with no simulator, ticked ``--idle-ticks`` times: the mission waits in BeginTask while
+  the topic readers run, so this is the real leaves' cost of a tick in which nothing happens.
+
+Figures are wall-clock on this machine and vary with its load; nothing here is asserted. Bad
+arguments or a broken tree file give one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Sequence
+from importlib.metadata import version
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from ros_harness import REPO, OneLineArgumentParser, isolate
+
+sys.path.insert(0, str(REPO))  # tests.mission_script, the scripted leaves the tree tests use
+
+NAVIGATION_TAG = "NavigateToPose"
+#: Conditions that would otherwise end a drive at once fail (as in the tree tests).
+STILL_DRIVING = ("RobotInPickUpArea",)
+
+
+def build_parser() -> OneLineArgumentParser:
+    from bt_servicesim.mission_tree import DEFAULT_TREE
+
+    parser = OneLineArgumentParser(prog="benchmarks/tick_cost.py",
+                                   description="Tick cost of the mission tree.")
+    parser.add_argument("--tree", type=Path, default=DEFAULT_TREE, help="mission tree XML")
+    parser.add_argument("--drive-ticks", type=int, default=300,
+                        help="ticks every scripted navigation stays RUNNING (default 300)")
+    parser.add_argument("--idle-ticks", type=int, default=3000,
+                        help="ticks of the idle real tree (default 3000)")
+    return parser
+
+
+def microseconds(seconds: Sequence[float]) -> str:
+    us = np.asarray(seconds) * 1e6
+    return (f"mean {us.mean():7.1f} µs  median {np.median(us):7.1f} µs  "
+            f"p99 {np.percentile(us, 99):7.1f} µs  (n={len(us)})")
+
+
+def timed_ticks(tree: Any, ticks: int | None, after_tick: Any = None) -> list[float]:
+    """Tick until the root finishes (or ``ticks`` times); the wall time of each tick."""
+    import py_trees
+
+    finished = (py_trees.common.Status.SUCCESS, py_trees.common.Status.FAILURE)
+    durations: list[float] = []
+    while ticks is None or len(durations) < ticks:
+        started = time.perf_counter()
+        tree.tick()
+        durations.append(time.perf_counter() - started)
+        if after_tick is not None:
+            after_tick()
+        if ticks is None and tree.root.status in finished:
+            break
+    return durations
+
+
+def navigation_leaves(tree_file: Path) -> list[str]:
+    root = ElementTree.parse(tree_file).getroot()
+    return sorted({element.get("name", "") for element in root.iter(NAVIGATION_TAG)})
+
+
+def scripted(tree_file: Path, drive_ticks: int) -> None:
+    import py_trees
+    from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+    from tests.mission_script import ManualClock, Script, scripted_registry
+
+    drive = (py_trees.common.Status.SUCCESS, drive_ticks)
+    outcomes: dict[str, list[Any]] = {name: [drive] * 1000
+                                      for name in navigation_leaves(tree_file)}
+    outcomes.update({name: [py_trees.common.Status.FAILURE] * 100_000 for name in STILL_DRIVING})
+    script = Script(outcomes)
+    root = parse_behaviour_tree_xml(str(tree_file),
+                                    node_registry=scripted_registry(tree_file, script))
+    tree = py_trees.trees.BehaviourTree(root)
+    clock = ManualClock()
+    tree.setup(node=clock)
+    durations = timed_ticks(tree, None, lambda: clock.advance(0.1))
+    size = len(list(root.iterate()))
+    print(f"scripted mission ({size} behaviours, ended {root.status.name} after "
+          f"{len(durations)} ticks, {len(script.calls)} leaf activations):")
+    print(f"  {microseconds(durations)}")
+
+
+def idle(tree_file: Path, ticks: int) -> None:
+    import py_trees
+    import rclpy
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+
+    from bt_servicesim.mission_tree import load_mission_tree
+
+    py_trees.blackboard.Blackboard.clear()
+    root = load_mission_tree(tree_file)
+    rclpy.init()
+    node = Node("benchmark_tick_cost",
+                parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+    try:
+        tree = py_trees.trees.BehaviourTree(root)
+        tree.setup(timeout=15.0, node=node)
+        durations = timed_ticks(tree, ticks)
+        tip = tree.root.tip()
+        print(f"idle real tree (no simulator, waiting in {tip.name if tip else '-'}):")
+        print(f"  {microseconds(durations)}")
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.drive_ticks < 0 or args.idle_ticks < 1:
+        build_parser().error("--drive-ticks must be 0 or more and --idle-ticks 1 or more")
+    domain = isolate()
+    from bt_servicesim.mission_tree import MissionTreeError, load_mission_tree
+
+    try:
+        load_mission_tree(args.tree)
+    except MissionTreeError as error:
+        build_parser().error(str(error))
+    print(f"py_trees {version('py_trees')}, ROS domain {domain}, "
+          f"discovery {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}")
+    scripted(args.tree, args.drive_ticks)
+    idle(args.tree, args.idle_ticks)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
