@@ -1,0 +1,174 @@
+"""The simulator node over real DDS: its services' answers and error answers, the referee's
+account, /clock and the latched map, and the NavigateToPose action (success, abort, cancel)."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+from action_msgs.msg import GoalStatus
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav_msgs.msg import OccupancyGrid
+from rclpy.action import ActionClient
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from servicesim_competition.action import NavigateToPose
+from servicesim_competition.msg import RefereeState, Score
+from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, TaskInfo
+
+from servicesim_sim.node import DrainingExecutor, SimulatorNode
+from servicesim_sim.scenario import Difficulty
+from servicesim_sim.settings import SimSettings
+from servicesim_sim.world import DEFAULT_WORLD, load_world
+
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class Graph:
+    """The simulator spinning in a thread, and a client node the test drives."""
+
+    def __init__(self, context: Context, *, speed: float) -> None:
+        settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=speed,
+                               difficulty=Difficulty.default(), camera_rate_hz=0.0)
+        self.sim_node = Node("servicesim", context=context)
+        self.simulator = SimulatorNode(settings, node=self.sim_node)
+        self.sim_executor = DrainingExecutor(context=context)
+        self.sim_executor.add_node(self.sim_node)
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.client = Node("probe", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.client)
+        self.thread.start()
+
+    def _run(self) -> None:
+        try:
+            self.simulator.run(self.sim_executor)
+        except Exception:  # the context shutting down ends the loop
+            return
+
+    def spin_until(self, done: Callable[[], bool], limit_s: float = 20.0) -> None:
+        deadline = time.monotonic() + limit_s
+        while not done():
+            assert time.monotonic() < deadline, "condition not reached in time"
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def call(self, kind: Any, name: str, request: Any) -> Any:
+        client = self.client.create_client(kind, name)
+        self.spin_until(client.service_is_ready)
+        future = client.call_async(request)
+        self.spin_until(future.done)
+        return future.result()
+
+
+@pytest.fixture
+def graph(ros_context: Context) -> Iterator[Graph]:
+    yield Graph(ros_context, speed=0.0)
+
+
+def test_clock_runs_and_the_map_is_latched(graph: Graph) -> None:
+    clocks: list[float] = []
+    maps: list[OccupancyGrid] = []
+    graph.client.create_subscription(
+        Clock, "/clock", lambda m: clocks.append(m.clock.sec + m.clock.nanosec * 1e-9), 10)
+    graph.client.create_subscription(OccupancyGrid, "/servicebot/map", maps.append, LATCHED)
+    graph.spin_until(lambda: len(clocks) > 20 and bool(maps))
+    assert clocks == sorted(clocks) and clocks[-1] > clocks[0]
+    assert (maps[0].info.width, maps[0].info.height) == (1200, 1200)
+    assert maps[0].info.resolution == pytest.approx(0.05)
+
+
+def test_room_info_answers_a_box_or_the_zero_box_for_an_unknown_room(graph: Graph) -> None:
+    known = graph.call(RoomInfo, "/servicesim/room_info", RoomInfo.Request(name="FrontElevator"))
+    assert (known.min.x, known.min.y, known.max.x, known.max.y) == (-1.5, 0.0, 1.5, 2.7)
+    unknown = graph.call(RoomInfo, "/servicesim/room_info", RoomInfo.Request(name="Attic"))
+    assert (unknown.min.x, unknown.min.y, unknown.max.x, unknown.max.y) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_task_info_new_task_and_a_second_new_task(graph: Graph) -> None:
+    before = graph.call(TaskInfo, "/servicesim/task_info", TaskInfo.Request())
+    assert before.pick_up_location == ""  # the error answer: no task yet
+    task = graph.call(NewTask, "/servicesim/new_task", NewTask.Request())
+    assert (task.pick_up_location, task.drop_off_location, task.guest_name) == (
+        "FrontElevator", "PrivateCubicle_32_1", "human_20843")
+    assert (task.robot_start_pose.position.x, task.robot_start_pose.position.y) == (10.975, 3.75)
+    again = graph.call(NewTask, "/servicesim/new_task", NewTask.Request())
+    assert again.pick_up_location == ""
+    info = graph.call(TaskInfo, "/servicesim/task_info", TaskInfo.Request())
+    assert info.guest_name == "human_20843"
+
+
+def test_a_refused_pickup_is_booked_and_the_score_runs_with_the_task(graph: Graph) -> None:
+    scores: list[float] = []
+    states: list[RefereeState] = []
+    graph.client.create_subscription(Score, "/servicesim/score",
+                                     lambda m: scores.append(m.score), 10)
+    graph.client.create_subscription(RefereeState, "/servicesim/referee", states.append, LATCHED)
+    graph.spin_until(lambda: bool(states))
+    assert not scores  # no task, no score
+    graph.call(NewTask, "/servicesim/new_task", NewTask.Request())
+    answer = graph.call(PickUpGuest, "/servicesim/pickup_guest",
+                        PickUpGuest.Request(guest_name="human_20843", robot_name="servicebot"))
+    assert answer.success is False  # before checkpoint 1
+    graph.spin_until(lambda: states[-1].failed_pickups == 1 and len(scores) > 10)
+    assert scores[-1] >= 40.0
+    drift = graph.call(Drift, "/servicesim/drift", Drift.Request())
+    assert drift.drift is False  # nobody is following
+
+
+def navigate(graph: Graph, x: float, y: float, *, cancel_after_s: float | None = None) -> Any:
+    client = ActionClient(graph.client, NavigateToPose, "/servicebot/navigate_to_pose")
+    graph.spin_until(client.server_is_ready)
+    goal = NavigateToPose.Goal()
+    goal.pose.header.frame_id = "map"
+    goal.pose.pose.position.x, goal.pose.pose.position.y = x, y
+    goal.pose.pose.orientation.w = 1.0
+    sent = client.send_goal_async(goal)
+    graph.spin_until(sent.done)
+    handle = sent.result()
+    assert handle.accepted
+    if cancel_after_s is not None:
+        started = time.monotonic()
+        graph.spin_until(lambda: time.monotonic() - started > cancel_after_s)
+        handle.cancel_goal_async()
+    result = handle.get_result_async()
+    graph.spin_until(result.done, limit_s=60.0)
+    return result.result()
+
+
+def localise(graph: Graph) -> None:
+    publisher = graph.client.create_publisher(PoseWithCovarianceStamped,
+                                              "/servicebot/initialpose", LATCHED)
+    message = PoseWithCovarianceStamped()
+    message.header.frame_id = "map"
+    message.pose.pose.position.x, message.pose.pose.position.y = 10.975, 3.75
+    message.pose.pose.orientation.z, message.pose.pose.orientation.w = math.sin(1.57), math.cos(
+        1.57)
+    publisher.publish(message)
+    started = time.monotonic()
+    graph.spin_until(lambda: time.monotonic() - started > 0.5)
+
+
+def test_a_goal_before_an_initial_pose_aborts_with_tf_error(graph: Graph) -> None:
+    outcome = navigate(graph, 9.0, 3.75)
+    assert outcome.status == GoalStatus.STATUS_ABORTED
+    assert outcome.result.error_code == NavigateToPose.Result.TF_ERROR
+
+
+def test_navigation_succeeds_aborts_without_a_path_and_cancels(graph: Graph) -> None:
+    localise(graph)
+    reached = navigate(graph, 9.5, 3.75)
+    assert reached.status == GoalStatus.STATUS_SUCCEEDED
+    assert reached.result.error_code == NavigateToPose.Result.NONE
+    walled = navigate(graph, -29.0, -29.0)  # outside the building: unknown space
+    assert walled.status == GoalStatus.STATUS_ABORTED
+    assert walled.result.error_code != 0 and walled.result.error_msg
+    cancelled = navigate(graph, -20.0, 10.0, cancel_after_s=0.3)
+    assert cancelled.status == GoalStatus.STATUS_CANCELED
