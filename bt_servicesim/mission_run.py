@@ -53,7 +53,7 @@ from bt_servicesim.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 
 FINAL_TREE_NAME = "final_tree.txt"
 
-DISCOVERY_SETTLE_S = 1.0  # wall seconds for the simulator to discover the clients set up
+DISCOVERY_SETTLE_S = 2.0  # wall seconds for the simulator to discover the clients set up
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
 SIM_TIME_BACKSTOP_S = 60.0  # sim seconds past the time limit before the run gives up itself
 

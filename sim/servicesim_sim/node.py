@@ -355,8 +355,8 @@ class SimulatorNode:
 
     # ----------------------------------------------------------------- loop
     def run(self, executor: DrainingExecutor) -> None:
-        wall_start, sim_start = time.monotonic(), self.engine.sim_time
-        speed = self.settings.speed
+        """Step, publish and serve until the context shuts down, paced by the speed factor."""
+        anchor: tuple[float, float, float] | None = None  # wall, sim, speed
         while rclpy.ok(context=self.node.context):
             for _ in range(self.steps_per_io):
                 self.engine.step()
@@ -365,11 +365,25 @@ class SimulatorNode:
             self._publish_io()
             self._wake_sleepers()
             executor.drain()
+            speed = self._pace()
+            if anchor is None or anchor[2] != speed:
+                anchor = (time.monotonic(), self.engine.sim_time, speed)
             if speed > 0.0:
-                due = wall_start + (self.engine.sim_time - sim_start) / speed
+                due = anchor[0] + (self.engine.sim_time - anchor[1]) / speed
                 while (remaining := due - time.monotonic()) > 0.0:
                     executor.spin_once(timeout_sec=remaining)
 
+    def _pace(self) -> float:
+        """The speed factor now: at most real time until a task starts.
+
+        Before ``new_task`` nothing is scored, and running flat out would only flood the
+        machine while the executive starts and DDS discovers its endpoints — a response
+        written before the server has matched the client's reader is lost.
+        """
+        speed = self.settings.speed
+        if self.engine.task_started or 0.0 < speed <= 1.0:
+            return speed
+        return 1.0
 
 class DrainingExecutor(SingleThreadedExecutor):
     """An executor that can run everything ready now, without waiting for more.
