@@ -8,8 +8,8 @@ Design intent:
   same search made goal-directed (A* with the octile heuristic, as reduced edge costs and a
   growing search limit) was only ~20 % faster over random pairs, needs ~5 ms per goal to
   reweight the edges and repeated searches to prove a goal unreachable; a pure-Python heap A*
-  took 160-210 ms. So the planner runs plain Dijkstra; the octile distance is just the length
-  of a grid step.
+  took 120-400 ms, 5-20 times as long. So the planner runs plain Dijkstra; the octile distance
+  is just the length of a grid step.
 * The graph's shape (which cells join which) is built once from the static layer. Only the edge
   weights follow the people marks: stepping onto a cell costs its length times
   ``1 + cost_weight * cost / 252`` and a lethal cell cannot be entered; weights are recomputed
