@@ -10,7 +10,9 @@ Only ``STATUS_SUCCEEDED`` is success. A rejected, aborted or cancelled goal is a
 carries Nav2's ``error_code`` and ``error_msg``. Because a navigation server can die mid-goal
 (and an rclpy future then simply never completes), the behaviour watches the server too: if
 ``server_is_ready()`` turns false, or nothing (acceptance, feedback, result) has arrived for
-``server_timeout`` sim seconds, it fails with "navigation server lost". All times are sim time.
+``silence_timeout`` sim seconds, it fails with "navigation server lost". All times are sim time;
+the silence allowed is generous because an executive that falls behind a fast simulator
+sees sim time jump before it has read the feedback that came with it.
 """
 
 from typing import Any, ClassVar
@@ -47,8 +49,9 @@ class NavigateToPose(BehaviourWithPorts):
     Args:
         name: the behaviour's name
         action: the action name
-        server_timeout: sim seconds to wait for the server to appear, and the longest silence
-            (no acceptance, feedback or result) tolerated from it mid-goal
+        server_timeout: sim seconds to wait for the server to appear
+        silence_timeout: sim seconds of silence (no acceptance, feedback or result) tolerated
+            from the server mid-goal
         timeout: sim seconds the whole navigation may take; 0 means no limit
         frame_id: the frame of the goal pose
     """
@@ -65,6 +68,7 @@ class NavigateToPose(BehaviourWithPorts):
         name: str,
         action: str = "/servicebot/navigate_to_pose",
         server_timeout: float = 5.0,
+        silence_timeout: float = 30.0,
         timeout: float = 0.0,
         frame_id: str = "map",
         **kwargs: Any,
@@ -72,6 +76,7 @@ class NavigateToPose(BehaviourWithPorts):
         super().__init__(name=name, **kwargs)
         self.action = action
         self.server_timeout = float(server_timeout)
+        self.silence_timeout = float(silence_timeout)
         self.timeout = float(timeout)
         self.frame_id = frame_id
         self.node: Node | None = None
@@ -223,10 +228,10 @@ class NavigateToPose(BehaviourWithPorts):
         client = self._require_setup()
         assert self._silence is not None
         silence = self._silence.elapsed()
-        if not client.server_is_ready() or silence > self.server_timeout:
+        if not client.server_is_ready() or silence > self.silence_timeout:
             self.feedback_message = (
                 f"navigation server lost: no feedback or result for {silence:.1f} sim s"
-                if silence > self.server_timeout
+                if silence > self.silence_timeout
                 else "navigation server lost: server no longer available"
             )
             return Status.FAILURE

@@ -243,7 +243,7 @@ def test_a_silent_server_counts_as_lost(
     client: Client, navigator: Navigator, action: str
 ) -> None:
     navigator.outcome, navigator.steps, navigator.step_s = "silent", 1000, 0.01
-    navigate = client.navigate(action, server_timeout=0.5)
+    navigate = client.navigate(action, silence_timeout=0.5)
     assert client.tick_until_done(navigate) == Status.FAILURE
     assert navigate.feedback_message.startswith("navigation server lost: no feedback")
 
@@ -253,7 +253,7 @@ def test_a_server_that_disappears_mid_goal_counts_as_lost(
 ) -> None:
     navigator = Navigator(ros_context, action)
     navigator.steps, navigator.step_s = 1000, 0.01
-    navigate = client.navigate(action, server_timeout=2.0)
+    navigate = client.navigate(action, silence_timeout=2.0)
     client.tick_until(navigate, lambda: Blackboard.exists("/remaining"))
     navigator.vanish()
     try:

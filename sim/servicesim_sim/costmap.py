@@ -37,6 +37,8 @@ LETHAL = 254
 ROBOT_RADIUS = 0.25  # m: the simulator's contact disc (footprint 0.4 x 0.5 m)
 INFLATION_RADIUS = 0.4  # m, as in the competition's costmap
 PERSON_RADIUS = 0.3  # m
+PERSON_INFLATION_RADIUS = 0.8  # m from a person's edge: the referee's 0.75 m "approximation"
+PERSON_COST_SCALING = 2.5  # gentler than the walls': keep a berth where there is room for one
 
 
 class OccupancyMapLike(Protocol):
@@ -123,7 +125,9 @@ class Costmap:
         inflation_radius: costs decay to zero at this distance
         resolution: metres per costmap cell, rounded to a whole number of map cells
         crop_margin: metres kept around the bounding box of the map's occupied cells
-        person_radius: a marked person is an obstacle disc of this radius
+        person_radius: a marked person is an obstacle disc of this radius; around it costs decay
+            more gently and reach further (:data:`PERSON_INFLATION_RADIUS`), so plans keep out
+            of the zone where the referee books "approximation" penalties when there is room
     """
 
     def __init__(self, occupancy_map: OccupancyMapLike, *, robot_radius: float = ROBOT_RADIUS,
@@ -133,6 +137,8 @@ class Costmap:
         self.map = occupancy_map
         self.inflation = Inflation(robot_radius=robot_radius, inflation_radius=inflation_radius,
                                    cost_scaling_factor=cost_scaling_factor)
+        self.social = Inflation(robot_radius=robot_radius, inflation_radius=max(
+            inflation_radius, PERSON_INFLATION_RADIUS), cost_scaling_factor=PERSON_COST_SCALING)
         self.person_radius = person_radius
         self.lidar = lidar or Lidar()
         self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
@@ -194,7 +200,7 @@ class Costmap:
         self.marks = marks
 
     def _with_people(self, costs: np.ndarray) -> np.ndarray:
-        reach = self.person_radius + self.inflation.inflation_radius
+        reach = self.person_radius + self.social.inflation_radius
         frame = self.frame
         for mark in self.marks:
             row0, col0 = frame.cell_of(mark.x - reach, mark.y - reach)
@@ -207,7 +213,7 @@ class Costmap:
             xs, ys = frame.centres(rows, cols)
             gap = np.hypot(xs - mark.x, ys - mark.y) - self.person_radius
             window = costs[row0:row1 + 1, col0:col1 + 1]
-            np.maximum(window, self.inflation.costs(gap), out=window)
+            np.maximum(window, self.social.costs(gap), out=window)
         return costs
 
     # ------------------------------------------------------------------ the lidar
