@@ -164,7 +164,8 @@ def test_a_person_in_view_is_marked_and_inflated() -> None:
     assert costmap.cost_at(6.0, 1.6) == LETHAL
     assert costmap.cost_at(6.0, 2.0) >= INSCRIBED  # within person + robot radius
     assert 0 < costmap.cost_at(6.0, 2.2) < INSCRIBED
-    assert costmap.cost_at(6.0, 2.5) == 0
+    assert 0 < costmap.cost_at(6.9, 1.6) < costmap.cost_at(6.0, 2.2)  # the social berth
+    assert costmap.cost_at(7.25, 1.6) == 0  # beyond it: 0.3 m body + 0.8 m berth
 
 
 def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_seen() -> None:
