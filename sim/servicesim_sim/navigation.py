@@ -81,7 +81,7 @@ class Tuning:
     creep_speed: float = 0.08
     turn_gain: float = 2.0
     min_turn_rate: float = 0.2
-    observe_period: float = 0.1
+    observe_period: float = 0.2  # the costmap updates at 5 Hz, Nav2's default update_frequency
     replan_period: float = 1.0  # replan this often while people obstruct the path ...
     obstruction_horizon: float = 4.0  # ... this far ahead,
     detour_allowance: float = 5.0  # taking a new way round them up to this much longer;
