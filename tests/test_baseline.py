@@ -14,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import py_trees
@@ -30,6 +31,8 @@ from std_srvs.srv import Empty
 
 from bt_servicesim.baseline import SEED_STATES, SeedStateMachine
 from bt_servicesim.geometry import Pose2D
+from bt_servicesim.mission_tree import MissionTreeError
+from bt_servicesim.run import RunSettings, executive_factory
 
 Status = py_trees.common.Status
 _names = itertools.count()
@@ -303,3 +306,24 @@ def test_time_limit_ends_the_run_with_failure(ros_context: object, namespace: st
     finally:
         driver.shutdown()
 
+
+
+def test_the_run_command_makes_the_baseline_without_a_tree_file(ros_context: object,
+                                                                tmp_path: Path) -> None:
+    settings = RunSettings(world=None, seed=3, speed=0.0, tree=tmp_path / "no_such_tree.xml",
+                           out=tmp_path, time_limit_s=123.0, headless=True,
+                           executive="baseline")
+    node = Node(f"factory_{next(_names)}", context=ros_context)
+    try:
+        machine = executive_factory(settings)(node)
+        assert isinstance(machine, SeedStateMachine)
+        assert machine.time_limit_s == 123.0 and machine.node is node
+    finally:
+        node.destroy_node()
+
+
+def test_the_run_command_still_checks_the_tree_file_of_the_tree(tmp_path: Path) -> None:
+    settings = RunSettings(world=None, seed=None, speed=0.0, tree=tmp_path / "missing.xml",
+                           out=tmp_path, time_limit_s=900.0, headless=True, executive="bt")
+    with pytest.raises(MissionTreeError, match=r"missing\.xml"):
+        executive_factory(settings)
