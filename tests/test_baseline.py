@@ -259,7 +259,9 @@ def test_each_attempt_clears_costmaps_then_waits_half_a_second(
     for clear, goal in zip(clears, goals, strict=True):
         assert goal.sim_time - clear.sim_time >= 0.5 - 1e-6
     gaps = [later.sim_time - earlier.sim_time for earlier, later in itertools.pairwise(clears)]
-    assert all(gap >= 1.0 - 1e-6 for gap in gaps), f"attempts faster than 1 Hz: {gaps}"
+    # a request reaches the fake simulator up to one clock step after it was sent
+    jitter = Driver.STEP_S + 1e-6
+    assert all(gap >= 1.0 - jitter for gap in gaps), f"attempts faster than 1 Hz: {gaps}"
 
 
 def test_a_goal_without_result_is_cancelled_and_resent_after_ten_seconds(
