@@ -4,7 +4,8 @@ Every benchmark calls :func:`isolate` before it imports rclpy: DDS discovery sta
 machine unless the user set ``ROS_AUTOMATIC_DISCOVERY_RANGE``, and the benchmark gets a ROS
 domain of its own (from ``ROS_DOMAIN_ID`` if set, else from the process id), so a test run or an
 evaluation on the same machine cannot answer its requests. The simulator is started exactly as
-the run command starts it (``python -m servicesim_sim``), with its output in a temporary file.
+the run command starts it (``python -m servicesim_sim``), with its output in a temporary file;
+:func:`start_task` starts its task, since before one it never runs faster than real time.
 """
 
 from __future__ import annotations
@@ -82,6 +83,19 @@ def spin_until(executor: Any, done: Callable[[], bool], limit_s: float,
         if time.monotonic() > deadline:
             raise SystemExit(f"gave up waiting for {what} after {limit_s:.0f} s")
         executor.spin_once(timeout_sec=0.05)
+
+
+def start_task(node: Any, executor: Any, simulator: Simulator) -> None:
+    """Call ``new_task``: until a task starts the simulator runs at most at real time."""
+    from servicesim_competition.srv import NewTask
+
+    client = node.create_client(NewTask, "/servicesim/new_task")
+    spin_until(executor, client.service_is_ready, 60.0, "/servicesim/new_task", simulator)
+    answer = client.call_async(NewTask.Request())
+    spin_until(executor, answer.done, 30.0, "the new_task answer", simulator)
+    if not answer.result().pick_up_location:
+        raise SystemExit("the simulator refused new_task")
+    node.destroy_client(client)
 
 
 def milliseconds(seconds: Sequence[float]) -> str:

@@ -2,8 +2,9 @@
 
 ``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]`` prints
 
-* alone: the simulator at ``--speed`` (default 0, as fast as it can) with nobody but this
-  script listening to ``/clock``, over ``S`` wall seconds after a short warm-up;
+* alone: the simulator at ``--speed`` (default 0, as fast as it can) with its task started
+  (before ``new_task`` it never runs faster than real time) but nobody driving the robot and
+  nobody but this script listening to ``/clock``, over ``S`` wall seconds after a warm-up;
 * driven: ``python -m bt_servicesim.run --headless`` on the default (shipped) task, same speed,
   measured from the referee's own stamps between the task's start and its end, which is the
   part of a run an evaluation pays for; and the run's report (completed, sim and wall time).
@@ -24,7 +25,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ros_harness import OneLineArgumentParser, Simulator, isolate, spin_until
+from ros_harness import OneLineArgumentParser, Simulator, isolate, spin_until, start_task
 
 
 def build_parser() -> OneLineArgumentParser:
@@ -67,6 +68,7 @@ def measure_alone(node: Any, executor: Any, *, speed: float, seconds: float) -> 
         subscription = node.create_subscription(
             Clock, "/clock", lambda message: stamps.add(seconds_of(message.clock)), 10)
         spin_until(executor, lambda: bool(stamps.pairs), 60.0, "/clock", simulator)
+        start_task(node, executor, simulator)
         warm_up = time.monotonic() + 2.0
         spin_until(executor, lambda: time.monotonic() > warm_up, 10.0, "warm-up", simulator)
         stamps.pairs.clear()
