@@ -9,8 +9,9 @@ with a ROS domain of its own, several at once. It writes
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
   episode's ``report.json``, with its scenario set and episode number added);
-* ``results.md``: the tables (per executive and set, paired on the episodes both completed,
-  failure reasons), the plots and the exact command; ``results_*.png``: the plots.
+* ``results.md``: the tables (per executive and set; paired: scores where both completed,
+  times to the drop-off where both got there; failure reasons), the plots and the exact
+  command; ``results_*.png``: the plots.
 
 An episode is never dropped: one that outlives its wall-time limit is stopped (SIGINT, so the
 run stops its simulator and writes its report, then SIGKILL for whatever is left) and recorded
@@ -482,12 +483,35 @@ def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict
 def paired_scores(rows: list[dict[str, Any]], scenario: str, first: str,
                   second: str) -> tuple[list[float], list[float]]:
     """Scores of ``first`` and ``second`` on the episodes of a set that both completed."""
+    return paired_values(rows, scenario, first, second,
+                         reached=lambda row: bool(row["completed"]),
+                         value=lambda row: float(row["score"]))
+
+
+def paired_drop_off_times(rows: list[dict[str, Any]], scenario: str, first: str,
+                          second: str) -> tuple[list[float], list[float]]:
+    """Task sim time to the drop-off (checkpoints 1–3) on the episodes both got that far."""
+    return paired_values(rows, scenario, first, second, reached=_dropped_off,
+                         value=lambda row: sum(float(checkpoint["sim_time_s"])
+                                               for checkpoint in row["checkpoints"][:3]))
+
+
+def paired_values(rows: list[dict[str, Any]], scenario: str, first: str, second: str, *,
+                  reached: Callable[[dict[str, Any]], bool],
+                  value: Callable[[dict[str, Any]], float]) -> tuple[list[float], list[float]]:
+    """``value`` of ``first``'s and ``second``'s rows, episode by episode, on the episodes of
+    a set where both rows satisfy ``reached``."""
     by_key = {(row["executive"], row["episode"]): row for row in rows
-              if row["scenario"] == scenario and row["completed"]}
+              if row["scenario"] == scenario and reached(row)}
     both = sorted({episode for (_, episode) in by_key
                    if (first, episode) in by_key and (second, episode) in by_key})
-    return ([float(by_key[(first, n)]["score"]) for n in both],
-            [float(by_key[(second, n)]["score"]) for n in both])
+    return ([value(by_key[(first, n)]) for n in both],
+            [value(by_key[(second, n)]) for n in both])
+
+
+def _dropped_off(row: dict[str, Any]) -> bool:
+    checkpoints = row.get("checkpoints") or []
+    return len(checkpoints) >= 3 and all(bool(c.get("done")) for c in checkpoints[:3])
 
 
 def _mean(values: list[float]) -> float | None:
@@ -511,7 +535,9 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              "[evaluation.md](evaluation.md).", "",
              "## Per executive and scenario set", "", *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
-        lines += ["## On the episodes both executives completed", "",
+        lines += ["## Paired: the same episodes, both executives", "",
+                  "Scores where both completed the mission; the task sim time to the drop-off "
+                  "(checkpoints 1–3) where both got the guest there.", "",
                   *paired_table(settings, rows), ""]
     lines += ["## Why episodes failed", "", *failure_table(rows), "", "## Plots", ""]
     lines += [f"![{title}]({image_dir}/results_{name}.png)" for name, title in PLOTS]
@@ -554,14 +580,22 @@ def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> l
 
 
 def paired_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
-    lines = ["| set | episodes both completed | bt mean score | baseline mean score | "
-             "bt lower on |", "|---|---|---|---|---|"]
+    """Each set, paired: scores where both completed, drop-off times where both dropped off."""
+    lines = ["| set | both completed | bt mean score | baseline mean score | bt lower on | "
+             "both dropped off | bt mean time to drop-off (s) | baseline mean time to "
+             "drop-off (s) | bt faster on |", "|" + "---|" * 9]
     for scenario in settings.scenarios:
         tree, seed = paired_scores(rows, scenario, "bt", "baseline")
-        lower = sum(a < b for a, b in zip(tree, seed, strict=True))
+        tree_time, seed_time = paired_drop_off_times(rows, scenario, "bt", "baseline")
         lines.append(f"| {scenario} | {len(tree)} | {_number(_mean(tree))} | "
-                     f"{_number(_mean(seed))} | {lower}/{len(tree)} |")
+                     f"{_number(_mean(seed))} | {_below(tree, seed)} | {len(tree_time)} | "
+                     f"{_number(_mean(tree_time))} | {_number(_mean(seed_time))} | "
+                     f"{_below(tree_time, seed_time)} |")
     return lines
+
+
+def _below(first: list[float], second: list[float]) -> str:
+    return f"{sum(a < b for a, b in zip(first, second, strict=True))}/{len(first)}"
 
 
 def failure_table(rows: list[dict[str, Any]]) -> list[str]:

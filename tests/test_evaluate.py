@@ -37,9 +37,13 @@ time.sleep(0.3)
 number = 0 if seed == "None" else int(seed)
 completed = executive == "bt" or number % 2 == 0
 score = (100.0 if executive == "bt" else 200.0) + number
+first = 10.0 if executive == "bt" else 20.0
+checkpoints = [{"name": name, "done": completed or index < 3, "sim_time_s": first + 10.0 * index}
+               for index, name in enumerate(("go_to_pick_up", "pick_up_guest",
+                                              "drop_off_guest", "return_to_start"))]
 report = {
     "completed": completed, "score": score, "sim_time_s": score / 2,
-    "checkpoints": [], "wall_time_s": 0.3, "seed": None if seed == "None" else number,
+    "checkpoints": checkpoints, "wall_time_s": 0.3, "seed": None if seed == "None" else number,
     "world": "default", "executive": executive, "exit_code": 0 if completed else 1,
     "failure": None if completed else "the mission tree ended with SUCCESS",
     "penalties": {"failed_pickup": 1 if executive == "baseline" else 0, "failed_dropoff": 0,
@@ -139,7 +143,9 @@ def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     assert chosen.command_line in results
     assert "| bt | random | 2 | 100% |" in results
     assert "| baseline | random | 2 | 50% |" in results
-    assert "| random | 1 |" in results, "one random episode completed by both"
+    # random: both completed episode 0 (100 vs 200); both dropped off in 0 and 1 (60 vs 90 s)
+    assert "| random | 1 | 100.0 | 200.0 | 1/1 | 2 | 60.0 | 90.0 | 2/2 |" in results
+    assert "| baseline | random | 1 | 3/4 | the mission tree ended with SUCCESS |" in results
     for name, _ in ev.PLOTS:
         assert (chosen.out / f"results_{name}.png").stat().st_size > 1000
         assert (tmp_path / "docs" / "images" / f"results_{name}.png").is_file()
