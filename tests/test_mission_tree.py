@@ -108,6 +108,23 @@ def test_arriving_without_the_guest_in_range_waits_for_navigation_to_finish() ->
     assert Status.SUCCESS in script.terminated[navigate]
 
 
+def test_a_robot_left_outside_the_area_by_the_approach_drives_into_it() -> None:
+    script = Script({**NOT_IN_AREA, "InsidePickUpArea": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateIntoPickUpArea") == 1
+    calls = script.calls
+    assert calls.index(next(c for c in calls if c.endswith("NavigateIntoPickUpArea"))) < (
+        calls.index(next(c for c in calls if c.endswith("CallPickUpGuest"))))
+
+
+def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest() -> None:
+    script = Script(dict(NOT_IN_AREA))
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateIntoPickUpArea") == 0
+
+
 def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
