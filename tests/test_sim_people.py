@@ -162,12 +162,19 @@ def test_a_walker_stops_for_a_robot_in_front_and_walks_on_when_it_is_gone() -> N
     (1.0, math.pi),  # behind
     (1.0, math.radians(75.0)),  # beside, outside the +-60 degree cone
     (1.8, 0.0),  # ahead but further than 1.5 m
+    (0.7, math.radians(120.0)),  # close, but behind its shoulder
 ])
 def test_a_walker_does_not_stop_for_a_robot_behind_beside_or_far(distance: float,
                                                                   bearing: float) -> None:
     people = crowd(5)
     walker = walkers_of(people)[0]
     assert steps_moved(people, walker, robot_at(distance=distance, bearing=bearing)) > 0.85
+
+
+def test_a_walker_gives_way_to_a_robot_close_at_its_side() -> None:
+    people = crowd(5)
+    walker = walkers_of(people)[0]
+    assert steps_moved(people, walker, robot_at(distance=0.8, bearing=math.radians(80.0))) == 0
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])

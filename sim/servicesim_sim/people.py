@@ -37,6 +37,8 @@ PERSON_RADIUS = 0.25  # metres; a person's footprint seen as a disc
 WALKER_SPEED_RANGE = (0.9, 1.2)  # m/s
 WALKER_STOP_DISTANCE = 1.5  # a robot this close in front stops a walker ...
 WALKER_STOP_HALF_ANGLE = math.radians(60.0)  # ... when within this angle of its heading
+WALKER_GIVE_WAY_DISTANCE = 0.9  # and a robot this close anywhere ahead (±90°) stops it too:
+# nobody walks into the robot from the side, which the referee would book as the robot's contact
 WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
 WALKER_IDLER_CLEARANCE = 0.6  # ... and this far from idlers
 ROUTE_CELL = 0.25  # metres per route-grid cell
@@ -314,6 +316,8 @@ class Walker:
         if distance > WALKER_STOP_DISTANCE:
             return False
         facing = dx * math.cos(self.person.yaw) + dy * math.sin(self.person.yaw)
+        if distance <= WALKER_GIVE_WAY_DISTANCE:
+            return facing > 0.0
         return facing >= math.cos(WALKER_STOP_HALF_ANGLE) * distance
 
 
