@@ -31,7 +31,7 @@ def place_robot(sim: SimEngine, x: float, y: float) -> None:
 
 def at_pick_up_beside_guest(sim: SimEngine) -> None:
     """Robot inside the pick-up area (checkpoint 1) and 1.5 m from the guest."""
-    box = sim.world.areas[sim.scenario.pick_up]
+    box = sim.world.areas[sim.scenario.task.pick_up]
     place_robot(sim, *box.centre)
     assert sim.referee.checkpoint_done[0]
     guest = sim.guest
@@ -46,9 +46,9 @@ def at_pick_up_beside_guest(sim: SimEngine) -> None:
 
 def test_the_default_scenario_is_the_shipped_task() -> None:
     scenario = engine().scenario
-    assert (scenario.pick_up, scenario.drop_off, scenario.guest_name) == (
+    assert (scenario.task.pick_up, scenario.task.drop_off, scenario.task.guest_name) == (
         "FrontElevator", "PrivateCubicle_32_1", "human_20843")
-    assert (scenario.start_x, scenario.start_y) == (10.975, 3.75)
+    assert (scenario.task.start_x, scenario.task.start_y) == (10.975, 3.75)
 
 
 def test_new_task_twice_is_refused_and_time_starts_with_the_first() -> None:
@@ -104,7 +104,7 @@ def test_pickup_then_dropoff_inside_the_area_then_return_completes() -> None:
     sim.guest.x, sim.guest.y = drop.centre  # as if guided there
     place_robot(sim, drop.centre[0] + 1.2, drop.centre[1])
     assert sim.dropoff("human_20843")[0]
-    start = sim.world.areas[sim.scenario.start_area]
+    start = sim.world.areas[sim.scenario.task.start_area]
     place_robot(sim, *start.centre)
     report = sim.referee_report()
     assert report["completed"] and all(c["done"] for c in report["checkpoints"])
@@ -145,7 +145,7 @@ def test_scheduled_and_forced_drifts_stop_the_guest_where_they_are() -> None:
 def test_rfid_is_silent_with_nobody_near_and_names_the_guest_near() -> None:
     sim = engine()
     sim.robot.x, sim.robot.y = sim.guest.x + 1.5, sim.guest.y
-    assert sim.scenario.guest_name in (sim.rfid_names() or [])
+    assert sim.scenario.task.guest_name in (sim.rfid_names() or [])
     far = [(x, y) for x in range(-25, 20) for y in range(1, 22)
            if sim.robot.walls.at(x, y) > 0.5
            and all(math.hypot(px - x, py - y) > 2.5 for _, _, px, py in sim.people_states())]
@@ -191,7 +191,7 @@ def test_the_same_seed_gives_the_same_task_and_people() -> None:
 def test_an_out_of_range_guest_stands_beyond_rfid_range_of_the_area_centre() -> None:
     for seed in range(5):
         sim = engine(seed=seed, difficulty=Difficulty(guest_out_of_range=True))
-        x, y = sim.world.areas[sim.scenario.pick_up].centre
+        x, y = sim.world.areas[sim.scenario.task.pick_up].centre
         assert math.hypot(sim.guest.x - x, sim.guest.y - y) > 2.0
         assert sim.world.map.is_free(sim.guest.x, sim.guest.y)
 
@@ -199,7 +199,7 @@ def test_an_out_of_range_guest_stands_beyond_rfid_range_of_the_area_centre() -> 
 def test_random_tasks_use_three_different_areas_and_free_spots() -> None:
     for seed in range(10):
         scenario = engine(seed=seed).scenario
-        assert len({scenario.pick_up, scenario.drop_off, scenario.start_area}) == 3
-        areas = office().areas
-        assert areas[scenario.start_area].contains(scenario.start_x, scenario.start_y)
-        assert office().map.is_free(scenario.guest_x, scenario.guest_y)
+        task = scenario.task
+        assert len({task.pick_up, task.drop_off, task.start_area}) == 3
+        assert office().areas[task.start_area].contains(task.start_x, task.start_y)
+        assert office().map.is_free(task.guest_x, task.guest_y)

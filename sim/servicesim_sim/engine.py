@@ -61,13 +61,13 @@ class SimEngine:
         self.task_started_at: float | None = None
         self.referee = Referee()
         walls = WallClearance(world.map)
-        self.robot = Robot(x=scenario.start_x, y=scenario.start_y, yaw=scenario.start_yaw,
-                           walls=walls)
-        self.guest = Guest(name=scenario.guest_name, x=scenario.guest_x, y=scenario.guest_y,
-                           yaw=scenario.guest_yaw, wall_clearance=walls.at)
+        task = scenario.task
+        self.robot = Robot(x=task.start_x, y=task.start_y, yaw=task.start_yaw, walls=walls)
+        self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,
+                           yaw=task.guest_yaw, wall_clearance=walls.at)
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
-                           taken_names={scenario.guest_name}, keep_clear=self._keep_clear())
+                           taken_names={task.guest_name}, keep_clear=self._keep_clear())
         self._knobs = np.random.default_rng(scenario.knob_seed)
         self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
         self._ticket = 0
@@ -81,10 +81,9 @@ class SimEngine:
         self._steps = 0
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
-        scenario, areas = self.scenario, self.world.areas
-        discs = [(scenario.start_x, scenario.start_y, 1.5),
-                 (scenario.guest_x, scenario.guest_y, 1.5)]
-        for name in (scenario.pick_up, scenario.drop_off, scenario.start_area):
+        task, areas = self.scenario.task, self.world.areas
+        discs = [(task.start_x, task.start_y, 1.5), (task.guest_x, task.guest_y, 1.5)]
+        for name in (task.pick_up, task.drop_off, task.start_area):
             x, y = areas[name].centre
             discs.append((x, y, 2.0))
         return discs
@@ -141,17 +140,17 @@ class SimEngine:
             return False, reason
         self.guest.stop_following(GuestState.DROPPED_OFF)
         referee.reach(rules.DROP_OFF_GUEST)
-        return True, f"{guest_name} dropped off in {self.scenario.drop_off}"
+        return True, f"{guest_name} dropped off in {self.scenario.task.drop_off}"
 
     def _dropoff_refusal(self, guest_name: str) -> str:
         if guest_name != self.guest.name:
             return f"{guest_name!r} is not the guest"
         if self.referee.current != rules.DROP_OFF_GUEST or not self.guest.following:
             return "the guest is not following the robot"
-        box = self.world.areas[self.scenario.drop_off]
+        box = self.world.areas[self.scenario.task.drop_off]
         if not box.contains(self.guest.x, self.guest.y):
             return (f"the guest at ({self.guest.x:.2f}, {self.guest.y:.2f}) is outside "
-                    f"{self.scenario.drop_off}")
+                    f"{self.scenario.task.drop_off}")
         return ""
 
     def force_drift(self) -> tuple[bool, str]:
@@ -251,10 +250,10 @@ class SimEngine:
         referee, areas = self.referee, self.world.areas
         x, y = self.robot.x, self.robot.y
         if (referee.current == rules.GO_TO_PICK_UP
-                and areas[self.scenario.pick_up].contains(x, y)):
+                and areas[self.scenario.task.pick_up].contains(x, y)):
             referee.reach(rules.GO_TO_PICK_UP)
         if (referee.current == rules.RETURN_TO_START
-                and areas[self.scenario.start_area].contains(x, y)):
+                and areas[self.scenario.task.start_area].contains(x, y)):
             referee.reach(rules.RETURN_TO_START)
 
     def _check_guest(self) -> None:

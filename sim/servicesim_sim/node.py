@@ -155,14 +155,14 @@ class SimulatorNode:
 
     def _fill_task(self, response: Any) -> Any:
         scenario = self.engine.scenario
-        response.pick_up_location = scenario.pick_up
-        response.drop_off_location = scenario.drop_off
-        response.guest_name = scenario.guest_name
+        response.pick_up_location = scenario.task.pick_up
+        response.drop_off_location = scenario.task.drop_off
+        response.guest_name = scenario.task.guest_name
         start = response.robot_start_pose
         start.position.x, start.position.y, start.position.z = (
-            scenario.start_x, scenario.start_y, 0.75)
-        start.orientation.z = math.sin(scenario.start_yaw / 2.0)
-        start.orientation.w = math.cos(scenario.start_yaw / 2.0)
+            scenario.task.start_x, scenario.task.start_y, 0.75)
+        start.orientation.z = math.sin(scenario.task.start_yaw / 2.0)
+        start.orientation.w = math.cos(scenario.task.start_yaw / 2.0)
         return response
 
     async def _room_info(self, request: RoomInfo.Request, response: RoomInfo.Response) -> Any:
@@ -416,10 +416,10 @@ def run_simulator(settings: SimSettings) -> int:
     simulator = SimulatorNode(settings, node=node)
     executor = DrainingExecutor()
     executor.add_node(node)
+    task = simulator.engine.scenario.task
     node.get_logger().info(
-        f"world {settings.world.name}: task {simulator.engine.scenario.pick_up} -> "
-        f"{simulator.engine.scenario.drop_off}, guest {simulator.engine.scenario.guest_name}, "
-        f"seed {settings.seed}, speed {settings.speed}")
+        f"world {settings.world.name}: task {task.pick_up} -> {task.drop_off}, "
+        f"guest {task.guest_name}, seed {settings.seed}, speed {settings.speed}")
     try:
         simulator.run(executor)
     except KeyboardInterrupt:

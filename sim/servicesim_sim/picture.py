@@ -19,7 +19,7 @@ import math
 import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import NoReturn, Protocol
+from typing import NoReturn
 
 import numpy as np
 from matplotlib.artist import Artist
@@ -28,8 +28,17 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrow, Patch, Rectangle
 
+from servicesim_sim.engine import SimEngine
 from servicesim_sim.scenario import ScenarioError, make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, AreaBox, OccupancyMap, World, WorldError, load_world
+from servicesim_sim.world import (
+    DEFAULT_WORLD,
+    AreaBox,
+    OccupancyMap,
+    TaskSpec,
+    World,
+    WorldError,
+    load_world,
+)
 
 PROG = "python -m servicesim_sim.picture"
 FORMATS = (".png", ".svg", ".pdf")
@@ -44,20 +53,6 @@ PEOPLE_STYLES = {  # role: (marker, colour, size, legend label)
     "walker": ("^", "#9467bd", 40, "walker"),
     "idler": ("o", "#7f7f7f", 30, "idler"),
 }
-
-
-class TaskLike(Protocol):
-    """What :func:`draw_task` reads: a world's ``TaskSpec`` or a simulator ``Scenario``."""
-
-    pick_up: str
-    drop_off: str
-    guest_name: str
-    guest_x: float
-    guest_y: float
-    start_area: str
-    start_x: float
-    start_y: float
-    start_yaw: float
 
 
 # --------------------------------------------------------------------------- drawing parts
@@ -90,7 +85,7 @@ def draw_areas(axes: Axes, areas: dict[str, AreaBox], *, font_size: float = 4.5)
                   rotation=90 if box.height > 1.5 * box.width else 0, color="#1a2a4a", zorder=4)
 
 
-def draw_task(axes: Axes, task: TaskLike, areas: dict[str, AreaBox]) -> None:
+def draw_task(axes: Axes, task: TaskSpec, areas: dict[str, AreaBox]) -> None:
     """The pick-up, drop-off and start areas highlighted, the start pose and the guest spot."""
     for role, name in (("pick_up", task.pick_up), ("drop_off", task.drop_off),
                        ("start", task.start_area)):
@@ -146,7 +141,7 @@ def known_extent(occupancy: OccupancyMap) -> tuple[float, float, float, float]:
     return low_x - MARGIN_M, low_y - MARGIN_M, high_x + MARGIN_M, high_y + MARGIN_M
 
 
-def draw_world(world: World, *, task: TaskLike | None,
+def draw_world(world: World, *, task: TaskSpec | None,
                people: Sequence[tuple[str, str, float, float]] | None) -> Figure:
     """A figure of ``world`` with ``task`` and ``people`` (either may be None: not drawn)."""
     low_x, low_y, high_x, high_y = known_extent(world.map)
@@ -171,7 +166,7 @@ def draw_world(world: World, *, task: TaskLike | None,
     return figure
 
 
-def title(world: World, task: TaskLike | None) -> str:
+def title(world: World, task: TaskSpec | None) -> str:
     text = f"world {world.name}: {len(world.areas)} target areas"
     if task is not None:
         text += (f" | task: fetch {task.guest_name} from {task.pick_up} to {task.drop_off}, "
@@ -180,20 +175,11 @@ def title(world: World, task: TaskLike | None) -> str:
 
 
 def task_and_people(world: World, *, seed: int | None
-                    ) -> tuple[TaskLike | None, list[tuple[str, str, float, float]] | None]:
-    """The task and people a simulator run on ``world`` starts with.
-
-    Falls back to the world's fixed task and no people if the engine cannot be imported.
-    """
-    try:
-        from servicesim_sim.engine import SimEngine
-    except ImportError as error:
-        print(f"{PROG}: note: no simulator engine ({error}); drawing the world's task only",
-              file=sys.stderr)
-        return world.task, None
+                    ) -> tuple[TaskSpec, list[tuple[str, str, float, float]]]:
+    """The task and people a simulator run on ``world`` starts with."""
     scenario = make_scenario(world, seed=seed)
     engine = SimEngine(world=world, scenario=scenario)
-    return scenario, engine.people_states()
+    return scenario.task, engine.people_states()
 
 
 # --------------------------------------------------------------------------- command line

@@ -13,13 +13,14 @@ navigation goals that abort, RFID messages that are lost, and slow referee servi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
-from servicesim_sim.world import AreaBox, DriftSpec, World
+from servicesim_sim.world import AreaBox, DriftSpec, TaskSpec, World
 
 GUEST_PADDING_M = 1.0  # the original spawns the guest 1.0 m inside a room's area
 NARROW_AREA_M = 2.0  # narrower than this (bathrooms, cubicle strips): the centre line instead
@@ -54,16 +55,7 @@ class Difficulty:
 class Scenario:
     """One run's task and random draws."""
 
-    pick_up: str
-    drop_off: str
-    guest_name: str
-    guest_x: float
-    guest_y: float
-    guest_yaw: float
-    start_area: str
-    start_x: float
-    start_y: float
-    start_yaw: float
+    task: TaskSpec
     drift_times: tuple[float, ...]  # sim seconds after the task started
     people_seed: int
     knob_seed: int
@@ -86,12 +78,14 @@ def make_scenario(world: World, *, seed: int | None = None,
     pick_up, drop_off, start_area = _three_areas(world, rng)
     guest_x, guest_y = _guest_spot(world, world.areas[pick_up], free, rng, difficulty)
     start_x, start_y = _start_spot(world, world.areas[start_area], free, rng)
-    return Scenario(
+    task = TaskSpec(
         pick_up=pick_up, drop_off=drop_off, guest_name=person_name(rng),
         guest_x=guest_x, guest_y=guest_y, guest_yaw=float(rng.uniform(-math.pi, math.pi)),
         start_area=start_area, start_x=start_x, start_y=start_y,
         start_yaw=float(rng.uniform(-math.pi, math.pi)),
-        drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
+    )
+    return Scenario(
+        task=task, drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
         people_seed=int(rng.integers(2**31)), knob_seed=int(rng.integers(2**31)),
         difficulty=difficulty, seed=seed,
     )
@@ -116,16 +110,12 @@ def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
     task = world.task
     assert task is not None
     rng = np.random.default_rng([SHIPPED_DRIFT_SEED, 1])
-    guest_x, guest_y = task.guest_x, task.guest_y
     if difficulty.guest_out_of_range:
         guest_x, guest_y = _out_of_range_spot(world, world.areas[task.pick_up],
                                               _spot_mask(world), rng)
+        task = dataclasses.replace(task, guest_x=guest_x, guest_y=guest_y)
     return Scenario(
-        pick_up=task.pick_up, drop_off=task.drop_off, guest_name=task.guest_name,
-        guest_x=guest_x, guest_y=guest_y, guest_yaw=task.guest_yaw,
-        start_area=task.start_area, start_x=task.start_x, start_y=task.start_y,
-        start_yaw=task.start_yaw,
-        drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
+        task=task, drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
         people_seed=int(rng.integers(2**31)), knob_seed=int(rng.integers(2**31)),
         difficulty=difficulty, seed=None,
     )
