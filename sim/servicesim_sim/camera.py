@@ -25,9 +25,10 @@ import math
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
+
+from servicesim_sim.world import OccupancyMap
 
 WIDTH = 640
 HEIGHT = 480
@@ -61,15 +62,6 @@ Pose = tuple[float, float, float]
 PersonState = tuple[str, str, float, float]  # (name, role, x, y)
 
 
-class OccupancyMapLike(Protocol):
-    """The part of ``world.OccupancyMap`` the camera reads."""
-
-    resolution: float
-    origin_x: float
-    origin_y: float
-
-    def blocked_mask(self) -> np.ndarray: ...
-
 
 def outfit(name: str, *, guest_name: str) -> tuple[Colour, Colour]:
     """(shirt, trousers) colours: blue over red for the guest, from the name for anyone else."""
@@ -84,7 +76,7 @@ def outfit(name: str, *, guest_name: str) -> tuple[Colour, Colour]:
 class FrontCamera:
     """A pinhole camera rendering one occupancy map at a fixed image size."""
 
-    occupancy_map: OccupancyMapLike
+    occupancy_map: OccupancyMap
     width: int = WIDTH
     height: int = HEIGHT
     hfov: float = HFOV
@@ -238,7 +230,7 @@ _last_camera: list[FrontCamera] = []
 
 
 def render_front_camera(*, robot: Pose, people: Sequence[PersonState], guest_name: str,
-                        occupancy_map: OccupancyMapLike, width: int = WIDTH,
+                        occupancy_map: OccupancyMap, width: int = WIDTH,
                         height: int = HEIGHT, hfov: float = HFOV) -> np.ndarray:
     """The front camera's picture (uint8, (height, width, 3), rgb8) from ``robot`` (x, y, yaw).
 

@@ -24,10 +24,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from scipy import ndimage
+
+from servicesim_sim.world import OccupancyMap
 
 FREE = 0
 MAX_INFLATED = 252
@@ -40,16 +41,6 @@ PERSON_RADIUS = 0.3  # m
 PERSON_INFLATION_RADIUS = 0.8  # m from a person's edge: the referee's 0.75 m "approximation"
 PERSON_COST_SCALING = 2.5  # gentler than the walls': keep a berth where there is room for one
 
-
-class OccupancyMapLike(Protocol):
-    """The part of ``world.OccupancyMap`` the costmap reads."""
-
-    grid: np.ndarray
-    resolution: float
-    origin_x: float
-    origin_y: float
-
-    def blocked_mask(self) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -130,7 +121,7 @@ class Costmap:
             of the zone where the referee books "approximation" penalties when there is room
     """
 
-    def __init__(self, occupancy_map: OccupancyMapLike, *, robot_radius: float = ROBOT_RADIUS,
+    def __init__(self, occupancy_map: OccupancyMap, *, robot_radius: float = ROBOT_RADIUS,
                  inflation_radius: float = INFLATION_RADIUS, cost_scaling_factor: float = 5.0,
                  resolution: float = 0.1, crop_margin: float = 1.0,
                  person_radius: float = PERSON_RADIUS, lidar: Lidar | None = None) -> None:
@@ -281,7 +272,7 @@ def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarr
     return np.any(gaps <= radius, axis=1)
 
 
-def _coarse_wall_distance(occupancy_map: OccupancyMapLike, walls: np.ndarray, *,
+def _coarse_wall_distance(occupancy_map: OccupancyMap, walls: np.ndarray, *,
                           resolution: float, margin: float) -> tuple[GridFrame, np.ndarray]:
     """The costmap's frame and, per coarse cell, metres to the nearest wall cell.
 

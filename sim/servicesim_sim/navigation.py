@@ -38,8 +38,9 @@ from typing import Literal
 
 import numpy as np
 
-from servicesim_sim.costmap import INSCRIBED, Costmap, OccupancyMapLike
+from servicesim_sim.costmap import INSCRIBED, Costmap
 from servicesim_sim.planner import ComputePathToPoseError, Planner, PlanResult, path_length
+from servicesim_sim.world import OccupancyMap
 
 NavigationStatus = Literal["idle", "running", "succeeded", "aborted", "canceled"]
 Pose = tuple[float, float, float]
@@ -189,7 +190,7 @@ class Navigator:
     ``path`` describe the current (or last) goal, like NavigateToPose's feedback and result.
     """
 
-    def __init__(self, occupancy_map: OccupancyMapLike, *, max_speed: float = 0.5,
+    def __init__(self, occupancy_map: OccupancyMap, *, max_speed: float = 0.5,
                  max_turn_rate: float = 1.0, xy_tolerance: float = 0.3,
                  yaw_tolerance: float = 0.262, rng: np.random.Generator,
                  tuning: Tuning | None = None) -> None:

@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
+
+from servicesim_sim.world import OccupancyMap
 
 WALKER = "walker"
 IDLER = "idler"
@@ -52,16 +53,6 @@ PLACEMENT_DRAWS = 200  # random spots drawn per idler before giving up
 
 KeepClear = tuple[float, float, float]  # (x, y, radius) in metres
 
-
-class OccupancyMapLike(Protocol):
-    """The part of ``world.OccupancyMap`` this module reads."""
-
-    grid: np.ndarray
-    resolution: float
-    origin_x: float
-    origin_y: float
-
-    def blocked_mask(self) -> np.ndarray: ...
 
 
 @dataclass
@@ -92,7 +83,7 @@ class Clearance:
     origin_y: float
 
     @classmethod
-    def of(cls, occupancy_map: OccupancyMapLike) -> Clearance:
+    def of(cls, occupancy_map: OccupancyMap) -> Clearance:
         blocked = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
         occupied = blocked & (np.asarray(occupancy_map.grid) != -1)
         rows, cols = np.nonzero(occupied if occupied.any() else ~blocked)
@@ -337,7 +328,7 @@ def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> lis
 class Crowd:
     """All walkers and idlers of one run."""
 
-    def __init__(self, occupancy_map: OccupancyMapLike, *, rng: np.random.Generator,
+    def __init__(self, occupancy_map: OccupancyMap, *, rng: np.random.Generator,
                  walkers: int, idlers: int, taken_names: set[str],
                  keep_clear: list[KeepClear]) -> None:
         if walkers < 0 or idlers < 0:
