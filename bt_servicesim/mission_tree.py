@@ -27,6 +27,7 @@ LEAF_MODULES = (
     "bt_servicesim.goals",
     "bt_servicesim.readiness",
     "bt_servicesim.area_conditions",
+    "bt_servicesim.guest_localisation",
 )
 
 

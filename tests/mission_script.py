@@ -24,6 +24,8 @@ from bt_servicesim.geometry import Box, Pose2D
 
 Status = py_trees.common.Status
 KEEP_REAL = ("SimTimeout", "SimWait")
+#: Input port types kept from the real leaf, so that constants in the tree file still convert.
+SCALARS = (float, int, str, bool)
 NOT_LEAVES = {"root", "BehaviorTree", "SubTree", "TreeNodesModel", "Sequence", "Fallback",
               "Selector", "Parallel"}
 
@@ -35,7 +37,7 @@ OUTPUT_VALUES: dict[str, Any] = {
     "jittered": Pose2D(0.1, 1.3), "waypoints": [Pose2D(1.0, 1.0), Pose2D(-1.0, 1.0)],
     "robot_pose": Pose2D(0.0, 0.0), "occupancy": object(), "actors_in_range": [],
     "rfid_age": 0.0, "guest_last_seen": Pose2D(-5.0, 5.0), "distance_remaining": 0.0,
-    "error_code": 0, "error_msg": "",
+    "error_code": 0, "error_msg": "", "rfid_history": object(),
 }
 
 
@@ -105,7 +107,10 @@ def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None)
         return {port: PortInformation(data_type=data_type, required=False) for port in names}
 
     settings = ports - real_inputs - real_outputs
-    inputs = {**port_info(ports & real_inputs, object), **port_info(settings, str)}
+    scalars = {port for port in ports & real_inputs
+               if real is not None and real.input_ports()[port].data_type in SCALARS}
+    inputs = {**port_info(ports & real_inputs - scalars, object), **port_info(settings, str),
+              **{port: real.input_ports()[port] for port in scalars}}
     outputs = port_info(ports & real_outputs, object)
 
     def initialise(self: Any) -> None:

@@ -138,6 +138,60 @@ def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
     assert script.count("CallPickUpGuest") == 1
 
 
+def test_the_robot_closes_in_on_the_guest_before_asking_for_them() -> None:
+    script = Script()
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    calls = script.calls
+    order = [calls.index(next(c for c in calls if c.endswith(leaf))) for leaf in (
+        "EstimateGuestPosition", "NavigateToGuest", "GuestSteadilyInRange", "CallPickUpGuest")]
+    assert order == sorted(order)
+
+
+def test_without_an_estimate_or_a_way_there_the_pick_up_is_asked_for_from_where_it_stands(
+) -> None:
+    for trouble in ("EstimateGuestPosition", "NavigateToGuest"):
+        script = Script({trouble: [Status.FAILURE]})
+        status, _ = run_mission(script)
+        assert status == Status.SUCCESS
+        assert script.count("NavigateToGuest") == (trouble == "NavigateToGuest")
+        assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_guest_not_steadily_in_range_is_estimated_again_not_asked_for() -> None:
+    script = Script({"GuestSteadilyInRange": [Status.FAILURE, Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.EstimateGuestPosition") == 3
+    assert script.count("Pickup.CallPickUpGuest") == 1
+    assert script.count("PlanExploration") == 0
+
+
+def test_a_guest_who_never_stays_in_range_is_searched_for_again() -> None:
+    script = Script({"GuestSteadilyInRange": [Status.FAILURE] * 4,
+                     "GuestAlreadyInRange": [Status.SUCCESS, Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.GuestSteadilyInRange") == 5
+    assert script.count("PlanExploration") == 1
+    assert script.count("Pickup.CallPickUpGuest") == 1
+
+
+def test_pick_ups_refused_again_and_again_are_retried_while_time_remains() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE] * 8})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallPickUpGuest") == 9
+
+
+def test_a_pick_up_never_granted_ends_the_mission_at_the_retry_budget() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE] * 100})
+    status, _ = run_mission(script)
+    assert status == Status.FAILURE
+    assert script.count("CallPickUpGuest") == 12  # the PickUpRetry budget
+    assert script.count("GetDropOffArea") == 0
+
+
 def test_a_failed_pick_up_is_retried_not_ignored() -> None:
     script = Script({"CallPickUpGuest": [Status.FAILURE]})
     status, _ = run_mission(script)
@@ -213,5 +267,5 @@ def test_the_sim_time_waits_follow_the_clock_not_the_wall() -> None:
     script = Script()
     status, clock = run_mission(script)
     assert status == Status.SUCCESS
-    waited = 0.3 + 2.0  # SettleBeforePickUp + LetGuestCatchUp
+    waited = 2.0  # LetGuestCatchUp
     assert clock.nanoseconds / 1e9 - 1.0 >= waited

@@ -1,0 +1,466 @@
+"""Where the guest stands, from RFID name lists and odometry alone, and how to close in on them.
+
+RFID says only *who* is within 2.0 m of the robot, ten times a sim second, and says nothing at all
+while nobody is near. Exploration stops the moment the guest's name first appears, i.e. with the
+guest at the very edge of range — exactly the distance at which the referee's pick-up starts to
+refuse. So the mission closes in before asking for the guest:
+
+- :class:`RecordRfidReadings` runs every tick beside the topic readers and keeps a bounded
+  :class:`RfidHistory`: each new RFID message with the robot's position then, and, after a
+  silence long enough not to be a lost message, an empty reading (nobody in range) now and then.
+- :func:`estimate_guest` is range-only localisation on that history: the guest stands on a free
+  cell within 2.0 m of where the robot heard them and beyond 2.0 m of where it recently did not.
+  Each cell of the map near the sightings counts the robot positions it contradicts; the cells
+  that contradict fewest are the guest's possible spots and their centroid is the estimate. So
+  a silence misread as absence, or a guest who moved, leaves the best cells, not an empty set.
+- :func:`approach_goal` picks a reachable spot, about 1.1 m from the estimate (outside the
+  0.75 m the referee penalises, clear of the costmap's berth around people), from which most
+  of the possible spots lie within pick-up reach. An estimate from an edge sighting is a
+  crescent; the robot closes in, hears more and estimates again.
+- :class:`GuestSteadilyInRange` holds the pick-up back until every reading over the last half
+  sim second, taken while the robot stands, names the guest.
+
+Only the latest run of sightings locates the guest (a guest who followed the robot and then
+drifted has moved since the older ones; :class:`GuestApproachGoal`'s ``sighting_gap`` says how
+long a pause ends a run); readings where they were not heard count from the last
+:data:`MEMORY` sim seconds.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections import deque
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+import py_trees
+from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
+
+from bt_servicesim.geometry import Pose2D
+from bt_servicesim.goals import PERSON_CLEARANCE, RFID_RANGE, ROBOT_CLEARANCE
+from bt_servicesim.occupancy import OccupancyGrid2D
+from bt_servicesim.sim_time import clock_from_setup_kwargs, sim_now_s
+
+__all__ = [
+    "GuestApproachGoal",
+    "GuestEstimate",
+    "GuestSteadilyInRange",
+    "RecordRfidReadings",
+    "RfidHistory",
+    "RfidReading",
+    "approach_goal",
+    "estimate_guest",
+]
+
+Status = py_trees.common.Status
+Ports = dict[str, PortInformation]
+Point = tuple[float, float]
+
+HISTORY_LENGTH = 1200
+"""Readings kept: two sim minutes at the sensor's 10 Hz."""
+SILENCE = 0.35
+"""Sim seconds without an RFID message after which nobody is taken to be in range (the sensor
+is silent then; three lost messages in a row are rarer than one in a hundred)."""
+READING_PERIOD = 0.1
+"""The sensor's period: silence is recorded as an empty reading at most this often."""
+MEMORY = 60.0
+"""Sim seconds of readings without the guest that still constrain where they are."""
+SIGHTING_GAP = 5.0
+"""A pause longer than this between sightings starts a new run of sightings (by default: a
+guest who may have moved; a guest waiting to be picked up stands still, and the mission may
+then allow any pause within :data:`MEMORY`)."""
+RANGE_TOLERANCE = 0.1
+"""Metres of slack at the RFID range's edge (odometry and a tick's travel)."""
+ESTIMATE_SPACING = 0.1
+"""Metres between the cells the estimate weighs."""
+POSITION_ROUNDING = 0.1
+"""Readings whose robot positions agree to this are one piece of evidence."""
+APPROACH_DISTANCE = 1.1
+"""Metres from the estimate an approach goal prefers (the referee penalises within 0.75 m)."""
+APPROACH_RADIUS = 1.8
+"""How far from the estimate an approach goal may lie."""
+PICKUP_REACH = 1.8
+"""A possible spot counts as within reach of a goal this close (2.0 m less the goal tolerance)."""
+TOO_CLOSE = 0.8
+"""A possible spot this close to a goal puts the robot in the guest's personal space."""
+CLOSE_ENOUGH = 1.5
+"""A robot this near the estimate need not move if no spot is clearly better ..."""
+STAY_SLACK = 0.1
+"""... clearly better meaning this much more of the possible spots in reach."""
+STEADY_FOR = 0.5
+"""Sim seconds of readings that must all name the guest before a pick-up."""
+STEADY_READINGS = 3
+"""At least this many readings in that time (lost messages thin them out)."""
+STEADY_PATIENCE = 2.5
+"""Sim seconds :class:`GuestSteadilyInRange` waits for a steady reading before failing."""
+
+
+# ============================================================================ the history
+@dataclass(frozen=True)
+class RfidReading:
+    """Who the RFID sensor had in range at sim time ``stamp``, with the robot at (x, y)."""
+
+    stamp: float
+    x: float
+    y: float
+    names: frozenset[str]
+
+
+class RfidHistory:
+    """The latest RFID readings, oldest first, at most ``length`` of them."""
+
+    def __init__(self, length: int = HISTORY_LENGTH) -> None:
+        self._readings: deque[RfidReading] = deque(maxlen=length)
+
+    def __repr__(self) -> str:
+        if not self._readings:
+            return "RfidHistory(empty)"
+        return f"RfidHistory({len(self._readings)} readings, last at {self.latest.stamp:.1f} s)"
+
+    def __len__(self) -> int:
+        return len(self._readings)
+
+    def __iter__(self) -> Iterator[RfidReading]:
+        return iter(self._readings)
+
+    @property
+    def latest(self) -> RfidReading:
+        return self._readings[-1]
+
+    def add(self, reading: RfidReading) -> None:
+        self._readings.append(reading)
+
+    def since(self, stamp: float) -> list[RfidReading]:
+        """The readings taken at or after ``stamp``, oldest first."""
+        recent: list[RfidReading] = []
+        for reading in reversed(self._readings):
+            if reading.stamp < stamp:
+                break
+            recent.append(reading)
+        return recent[::-1]
+
+
+# ============================================================================ the estimate
+@dataclass(frozen=True)
+class GuestEstimate:
+    """Where the guest may stand: the possible spots and their centroid."""
+
+    x: float
+    y: float
+    spots: np.ndarray
+    """(n, 2) centres of the cells contradicting fewest robot positions."""
+    sightings: int
+    """Distinct robot positions the guest was heard from."""
+
+
+def estimate_guest(
+    history: Iterable[RfidReading], guest: str, grid: OccupancyGrid2D, now: float,
+    sighting_gap: float = SIGHTING_GAP,
+) -> GuestEstimate | None:
+    """Range-only estimate of the guest's position; None if they have not been heard lately.
+
+    The guest's latest run of sightings (no pause over ``sighting_gap``) gives the
+    positions they were within RFID range of; every reading of the last :data:`MEMORY` sim
+    seconds without them, a position they were beyond it. Cells where a person may stand
+    (:data:`~bt_servicesim.goals.PERSON_CLEARANCE` from walls) near the sightings are scored by
+    how many distinct positions they contradict; those contradicting fewest are the possible
+    spots (none, when the readings agree).
+    """
+    readings = [reading for reading in history if reading.stamp >= now - MEMORY]
+    heard = _latest_sightings(readings, guest, sighting_gap)
+    if heard.size == 0:
+        return None
+    unheard = _distinct([(r.x, r.y) for r in readings if guest not in r.names])
+    cells = _candidate_cells(grid, heard)
+    if cells.size == 0:
+        return None
+    contradictions = (_count_beyond(cells, heard, RFID_RANGE + RANGE_TOLERANCE)
+                      + _count_within(cells, unheard, RFID_RANGE - RANGE_TOLERANCE))
+    spots = cells[contradictions == contradictions.min()]
+    centre = spots.mean(axis=0)
+    return GuestEstimate(float(centre[0]), float(centre[1]), spots, len(heard))
+
+
+def _latest_sightings(readings: list[RfidReading], guest: str, gap: float) -> np.ndarray:
+    """Distinct robot positions of the guest's latest run of sightings, (k, 2)."""
+    stamps = [r.stamp for r in readings if guest in r.names]
+    if not stamps:
+        return np.zeros((0, 2))
+    start = stamps[0]
+    for before, after in itertools.pairwise(stamps):
+        if after - before > gap:
+            start = after
+    return _distinct([(r.x, r.y) for r in readings if guest in r.names and r.stamp >= start])
+
+
+def _distinct(points: list[Point]) -> np.ndarray:
+    """The points rounded to :data:`POSITION_ROUNDING`, without repeats, (k, 2)."""
+    if not points:
+        return np.zeros((0, 2))
+    rounded = np.round(np.asarray(points, dtype=float) / POSITION_ROUNDING) * POSITION_ROUNDING
+    return np.unique(rounded, axis=0)
+
+
+def _candidate_cells(grid: OccupancyGrid2D, heard: np.ndarray) -> np.ndarray:
+    """Centres (n, 2) of cells a person may stand on within range of some sighting."""
+    reach = RFID_RANGE + RANGE_TOLERANCE
+    (min_x, min_y), (max_x, max_y) = heard.min(axis=0) - reach, heard.max(axis=0) + reach
+    window = grid.window(min_x, min_y, max_x, max_y)
+    if window.is_empty:
+        return np.zeros((0, 2))
+    stride = max(1, round(ESTIMATE_SPACING / grid.resolution))
+    xs, ys = np.meshgrid(window.xs[::stride], window.ys[::stride])
+    room = grid.clearances[window.rows, window.cols][::stride, ::stride]
+    cells = np.column_stack([xs[room >= PERSON_CLEARANCE], ys[room >= PERSON_CLEARANCE]])
+    near = _count_within(cells, heard, reach) > 0
+    return cells[near]
+
+
+def _distances(cells: np.ndarray, points: np.ndarray) -> np.ndarray:
+    return np.hypot(cells[:, None, 0] - points[None, :, 0], cells[:, None, 1] - points[None, :, 1])
+
+
+def _count_within(cells: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
+    """For each cell, how many points lie within ``radius``."""
+    if points.size == 0:
+        return np.zeros(len(cells), dtype=int)
+    return (_distances(cells, points) <= radius).sum(axis=1)
+
+
+def _count_beyond(cells: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
+    """For each cell, how many points lie farther than ``radius``."""
+    if points.size == 0:
+        return np.zeros(len(cells), dtype=int)
+    return (_distances(cells, points) > radius).sum(axis=1)
+
+
+# ============================================================================ the approach
+def approach_goal(
+    estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D
+) -> Pose2D | None:
+    """A reachable spot near the estimate, facing it, from which the guest is within reach.
+
+    Every reachable cell within :data:`APPROACH_RADIUS` of the estimate is scored by the share
+    of the possible spots within :data:`PICKUP_REACH` of it, less the share within
+    :data:`TOO_CLOSE`, less a little for straying from :data:`APPROACH_DISTANCE` from the
+    estimate and for the distance from the robot. For a compact estimate the best cell lies
+    about 1.1 m from it on the robot's side; for an estimate split in two (a robot that drove
+    a straight line cannot tell its left from its right) it may lie between the two halves.
+    None if the robot already stands :data:`CLOSE_ENOUGH` and no cell scores clearly better
+    (:data:`STAY_SLACK`), or nothing near is reachable.
+    """
+    cells = _reachable_near(estimate, grid, grid.reachable_from(robot.x, robot.y,
+                                                                ROBOT_CLEARANCE))
+    if cells.size == 0:
+        return None
+    scores = _score(estimate, cells, robot)
+    here = _score(estimate, np.array([[robot.x, robot.y]]), robot)[0]
+    near = math.hypot(estimate.x - robot.x, estimate.y - robot.y) <= CLOSE_ENOUGH
+    if near and here >= scores.max() - STAY_SLACK:
+        return None
+    spot = cells[int(np.argmax(scores))]
+    yaw = math.atan2(estimate.y - spot[1], estimate.x - spot[0])
+    return Pose2D(float(spot[0]), float(spot[1]), yaw)
+
+
+def _reachable_near(
+    estimate: GuestEstimate, grid: OccupancyGrid2D, reachable: np.ndarray
+) -> np.ndarray:
+    """Centres (n, 2) of reachable cells within APPROACH_RADIUS of the estimate."""
+    window = grid.window(estimate.x - APPROACH_RADIUS, estimate.y - APPROACH_RADIUS,
+                         estimate.x + APPROACH_RADIUS, estimate.y + APPROACH_RADIUS)
+    if window.is_empty:
+        return np.zeros((0, 2))
+    xs, ys = np.meshgrid(window.xs, window.ys)
+    keep = reachable[window.rows, window.cols] & (
+        np.hypot(xs - estimate.x, ys - estimate.y) <= APPROACH_RADIUS)
+    return np.column_stack([xs[keep], ys[keep]])
+
+
+def _score(estimate: GuestEstimate, cells: np.ndarray, robot: Pose2D) -> np.ndarray:
+    """How well each cell (n, 2) serves as the place to ask for the guest from."""
+    distances = _distances(cells, estimate.spots)
+    in_reach = (distances <= PICKUP_REACH).mean(axis=1)
+    crowding = (distances < TOO_CLOSE).mean(axis=1)
+    off_ring = np.abs(np.hypot(cells[:, 0] - estimate.x, cells[:, 1] - estimate.y)
+                      - APPROACH_DISTANCE)
+    travel = np.hypot(cells[:, 0] - robot.x, cells[:, 1] - robot.y)
+    return in_reach - crowding - 0.1 * off_ring - 1e-3 * travel
+
+
+# ============================================================================ behaviours
+class RecordRfidReadings(BehaviourWithPorts):
+    """Append each new RFID reading, with the robot's position, to ``rfid_history``; SUCCESS.
+
+    A new message shows as a new stamp (now − ``rfid_age``). Silence longer than
+    :data:`SILENCE` is recorded as an empty reading every :data:`READING_PERIOD`. The same
+    :class:`RfidHistory` object stays on the blackboard for the whole run.
+
+    Args:
+        name: the behaviour's name
+        length: readings kept
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "actors_in_range": PortInformation(data_type=list[str], required=True),
+        "rfid_age": PortInformation(data_type=float, required=True),
+        "robot_pose": PortInformation(data_type=Pose2D, required=True),
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "rfid_history": PortInformation(data_type=RfidHistory, required=False),
+    }
+
+    def __init__(self, name: str = "RecordRfidReadings", length: int = HISTORY_LENGTH,
+                 **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.history = RfidHistory(int(length))
+        self._clock: Any = None
+        self._last_stamp = -math.inf
+
+    def setup(self, **kwargs: Any) -> None:
+        """Take the clock from ``kwargs["node"]``."""
+        self._clock = clock_from_setup_kwargs(self.name, kwargs)
+
+    def update(self) -> Status:
+        """Record the reading, if there is a new one."""
+        self._set_output("rfid_history", self.history)
+        try:
+            names, age = self.get_input("actors_in_range"), float(self.get_input("rfid_age"))
+            pose = self.get_input("robot_pose")
+        except NoDataAvailable as error:
+            self.feedback_message = f"nothing to record yet: {error}"
+            return Status.SUCCESS
+        now = sim_now_s(self._require_clock())
+        reading = self._new_reading(now, age, names, pose)
+        if reading is not None:
+            self.history.add(reading)
+            self._last_stamp = reading.stamp
+        self.feedback_message = repr(self.history)
+        return Status.SUCCESS
+
+    def _new_reading(
+        self, now: float, age: float, names: list[str], pose: Pose2D
+    ) -> RfidReading | None:
+        if age > SILENCE:
+            if now - self._last_stamp < READING_PERIOD - 1e-6:
+                return None
+            return RfidReading(now, pose.x, pose.y, frozenset())
+        stamp = now - age
+        if abs(stamp - self._last_stamp) < READING_PERIOD / 4.0:
+            return None
+        return RfidReading(stamp, pose.x, pose.y, frozenset(names))
+
+    def _require_clock(self) -> Any:
+        if self._clock is None:
+            raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
+        return self._clock
+
+
+class GuestApproachGoal(BehaviourWithPorts):
+    """Estimate where the guest stands and write a goal close to them (``goal``).
+
+    SUCCESS with the goal; FAILURE if the guest has not been heard lately, no approach spot is
+    reachable, or the robot is already close enough — then the mission asks for the guest from
+    where it stands.
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "guest_name": PortInformation(data_type=str, required=True),
+        "rfid_history": PortInformation(data_type=RfidHistory, required=True),
+        "occupancy": PortInformation(data_type=OccupancyGrid2D, required=True),
+        "robot_pose": PortInformation(data_type=Pose2D, required=True),
+        "sighting_gap": PortInformation(
+            data_type=float, required=False,
+            description="sim s of pause that ends a run of sightings (long: a waiting guest)"),
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "goal": PortInformation(data_type=Pose2D, required=False),
+    }
+
+    def __init__(self, name: str = "GuestApproachGoal", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self._clock: Any = None
+
+    def setup(self, **kwargs: Any) -> None:
+        """Take the clock from ``kwargs["node"]``."""
+        self._clock = clock_from_setup_kwargs(self.name, kwargs)
+
+    def update(self) -> Status:
+        """Estimate, then place the goal."""
+        try:
+            guest, history = self.get_input("guest_name"), self.get_input("rfid_history")
+            grid, robot = self.get_input("occupancy"), self.get_input("robot_pose")
+        except (NoDataAvailable, TypeError) as error:
+            self.feedback_message = f"cannot estimate the guest's position: {error}"
+            return Status.FAILURE
+        estimate = estimate_guest(history, guest, grid, sim_now_s(self._clock),
+                                  self._sighting_gap())
+        if estimate is None:
+            self.feedback_message = f"{guest} not heard lately: no estimate"
+            return Status.FAILURE
+        goal = approach_goal(estimate, grid, robot)
+        where = f"{guest} near ({estimate.x:.2f}, {estimate.y:.2f})"
+        if goal is None:
+            self.feedback_message = f"{where}: already close, or no reachable spot near"
+            return Status.FAILURE
+        self._set_output("goal", goal)
+        self.feedback_message = f"{where}: approach ({goal.x:.2f}, {goal.y:.2f})"
+        return Status.SUCCESS
+
+    def _sighting_gap(self) -> float:
+        try:
+            return float(self.get_input("sighting_gap"))
+        except (NoDataAvailable, TypeError, ValueError):
+            return SIGHTING_GAP
+
+
+class GuestSteadilyInRange(BehaviourWithPorts):
+    """SUCCESS once every reading over the last :data:`STEADY_FOR` sim s names the guest.
+
+    Only readings taken since the behaviour started count (the robot stands by then). RUNNING
+    while too few have come; FAILURE at once on a reading without the guest, or after
+    :data:`STEADY_PATIENCE` sim s without a steady run.
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "guest_name": PortInformation(data_type=str, required=True),
+        "rfid_history": PortInformation(data_type=RfidHistory, required=True),
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {}
+
+    def __init__(self, name: str = "GuestSteadilyInRange", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self._clock: Any = None
+        self._started = 0.0
+
+    def setup(self, **kwargs: Any) -> None:
+        """Take the clock from ``kwargs["node"]``."""
+        self._clock = clock_from_setup_kwargs(self.name, kwargs)
+
+    def initialise(self) -> None:
+        """Readings count from now."""
+        self._started = sim_now_s(self._clock)
+
+    def update(self) -> Status:
+        """Judge the readings since the start."""
+        try:
+            guest, history = self.get_input("guest_name"), self.get_input("rfid_history")
+        except (NoDataAvailable, TypeError) as error:
+            self.feedback_message = f"cannot check the guest: {error}"
+            return Status.FAILURE
+        now = sim_now_s(self._clock)
+        readings = history.since(self._started)
+        if any(guest not in reading.names for reading in readings):
+            self.feedback_message = f"{guest} dropped out of RFID range"
+            return Status.FAILURE
+        if now - self._started >= STEADY_FOR and len(readings) >= STEADY_READINGS:
+            self.feedback_message = f"{guest} steadily in range ({len(readings)} readings)"
+            return Status.SUCCESS
+        if now - self._started > STEADY_PATIENCE:
+            self.feedback_message = f"too few readings of {guest} in {STEADY_PATIENCE} sim s"
+            return Status.FAILURE
+        self.feedback_message = f"{guest} in range on {len(readings)} readings so far"
+        return Status.RUNNING
