@@ -54,6 +54,7 @@ class MissionExecutive:
         self.outcome: Status | None = None
         self.ticks = 0
         self._timer = None
+        self._phase: tuple[int, str] = (-1, "-")
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
         """Create every behaviour's ROS handles (publishers, clients, subscriptions)."""
@@ -90,7 +91,15 @@ class MissionExecutive:
         self.tree.root.stop(Status.INVALID)
 
     def phase(self) -> str:
-        """The running child of the ``Mission`` sequence (BeginTask, Pickup, ...), else "-"."""
+        """The running child of the ``Mission`` sequence (BeginTask, Pickup, ...), else "-".
+
+        The run asks after every callback it spins; the answer changes only with a tick.
+        """
+        if self._phase[0] != self.ticks:
+            self._phase = (self.ticks, self._find_phase())
+        return self._phase[1]
+
+    def _find_phase(self) -> str:
         node = self.tree.root.tip()
         while node is not None and node.parent is not None:
             if short_name(node.parent) == MISSION_SEQUENCE:

@@ -9,6 +9,13 @@ snapshot log (``tree_log.jsonl``) and its final tick (``final_tree.txt``) when t
 a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS traffic (``run.mcap``).
 They are written on every way out, Ctrl-C included; a record that cannot be written costs a
 warning line, never the report.
+
+The executive's node is spun by rclpy's C++ ``EventsExecutor``: with the simulator at 50x real
+time the node takes thousands of messages a wall second (clock, odometry, RFID, the 50 Hz
+score the recording keeps), and the Python ``SingleThreadedExecutor`` rebuilds its wait set
+from every entity of the node for each of them. The C++ executor runs the same callbacks on
+the same thread without that per-message Python work (``benchmarks/sim_rtf.py`` measures
+the pair).
 """
 
 from __future__ import annotations
@@ -21,14 +28,15 @@ from typing import Any
 
 import py_trees
 import rclpy
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import Executor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from servicesim_competition.srv import NewTask
 
 from bt_servicesim.dump import ShadowTree
 from bt_servicesim.executive import Executive
+from bt_servicesim.executive_node import ExecutiveNode
 from bt_servicesim.progress import ProgressView
 from bt_servicesim.recording import MCAP_NAME, McapRecorder, TaskTopic, TreeTopic
 from bt_servicesim.referee_monitor import RefereeMonitor
@@ -80,9 +88,8 @@ class MissionRun:
     def execute(self) -> int:
         self.simulator.start()
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-        node = Node("bt_servicesim_executive",
-                    parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
-        executor = SingleThreadedExecutor()
+        node = ExecutiveNode("bt_servicesim_executive")
+        executor = EventsExecutor()
         executor.add_node(node)
         monitor = RefereeMonitor(node)
         executive = self.make_executive(node)
@@ -104,7 +111,7 @@ class MissionRun:
         rclpy.try_shutdown()
         return code
 
-    def _run(self, node: Node, executor: SingleThreadedExecutor, monitor: RefereeMonitor,
+    def _run(self, node: Node, executor: Executor, monitor: RefereeMonitor,
              executive: Executive, records: RunRecords) -> int:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
@@ -134,7 +141,7 @@ class MissionRun:
                 executive.outcome) else "the mission did not end"
         return EXIT_COMPLETED if monitor.completed else EXIT_FAILED
 
-    def _wait_for_simulator(self, node: Node, executor: SingleThreadedExecutor) -> int | None:
+    def _wait_for_simulator(self, node: Node, executor: Executor) -> int | None:
         """Until /clock runs and the referee answers; an exit code if the simulator refused."""
         client = node.create_client(NewTask, "/servicesim/new_task")
         deadline = time.monotonic() + STARTUP_LIMIT_S
@@ -178,11 +185,11 @@ class MissionRun:
               f"report: {self.settings.out / REPORT_NAME}")
 
     @staticmethod
-    def _spin_for(executor: SingleThreadedExecutor, seconds: float) -> None:
+    def _spin_for(executor: Executor, seconds: float) -> None:
         MissionRun._spin_until(executor, lambda: False, seconds)
 
     @staticmethod
-    def _spin_until(executor: SingleThreadedExecutor, done: Any, seconds: float) -> None:
+    def _spin_until(executor: Executor, done: Any, seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)

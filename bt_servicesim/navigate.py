@@ -26,6 +26,7 @@ from rclpy.node import Node
 from rclpy.task import Future
 from servicesim_competition.action import NavigateToPose as NavigateToPoseAction
 
+from bt_servicesim.executive_node import shared_action_client
 from bt_servicesim.geometry import Pose2D
 from bt_servicesim.sim_time import SimStopwatch, node_from_setup_kwargs
 
@@ -95,7 +96,7 @@ class NavigateToPose(BehaviourWithPorts):
     def setup(self, **kwargs: Any) -> None:
         """Create the action client on ``kwargs["node"]``."""
         self.node = node_from_setup_kwargs(self.name, kwargs)
-        self.client = ActionClient(self.node, NavigateToPoseAction, self.action)
+        self.client = shared_action_client(self.node, NavigateToPoseAction, self.action)
         self._overall = SimStopwatch(self.node.get_clock())
         self._silence = SimStopwatch(self.node.get_clock())
 

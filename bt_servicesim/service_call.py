@@ -30,6 +30,7 @@ from rclpy.task import Future
 from servicesim_competition import srv
 from std_srvs.srv import Empty
 
+from bt_servicesim.executive_node import shared_client
 from bt_servicesim.geometry import Box, Pose2D
 from bt_servicesim.sim_time import SimStopwatch, node_from_setup_kwargs
 
@@ -103,7 +104,7 @@ class ServiceCall(BehaviourWithPorts):
     def setup(self, **kwargs: Any) -> None:
         """Create the client on ``kwargs["node"]``."""
         self.node = node_from_setup_kwargs(self.name, kwargs)
-        self.client = self.node.create_client(self.SERVICE_TYPE, self.service)
+        self.client = shared_client(self.node, self.SERVICE_TYPE, self.service)
         self._server_wait = SimStopwatch(self.node.get_clock())
         self._answer_wait = SimStopwatch(self.node.get_clock())
 

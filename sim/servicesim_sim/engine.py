@@ -273,6 +273,8 @@ class SimEngine:
     def _book_contacts(self, dt: float) -> None:
         gaps = self._person_gaps()
         wall_gap = self.robot.wall_gap()
+        if wall_gap >= OBJECT_APPROXIMATION_M and gaps.min() >= PERSON_APPROXIMATION_M:
+            return  # nobody and nothing near: the common case, nothing to book
         touching = np.clip(PERSON_BODY_RADIUS - gaps, 0.0, None)
         self.referee.contact(person_depth=float(touching.sum()),
                              object_depth=max(0.0, -wall_gap), dt=dt)

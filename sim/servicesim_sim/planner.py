@@ -38,6 +38,11 @@ from servicesim_sim.costmap import INSCRIBED, MAX_INFLATED, Costmap
 
 Point = tuple[float, float]
 
+#: The first search stops at this many times the straight-line distance to the goal, plus
+#: the margin (in cells); only a goal beyond that is searched for over the whole grid.
+SEARCH_BOUND_FACTOR = 1.6
+SEARCH_BOUND_MARGIN_CELLS = 30.0
+
 # The 8 grid steps: (row offset, column offset).
 STEPS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 
@@ -162,10 +167,18 @@ class Planner:
         source_index, target_index = source[0] * cols + source[1], target[0] * cols + target[1]
         if source_index == target_index:
             return np.array([source_index])
-        distances, predecessors = csgraph.dijkstra(
-            self._graph(costs, with_people=with_people), directed=True, indices=source_index,
-            return_predecessors=True)
-        if not np.isfinite(distances[target_index]):
+        graph = self._graph(costs, with_people=with_people)
+        # First a search bounded a little past the straight-line distance (most plans), then,
+        # if the goal lies beyond that bound, the whole grid.
+        d_row, d_col = abs(source[0] - target[0]), abs(source[1] - target[1])
+        octile = max(d_row, d_col) + (math.sqrt(2.0) - 1.0) * min(d_row, d_col)
+        for limit in (SEARCH_BOUND_FACTOR * octile + SEARCH_BOUND_MARGIN_CELLS, np.inf):
+            distances, predecessors = csgraph.dijkstra(
+                graph, directed=True, indices=source_index, return_predecessors=True,
+                limit=limit)
+            if np.isfinite(distances[target_index]):
+                break
+        else:
             return None
         chain = [target_index]
         while chain[-1] != source_index:
