@@ -105,7 +105,7 @@ class MissionRun:
         finally:
             self.simulator.stop()
         records.finish(title=self._title(monitor))
-        self._finish(monitor, code)
+        self._finish(monitor, code, executive)
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
@@ -168,7 +168,7 @@ class MissionRun:
                 f"{done}/4 checkpoints, score {fields['score']:.1f}, "
                 f"{fields['sim_time_s']:.0f} s sim")
 
-    def _finish(self, monitor: RefereeMonitor, code: int) -> None:
+    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
         report: dict[str, Any] = {
             **monitor.report_fields(),
             "wall_time_s": round(time.monotonic() - self.started_wall, 3),
@@ -177,6 +177,9 @@ class MissionRun:
             "executive": self.settings.executive,
             "exit_code": code,
             "failure": self.failure,
+            # where a failed run stood: the phase and the running behaviour with its feedback
+            "last_activity": (f"{executive.phase()}: {executive.activity()}"
+                              if self.failure else None),
         }
         write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"

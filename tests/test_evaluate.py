@@ -184,6 +184,30 @@ def test_a_stale_report_never_passes_for_a_new_episode(tmp_path: Path) -> None:
     assert not rows[0]["completed"]
 
 
+def test_resume_keeps_finished_episodes_and_runs_the_rest(tmp_path: Path) -> None:
+    first = settings(tmp_path, episodes=1, scenarios=("random",), executives=("baseline",))
+    kept = quietly(tmp_path, first, fake())[0]
+    both = settings(tmp_path, episodes=1, scenarios=("random",), resume=True)
+    rows = quietly(tmp_path, both, fake({("baseline", 0): "crash"}))
+    baseline = next(row for row in rows if row["executive"] == "baseline")
+    assert baseline["resumed"] is True, "the finished baseline episode is not run again"
+    assert baseline["interval"] == kept["interval"]
+    bt = next(row for row in rows if row["executive"] == "bt")
+    assert bt["completed"] and not bt.get("resumed")
+    summary = json.loads((both.out / "summary.json").read_text())
+    assert summary["baseline"]["episodes"] == 1 and summary["bt"]["episodes"] == 1
+    assert "kept from an earlier run with --resume" in (both.out / "results.md").read_text()
+
+
+def test_resume_reruns_an_episode_played_with_other_settings(tmp_path: Path) -> None:
+    quietly(tmp_path, settings(tmp_path, episodes=1, scenarios=("random",),
+                               executives=("bt",)), fake())
+    longer = settings(tmp_path, episodes=1, scenarios=("random",), executives=("bt",),
+                      time_limit_s=300.0, resume=True)
+    rows = quietly(tmp_path, longer, fake({("bt", 0): "crash"}))
+    assert not rows[0].get("resumed") and rows[0]["exit_code"] == 3
+
+
 def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
     chosen = settings(tmp_path, scenarios=("default", "hard"), speed=2.0)
     plan = ev.plan_episodes(chosen)
