@@ -7,7 +7,11 @@
   nobody but this script listening to ``/clock``, over ``S`` wall seconds after a warm-up;
 * driven: ``python -m bt_servicesim.run --headless`` on the default (shipped) task, same speed,
   measured from the referee's own stamps between the task's start and its end, which is the
-  part of a run an evaluation pays for; and the run's report (completed, sim and wall time).
+  part of a run an evaluation pays for; and the run's report (completed, sim and wall time);
+* the CPU time the executive's and the simulator's processes spent over the task (from
+  ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
+  second cannot keep X times real time even with a core of its own, so these say which of
+  the two limits the pair.
 
 Real-time factor = sim seconds per wall second. Figures are wall-clock on this machine and vary
 with its load; nothing here is asserted. Bad arguments give one line and exit status 2.
@@ -82,6 +86,49 @@ def measure_alone(node: Any, executor: Any, *, speed: float, seconds: float) -> 
           f"real-time factor {factor:6.1f}")
 
 
+class ProcessCpu:
+    """CPU seconds (user + system) of a process and its children, read from ``/proc``."""
+
+    TICKS = os.sysconf("SC_CLK_TCK")
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.latest: dict[int, float] = {}  # pid to CPU seconds, at the last sample
+        self.marks: list[dict[int, float]] = []
+
+    def sample(self) -> None:
+        for pid in (self.pid, *self._children()):
+            seconds = self._cpu_of(pid)
+            if seconds is not None:
+                self.latest[pid] = seconds
+
+    def mark(self) -> None:
+        """Remember the totals now (the task's start and its end)."""
+        self.sample()
+        self.marks.append(dict(self.latest))
+
+    def spent(self, pid: int) -> float:
+        first, last = self.marks[0], self.marks[-1]
+        return last.get(pid, 0.0) - first.get(pid, 0.0)
+
+    def children(self) -> list[int]:
+        return [pid for pid in self.latest if pid != self.pid]
+
+    def _children(self) -> list[int]:
+        try:
+            text = Path(f"/proc/{self.pid}/task/{self.pid}/children").read_text()
+        except OSError:
+            return []
+        return [int(pid) for pid in text.split()]
+
+    def _cpu_of(self, pid: int) -> float | None:
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            return None
+        return (int(fields[11]) + int(fields[12])) / self.TICKS
+
+
 def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -> None:
     from servicesim_competition.msg import RefereeState
 
@@ -90,11 +137,17 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
     task = Stamps()
     ended: list[bool] = []
 
+    cpu: list[ProcessCpu] = []
+
     def on_state(state: RefereeState) -> None:
         if (state.task_running or state.completed) and not ended:
+            if not task.pairs and cpu:
+                cpu[0].mark()
             task.add(seconds_of(state.stamp))
-        if state.completed:
+        if state.completed and not ended:
             ended.append(True)  # the referee keeps publishing the finished state
+            if cpu:
+                cpu[0].mark()
 
     node.create_subscription(RefereeState, REFEREE_TOPIC, on_state, LATCHED)
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
@@ -103,7 +156,13 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
         started = time.monotonic()
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                env=os.environ.copy())
-        spin_until(executor, lambda: run.poll() is not None, 1800.0, "the mission")
+        cpu.append(ProcessCpu(run.pid))
+
+        def run_over() -> bool:
+            cpu[0].sample()
+            return run.poll() is not None
+
+        spin_until(executor, run_over, 1800.0, "the mission")
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
     if len(task.pairs) < 2:
@@ -114,6 +173,12 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
           f"wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
+    if len(cpu[0].marks) == 2:
+        processes = [("executive", cpu[0].pid)] + [("simulator", pid)
+                                                   for pid in cpu[0].children()]
+        print("  CPU over the task: " + ", ".join(
+            f"{name} {cpu[0].spent(pid):.2f} s ({1000.0 * cpu[0].spent(pid) / sim_s:.1f} ms "
+            f"per sim s)" for name, pid in processes))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
