@@ -76,6 +76,8 @@ EXPLORATION_REACH = 6.0
 WAYPOINT_SPACING = 2.4
 """Search lattice spacing: the square of 2.4 m has a half-diagonal of 1.70 m, inside RFID range."""
 COVER_RADIUS = 1.8
+#: Exploration visits the waypoints around the box in bands this wide, nearest band first.
+SEARCH_BAND = 2.0
 """A waypoint counts as covering cells this close (RFID range less some goal tolerance)."""
 PERSON_CLEARANCE = 0.2
 """A person's origin keeps at least this far from walls: a search covers where one can stand."""
@@ -462,8 +464,11 @@ def exploration_waypoints(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> lis
     or outside the building); each ends within :data:`COVER_RADIUS` of a waypoint, or within
     RFID range where walls keep the robot farther off (targets out of RFID range of anywhere
     reachable cannot be searched and are skipped). Ordered box first — the waypoints covering
-    the box, as a nearest-neighbour tour from the robot — then the rest, continuing the tour;
-    each yaw is the heading of travel.
+    the box, as a nearest-neighbour tour from the robot — then the rest in bands of
+    :data:`SEARCH_BAND` metres outward from the box, each band a tour continuing the last: a
+    guest placed off the area stands near it, and one nearest-neighbour tour over everything
+    could wander 6 m off on one side before looking just beside the box on the other.
+    Each yaw is the heading of travel.
     """
     reach = EXPLORATION_REACH + RFID_RANGE
     window = grid.window(box.min_x - reach, box.min_y - reach, box.max_x + reach, box.max_y + reach)
@@ -475,8 +480,11 @@ def exploration_waypoints(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> lis
     for spot in _lattice(box, EXPLORATION_REACH):
         coverage.add_near(spot)
     coverage.repair()
-    return _tour(robot, coverage.waypoints,
-                 first=lambda p: distance_to_box(box, *p) <= COVER_RADIUS)
+    def band(point: Point) -> int:
+        beyond = distance_to_box(box, *point) - COVER_RADIUS
+        return 0 if beyond <= 0.0 else 1 + int(beyond // SEARCH_BAND)
+
+    return _tour(robot, coverage.waypoints, band=band)
 
 
 def _lattice(box: Box, reach: float) -> list[Point]:
@@ -572,12 +580,12 @@ class _Coverage:
         np.minimum(self.to_waypoint[disc], distances, out=self.to_waypoint[disc])
 
 
-def _tour(start: Pose2D, points: list[Point], first: Callable[[Point], bool]) -> list[Pose2D]:
-    """Nearest-neighbour tour from ``start``: the ``first`` points, then the rest."""
+def _tour(start: Pose2D, points: list[Point], band: Callable[[Point], int]) -> list[Pose2D]:
+    """Nearest-neighbour tour from ``start`` over each band of points in turn, lowest first."""
     tour: list[Pose2D] = []
     here = (start.x, start.y)
-    for group in ([p for p in points if first(p)], [p for p in points if not first(p)]):
-        remaining = list(group)
+    for number in sorted({band(p) for p in points}):
+        remaining = [p for p in points if band(p) == number]
         while remaining:
             following = min(remaining, key=lambda p: math.dist(here, p))
             remaining.remove(following)

@@ -378,6 +378,9 @@ def test_exploration_waypoints_cover_the_box_and_6_m_around_it(box: Box) -> None
     assert farthest_from_waypoints(free_cells_within(grid, to_box, 6.0), waypoints) <= 2.0
     covers_box = [bool(to_box(np.array(w.x), np.array(w.y)) <= 1.8) for w in waypoints]
     assert covers_box[0] and covers_box == sorted(covers_box, reverse=True)  # box first
+    bands = [int(max(float(to_box(np.array(w.x), np.array(w.y))) - 1.8, 0.0) // 2.0)
+             + (float(to_box(np.array(w.x), np.array(w.y))) > 1.8) for w in waypoints]
+    assert bands == sorted(bands)  # then outward, the nearest band first
     legs = [math.dist((a.x, a.y), (b.x, b.y)) for a, b in itertools.pairwise(waypoints)]
     assert min(legs) >= 0.2  # no waypoint twice
     area = (box.max_x - box.min_x + 12.0) * (box.max_y - box.min_y + 12.0)
