@@ -100,10 +100,14 @@ class MissionExecutive:
         return self._phase[1]
 
     def _find_phase(self) -> str:
-        node = self.tree.root.tip()
+        """The Mission sequence's running child, or the first node below it that is not a
+        decorator (a phase wrapped in a retry is named by the phase)."""
+        node, phase = self.tree.root.tip(), None
         while node is not None and node.parent is not None:
+            if not isinstance(node, py_trees.decorators.Decorator):
+                phase = node
             if short_name(node.parent) == MISSION_SEQUENCE:
-                return short_name(node)
+                return short_name(phase or node)
             node = node.parent
         return "-"
 

@@ -77,11 +77,21 @@ def test_navigation_failures_climb_the_recovery_ladder_then_succeed() -> None:
 
 
 def test_navigation_that_never_works_fails_the_mission_after_the_ladder() -> None:
-    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 10, **NOT_IN_AREA})
-    status, _ = run_mission(script)
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 1000, **NOT_IN_AREA})
+    status, _ = run_mission(script, max_ticks=20_000)
     assert status == Status.FAILURE
-    assert script.count("GoToPickUpArea.NavigateToGoal") == 4
+    # the recovery ladder's 4 tries, in each of the 8 attempts at the pick-up phase
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 4 * 8
+    assert script.count("GetPickUpArea") == 8
     assert script.count("CallPickUpGuest") == 0
+
+
+def test_a_failed_phase_starts_over() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 4, **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GetPickUpArea") == 2
+    assert script.count("CallPickUpGuest") == 1
 
 
 def test_the_approach_stops_once_inside_the_area_with_the_guest_in_range() -> None:
@@ -199,10 +209,10 @@ def test_pick_ups_refused_again_and_again_are_retried_while_time_remains() -> No
 
 
 def test_a_pick_up_never_granted_ends_the_mission_at_the_retry_budget() -> None:
-    script = Script({"CallPickUpGuest": [Status.FAILURE] * 100})
-    status, _ = run_mission(script)
+    script = Script({"CallPickUpGuest": [Status.FAILURE] * 1000})
+    status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
-    assert script.count("CallPickUpGuest") == 12  # the PickUpRetry budget
+    assert script.count("CallPickUpGuest") == 12 * 8  # PickUpRetry's budget, 8 phase attempts
     assert script.count("GetDropOffArea") == 0
 
 
@@ -260,11 +270,11 @@ def test_a_drop_off_refused_with_the_guest_following_repositions_and_tries_again
 
 
 def test_drop_offs_refused_over_and_over_fail_the_mission_in_the_end() -> None:
-    script = Script({"CallDropOffGuest": [Status.FAILURE] * 100,
-                     "NavigateToRepositionGoal": [Status.FAILURE] * 100})
-    status, _ = run_mission(script)
+    script = Script({"CallDropOffGuest": [Status.FAILURE] * 1000,
+                     "NavigateToRepositionGoal": [Status.FAILURE] * 1000})
+    status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
-    assert script.count("CallDropOffGuest") == 6  # the DropOffRetry budget
+    assert script.count("CallDropOffGuest") == 6 * 8  # DropOffRetry's budget, 8 phase attempts
     assert script.count("ComputeReturnGoal") == 0
 
 
@@ -283,3 +293,26 @@ def test_the_sim_time_waits_follow_the_clock_not_the_wall() -> None:
     assert status == Status.SUCCESS
     waited = 2.0  # LetGuestCatchUp
     assert clock.nanoseconds / 1e9 - 1.0 >= waited
+
+
+def test_the_phase_is_named_by_the_phase_not_by_its_retry(ros_context: object) -> None:
+    from rclpy.node import Node
+
+    from bt_servicesim.executive import MissionExecutive
+
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.RUNNING, 10**6)], **NOT_IN_AREA})
+    root = parse_behaviour_tree_xml(
+        str(DEFAULT_TREE), node_registry=scripted_registry(DEFAULT_TREE, script),
+        input_mappings={"time_limit": "900.0"})
+    node = Node("phase_probe", context=ros_context)
+    try:
+        executive = MissionExecutive(node=node, root=root)
+        executive.tree.setup(node=ManualClock())
+        phases = set()
+        for _ in range(30):
+            executive.tick()
+            phases.add(executive.phase())
+        assert "Pickup" in phases
+        assert not any("Retry" in phase for phase in phases)
+    finally:
+        node.destroy_node()

@@ -172,3 +172,25 @@ def test_navigation_succeeds_aborts_without_a_path_and_cancels(graph: Graph) -> 
     assert walled.result.error_code != 0 and walled.result.error_msg
     cancelled = navigate(graph, -20.0, 10.0, cancel_after_s=0.3)
     assert cancelled.status == GoalStatus.STATUS_CANCELED
+
+
+def test_a_message_dds_refuses_is_dropped_with_a_warning_and_the_loop_goes_on(
+        ros_context: Context) -> None:
+    from servicesim_sim.node import RCLError
+
+    settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=0.0,
+                           difficulty=Difficulty.default(), camera_rate_hz=0.0)
+    node = Node("servicesim_refused", context=ros_context)
+    simulator = SimulatorNode(settings, node=node)
+
+    class Refusing:
+        topic_name = "/servicesim/actors"
+
+        def publish(self, message: Any) -> None:
+            raise RCLError("Failed to publish: cannot publish data")
+
+    simulator._actors = Refusing()
+    for _ in range(15):
+        simulator._publish_io()  # the people go out every fifth period
+    assert simulator._dropped == 3
+    node.destroy_node()
