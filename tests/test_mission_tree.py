@@ -135,7 +135,7 @@ def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest()
     assert script.count("NavigateIntoPickUpArea") == 0
 
 
-def test_an_unreachable_waypoint_clears_the_costmaps_and_is_skipped() -> None:
+def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
         "Explore.GuestInRange": [Status.FAILURE] * 25,
@@ -143,10 +143,26 @@ def test_an_unreachable_waypoint_clears_the_costmaps_and_is_skipped() -> None:
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
-    assert script.count("ClearCostmapsForNextWaypoint") == 1
-    waypoints = [c for c in script.calls if c.endswith("NextWaypoint")]
-    assert len(waypoints) >= 2, "the failed waypoint is not retried: the next one is taken"
-    assert script.count("CallPickUpGuest") == 1
+    assert script.count("ClearCostmapsForWaypoint") == 1
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint"))]
+    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint",
+                         "NavigateToWaypoint"], "the same waypoint once more, not the next"
+
+
+def test_a_waypoint_that_fails_twice_is_skipped() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [Status.FAILURE, Status.FAILURE, (Status.SUCCESS, 10),
+                               (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint"))]
+    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "NavigateToWaypoint",
+                         "NextWaypoint"]
 
 
 def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
