@@ -171,6 +171,20 @@ def test_a_walker_does_not_stop_for_a_robot_behind_beside_or_far(distance: float
     assert steps_moved(people, walker, robot_at(distance=distance, bearing=bearing)) > 0.85
 
 
+def test_a_walker_blocked_by_the_robot_for_5_s_turns_back_and_walks_away() -> None:
+    people = crowd(5)
+    walker = walkers_of(people)[0]
+    robot = robot_at(distance=1.2, bearing=0.0)(walker)  # stays where it was put
+    blocked = 0.0
+    while steps_moved(people, walker, lambda _: robot) == 0.0:
+        blocked += 1.0
+        assert blocked < 10.0, "still waiting after 10 s"
+    assert 4.0 <= blocked <= 5.0
+    gap_before = math.hypot(walker.x - robot[0], walker.y - robot[1])
+    steps_moved(people, walker, lambda _: robot)
+    assert math.hypot(walker.x - robot[0], walker.y - robot[1]) > gap_before + 0.5
+
+
 def test_a_walker_gives_way_to_a_robot_close_at_its_side() -> None:
     people = crowd(5)
     walker = walkers_of(people)[0]

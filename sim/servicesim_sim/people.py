@@ -41,6 +41,9 @@ WALKER_STOP_DISTANCE = 1.5  # a robot this close in front stops a walker ...
 WALKER_STOP_HALF_ANGLE = math.radians(60.0)  # ... when within this angle of its heading
 WALKER_GIVE_WAY_DISTANCE = 0.9  # and a robot this close anywhere ahead (±90°) stops it too:
 # nobody walks into the robot from the side, which the referee would book as the robot's contact
+WALKER_PATIENCE_S = 5.0  # a walker stopped this long for the robot turns back along its route:
+# in a corridor too narrow to pass, a walker waiting for the robot and a robot waiting for the
+# walker would otherwise wait for each other for ever
 WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
 WALKER_IDLER_CLEARANCE = 0.6  # ... and this far from idlers
 ROUTE_CELL = 0.25  # metres per route-grid cell
@@ -281,6 +284,8 @@ class Walker:
     along: np.ndarray  # arc length at each route point
     speed: float
     travelled: float  # arc length from the route's start, below the route's length
+    direction: int = 1  # +1 along the route, -1 back along it
+    waited: float = 0.0  # sim seconds stopped for the robot, this time
 
     def __post_init__(self) -> None:
         # advance() runs for every walker every other physics step: plain floats and bisect
@@ -309,7 +314,15 @@ class Walker:
         xs, ys = self._xs, self._ys
         self.person.x = xs[leg] + t * (xs[leg + 1] - xs[leg])
         self.person.y = ys[leg] + t * (ys[leg + 1] - ys[leg])
-        self.person.yaw = self._headings[leg]
+        heading = self._headings[leg]
+        self.person.yaw = heading if self.direction > 0 else math.atan2(
+            -math.sin(heading), -math.cos(heading))
+
+    def turn_back(self) -> None:
+        """Walk the route the other way from here (the robot has blocked it long enough)."""
+        self.direction = -self.direction
+        self.waited = 0.0
+        self.advance(0.0)
 
     def sees_robot_ahead(self, robot: tuple[float, float, float]) -> bool:
         dx, dy = robot[0] - self.person.x, robot[1] - self.person.y
@@ -368,12 +381,18 @@ class Crowd:
         return list(self._walkers)
 
     def step(self, dt: float, *, robot: tuple[float, float, float]) -> None:
-        """Move every walker ``dt`` seconds on, except those with the robot just ahead."""
+        """Move every walker ``dt`` seconds on, except those with the robot just ahead; one
+        stopped for :data:`WALKER_PATIENCE_S` turns back."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
         for walker in self._walkers:
             if not walker.sees_robot_ahead(robot):
-                walker.advance(walker.speed * dt)
+                walker.waited = 0.0
+                walker.advance(walker.direction * walker.speed * dt)
+                continue
+            walker.waited += dt
+            if walker.waited >= WALKER_PATIENCE_S:
+                walker.turn_back()
 
     def states(self) -> list[tuple[str, str, float, float]]:
         """(name, role, x, y) of everybody, walkers first."""
