@@ -31,6 +31,7 @@ from bt_servicesim.guest_localisation import (
 )
 from bt_servicesim.occupancy import OccupancyGrid2D
 from tests.mission_script import ManualClock
+from tests.test_leaf_goals import open_room
 from tests.test_occupancy import cells, fill, grid_message
 
 Status = py_trees.common.Status
@@ -46,14 +47,6 @@ def clean_blackboard() -> Iterator[None]:
     Blackboard.clear()
     yield
     Blackboard.clear()
-
-
-def open_room(size: float = 14.0) -> OccupancyGrid2D:
-    values = cells(size, size)
-    for wall in ((0, 0, size, 0.1), (0, size - 0.1, size, size),
-                 (0, 0, 0.1, size), (size - 0.1, 0, size, size)):
-        fill(values, *wall)
-    return OccupancyGrid2D.from_message(grid_message(values))
 
 
 def corridor() -> OccupancyGrid2D:
