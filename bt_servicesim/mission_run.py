@@ -28,6 +28,7 @@ from typing import Any
 
 import py_trees
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
@@ -61,6 +62,7 @@ from bt_servicesim.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 FINAL_TREE_NAME = "final_tree.txt"
 
 DISCOVERY_SETTLE_S = 2.0  # wall seconds for the simulator to discover the clients set up
+SERVER_WAIT_LIMIT_S = 30.0  # wall seconds the run waits for every server its executive calls
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
 SIM_TIME_BACKSTOP_S = 60.0  # sim seconds past the time limit before the run gives up itself
 
@@ -116,6 +118,7 @@ class MissionRun:
         if refused is not None:
             return refused
         executive.setup()
+        self._wait_for_servers(node, executor)
         self._spin_for(executor, DISCOVERY_SETTLE_S)
         executive.start()
         view = ProgressView(headless=self.settings.headless,
@@ -156,6 +159,24 @@ class MissionRun:
             executor.spin_once(timeout_sec=0.1)
         node.destroy_client(client)
         return None
+
+    @staticmethod
+    def _wait_for_servers(node: Node, executor: Executor) -> None:
+        """Until every service and action the executive set up a client for has a server.
+
+        A client is "ready" once its requests reach the server; the server's answers reach
+        the client only once the server has discovered the client's reader in turn, which on a
+        busy machine can take seconds. An answer sent before that is lost (a drop-off the
+        referee granted looked like a timeout), so the tree starts only when every client is
+        ready, and DISCOVERY_SETTLE_S later. Bounded: a server that never comes is the
+        tree's to wait for and report.
+        """
+        def every_server_ready() -> bool:
+            actions = [w for w in node.waitables if isinstance(w, ActionClient)]
+            return (all(client.service_is_ready() for client in node.clients)
+                    and all(action.server_is_ready() for action in actions))
+
+        MissionRun._spin_until(executor, every_server_ready, SERVER_WAIT_LIMIT_S)
 
     def _title(self, monitor: RefereeMonitor) -> str:
         fields = monitor.report_fields()

@@ -89,6 +89,9 @@ class Inflation:
         return np.rint(costs).astype(np.uint8)
 
 
+RAY_CELL = 0.1  # metres: the lidar's rays are traced on walls pooled to about this size
+
+
 @dataclass(frozen=True)
 class Lidar:
     """The planar scanner: field of view (half angle) and range, both as in the competition."""
@@ -133,6 +136,7 @@ class Costmap:
         self.person_radius = person_radius
         self.lidar = lidar or Lidar()
         self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
+        self._ray_walls, self._ray_cell = _ray_grid(self._walls, occupancy_map.resolution)
         self.frame, wall_distance = _coarse_wall_distance(
             occupancy_map, self._walls, resolution=resolution, margin=crop_margin)
         self.static = self.inflation.costs(wall_distance)
@@ -227,13 +231,14 @@ class Costmap:
     def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Whether each ray from the robot to a target's surface misses every wall cell.
 
-        Rays are sampled every map cell, all rays in one flat array (no padding). Samples one
-        cell apart cannot step over a straight wall one cell thick, only clip its corners.
+        Rays are sampled every cell of the ray grid (:func:`_ray_grid`), all rays in one flat
+        array (no padding). Samples one cell apart cannot step over a straight wall one cell
+        thick, only clip its corners.
         """
         offsets = targets - robot
         distance = np.maximum(np.hypot(offsets[:, 0], offsets[:, 1]), 1e-9)
         lengths = distance - self.person_radius
-        step = self.map.resolution
+        step = self._ray_cell
         counts = np.floor(np.maximum(lengths - self.lidar.min_range, 0.0) / step).astype(
             np.intp) + 1
         owner = np.repeat(np.arange(len(targets)), counts)
@@ -241,11 +246,11 @@ class Costmap:
         along = self.lidar.min_range + index * step
         xs = robot[0] + offsets[owner, 0] / distance[owner] * along
         ys = robot[1] + offsets[owner, 1] / distance[owner] * along
-        cols = np.floor((xs - self.map.origin_x) / self.map.resolution).astype(np.intp)
-        rows = np.floor((ys - self.map.origin_y) / self.map.resolution).astype(np.intp)
-        height, width = self._walls.shape
+        cols = np.floor((xs - self.map.origin_x) / step).astype(np.intp)
+        rows = np.floor((ys - self.map.origin_y) / step).astype(np.intp)
+        height, width = self._ray_walls.shape
         inside = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
-        hits = self._walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)] | ~inside
+        hits = self._ray_walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)] | ~inside
         return np.bincount(owner, weights=hits, minlength=len(targets)) == 0
 
     def _hidden_by_people(self, robot: np.ndarray, targets: np.ndarray,
@@ -261,6 +266,23 @@ class Costmap:
         across = np.abs(relative[:, :, 0] * unit[:, None, 1] - relative[:, :, 1] * unit[:, None, 0])
         in_front = (along > 0.0) & (along < distance[:, None] - self.person_radius)
         return np.any(in_front & (across < self.person_radius), axis=1)
+
+
+def _ray_grid(walls: np.ndarray, resolution: float,
+              cell: float = RAY_CELL) -> tuple[np.ndarray, float]:
+    """The wall grid the lidar's rays are traced on, and its cell size.
+
+    A map finer than ``cell`` is pooled into blocks of about that size, a block being a wall
+    where any of its cells is: walls grow by less than a block, and a ray needs a half or a
+    quarter of the samples it would need on the map itself.
+    """
+    factor = max(1, round(cell / resolution))
+    if factor == 1:
+        return walls, resolution
+    height, width = walls.shape
+    padded = np.pad(walls, ((0, -height % factor), (0, -width % factor)))
+    blocks = padded.reshape(padded.shape[0] // factor, factor, padded.shape[1] // factor, factor)
+    return blocks.any(axis=(1, 3)), resolution * factor
 
 
 def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarray:

@@ -271,10 +271,11 @@ class SimEngine:
             self._drift()
 
     def _book_contacts(self, dt: float) -> None:
-        gaps = self._person_gaps()
         wall_gap = self.robot.wall_gap()
-        if wall_gap >= OBJECT_APPROXIMATION_M and gaps.min() >= PERSON_APPROXIMATION_M:
+        if wall_gap >= OBJECT_APPROXIMATION_M and self._nearest_person_gap() >= (
+                PERSON_APPROXIMATION_M):
             return  # nobody and nothing near: the common case, nothing to book
+        gaps = self._person_gaps()
         touching = np.clip(PERSON_BODY_RADIUS - gaps, 0.0, None)
         self.referee.contact(person_depth=float(touching.sum()),
                              object_depth=max(0.0, -wall_gap), dt=dt)
@@ -283,6 +284,16 @@ class SimEngine:
             person_depth=float(approach.sum()),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - wall_gap)),
             dt=dt)
+
+    def _nearest_person_gap(self) -> float:
+        """Distance from the robot's body edge to the nearest person's origin (plain floats:
+        this runs every step)."""
+        x, y = self.robot.x, self.robot.y
+        nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
+                       for person in self.crowd.people),
+                      default=math.inf)
+        nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
+        return math.sqrt(nearest) - BODY_RADIUS
 
     def _person_gaps(self) -> np.ndarray:
         """Distance from the robot's body edge to each person's origin."""

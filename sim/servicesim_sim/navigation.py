@@ -122,13 +122,20 @@ class PolylinePath:
 
     def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
         """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``."""
-        start, end = self.points[:-1], self.points[1:]
+        # only the segments that overlap the window can hold the answer
+        segments = len(self.lengths)
+        first = min(max(int(np.searchsorted(self.arc, near - 0.2, side="right")) - 1, 0),
+                    segments - 1)
+        last = min(max(int(np.searchsorted(self.arc, near + reach, side="left")), first + 1),
+                   segments)
+        start, end = self.points[first:last], self.points[first + 1:last + 1]
+        lengths = self.lengths[first:last]
         span = end - start
         fraction = np.clip(((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
-                           / np.maximum(self.lengths ** 2, 1e-12), 0.0, 1.0)
+                           / np.maximum(lengths ** 2, 1e-12), 0.0, 1.0)
         nearest = start + fraction[:, None] * span
         gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
-        arcs = self.arc[:-1] + fraction * self.lengths
+        arcs = self.arc[first:last] + fraction * lengths
         gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
         best = int(np.argmin(gaps))
         if not np.isfinite(gaps[best]):
