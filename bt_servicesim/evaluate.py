@@ -56,6 +56,7 @@ DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
 STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
 REPORT_NAME = "report.json"
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
+INTERRUPTED = "evaluation interrupted"
 PARENT_FIELD, START_TIME_FIELD = 4, 22  # of /proc/<pid>/stat
 PENALTY_KEYS = ("failed_pickup", "failed_dropoff", "too_fast", "drifts", "contact",
                 "approximation")
@@ -245,12 +246,11 @@ class EpisodeRunner:
             shutil.rmtree(episode.out)  # a stale report must never pass for this episode's
         episode.out.mkdir(parents=True)
         if self.stopping.is_set():
-            return episode_row(episode, EpisodeOutcome(None, 0.0, "evaluation interrupted"),
-                               domain_id)
+            return episode_row(episode, EpisodeOutcome(None, 0.0, INTERRUPTED), domain_id)
         outcome = self._run_process(episode, domain_id)
         row = episode_row(episode, outcome, domain_id)
         row.update(revision=self.revision, episode_key=self.key(episode))
-        if outcome.stopped != "evaluation interrupted":
+        if outcome.stopped != INTERRUPTED:
             (episode.out / EPISODE_NAME).write_text(json.dumps(row, indent=1) + "\n")
         return row
 
@@ -290,7 +290,7 @@ class EpisodeRunner:
                 pass
             if self.stopping.is_set():
                 stop_process_tree(process)
-                return "evaluation interrupted"
+                return INTERRUPTED
             if time.monotonic() > deadline:
                 stop_process_tree(process)
                 return (f"episode wall-time limit of {self.settings.episode_timeout_s:g} s "
@@ -358,6 +358,8 @@ def episode_row(episode: Episode, outcome: EpisodeOutcome, domain_id: int) -> di
     if outcome.stopped is not None:
         row["completed"] = False
         row["failure"] = outcome.stopped
+    # Ctrl-C stopped it or it never started: no verdict on the executive, and no statistic
+    row["not_run"] = outcome.stopped == INTERRUPTED
     row.update(scenario=episode.scenario, episode=episode.index, episode_seed=episode.seed,
                ros_domain_id=domain_id, returncode=outcome.returncode,
                episode_wall_time_s=round(outcome.wall_time_s, 3), out=str(episode.out))
@@ -488,8 +490,19 @@ def _report_progress(futures: list[Future[dict[str, Any]]], progress: ProgressBa
 
 
 # ============================================================================ statistics
+def played(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows of episodes that ran to an outcome: not those a Ctrl-C stopped or never ran."""
+    return [row for row in rows if not row.get("not_run")]
+
+
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """The summary of one executive's rows (see ``docs/evaluation.md`` for the definitions)."""
+    """The summary of one executive's rows (see ``docs/evaluation.md`` for the definitions).
+
+    Episodes an interrupted evaluation did not play to an outcome are counted as ``not_run``
+    and left out of every statistic; their rows are kept.
+    """
+    every = rows
+    rows = played(every)
     completed = [row for row in rows if row["completed"]]
     scores = [float(row["score"]) for row in completed]
     return {
@@ -500,7 +513,8 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "mean_sim_time_s": _mean([float(row["sim_time_s"]) for row in completed]),
         "penalties": mean_penalties(rows),
         "wall_time_s": round(sum(_episode_wall(row) for row in rows), 3),
-        "rows": rows,
+        "not_run": len(every) - len(rows),
+        "rows": every,
     }
 
 
@@ -571,7 +585,8 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"{settings.time_limit_s:g} sim s, episode wall-time limit "
              f"{settings.episode_timeout_s:g} s. Definitions: "
              "[evaluation.md](evaluation.md).", "",
-             "## Per executive and scenario set", "", *results_table(settings, rows), ""]
+             "## Per executive and scenario set", "", *_not_run_note(rows),
+             *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
         lines += ["## Paired: the same episodes, both executives", "",
                   "Scores where both completed the mission; the task sim time to the drop-off "
@@ -580,6 +595,18 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
     lines += ["## Why episodes failed", "", *failure_table(rows), "", "## Plots", ""]
     lines += [f"![{title}]({image_dir}/results_{name}.png)" for name, title in PLOTS]
     return "\n".join(lines) + "\n"
+
+
+def _not_run_note(rows: list[dict[str, Any]]) -> list[str]:
+    """A line saying how many episodes an interrupted evaluation left unplayed, if any."""
+    counts = Counter((row["executive"], row["scenario"]) for row in rows if row.get("not_run"))
+    if not counts:
+        return []
+    parts = ", ".join(f"{executive} {scenario}: {count}"
+                      for (executive, scenario), count in sorted(counts.items()))
+    return [f"The evaluation was stopped before every episode had run; these episodes were not "
+            f"played and are left out of the statistics ({parts}). `episodes` counts the "
+            "episodes played.", ""]
 
 
 def _resumed_note(rows: list[dict[str, Any]]) -> str:
@@ -619,7 +646,7 @@ def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> l
         for executive in settings.executives:
             group = [row for row in rows
                      if row["executive"] == executive and row["scenario"] == scenario]
-            summary, walls = summarise(group), [_episode_wall(row) for row in group]
+            summary, walls = summarise(group), [_episode_wall(row) for row in played(group)]
             penalties = summary["penalties"]
             lines.append(
                 f"| {executive} | {scenario} | {summary['episodes']} | "
@@ -653,7 +680,7 @@ def _below(first: list[float], second: list[float]) -> str:
 def failure_table(rows: list[dict[str, Any]]) -> list[str]:
     """Failed episodes by executive, set, how far the referee saw them get, and reason."""
     reasons = Counter((row["executive"], row["scenario"], _checkpoints_done(row),
-                       str(row["failure"])) for row in rows if not row["completed"])
+                       str(row["failure"])) for row in played(rows) if not row["completed"])
     if not reasons:
         return ["No episode failed."]
     lines = ["| executive | set | episodes | checkpoints | reason |", "|---|---|---|---|---|"]

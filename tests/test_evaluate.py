@@ -57,7 +57,7 @@ with open(os.path.join(out, "report.json"), "w") as f:
 """
 
 SUMMARY_KEYS = {"episodes", "success_rate", "mean_score", "median_score", "mean_sim_time_s",
-                "penalties", "wall_time_s", "rows"}
+                "penalties", "wall_time_s", "not_run", "rows"}
 
 
 def settings(tmp_path: Path, **changes: Any) -> ev.EvaluationSettings:
@@ -278,3 +278,22 @@ def test_missing_out_and_out_a_file_are_bad_input(tmp_path: Path) -> None:
 def evaluate_command(cwd: Path, *arguments: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "bt_servicesim.evaluate", *arguments],
                           capture_output=True, text=True, cwd=cwd, timeout=60)
+
+
+def test_episodes_an_interrupted_evaluation_did_not_play_are_left_out_of_the_statistics(
+        tmp_path: Path) -> None:
+    chosen = settings(tmp_path, episodes=3, scenarios=("random",), executives=("bt",))
+    episodes = ev.plan_episodes(chosen)
+    for episode in episodes:
+        episode.out.mkdir(parents=True)
+    played_ok = dict(ev.episode_row(episodes[0], ev.EpisodeOutcome(0, 1.0), 7),
+                     completed=True, score=10.0, sim_time_s=5.0)
+    failed = ev.episode_row(episodes[1], ev.EpisodeOutcome(1, 1.0), 7)
+    not_run = ev.episode_row(episodes[2], ev.EpisodeOutcome(None, 0.0, ev.INTERRUPTED), 7)
+    assert not_run["not_run"] and not failed["not_run"]
+    summary = ev.summarise([played_ok, failed, not_run])
+    assert (summary["episodes"], summary["success_rate"], summary["not_run"]) == (2, 0.5, 1)
+    assert len(summary["rows"]) == 3, "the unplayed row is kept, not dropped"
+    report = ev.markdown_report(chosen, [played_ok, failed, not_run], ".")
+    assert "not played and are left out of the statistics (bt random: 1)" in report
+    assert ev.INTERRUPTED not in report.split("## Why episodes failed")[1]
