@@ -26,7 +26,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -35,8 +35,10 @@ import yaml
 from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
+from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 from rclpy.task import Future
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import TaskInfo
@@ -197,18 +199,31 @@ class McapRecorder:
                 topic=topic.name, message_encoding="cdr", schema_id=schemas[name],
                 metadata={"offered_qos_profiles": offered_qos_yaml(topic.qos)})
             self.counts[topic.name] = 0
-            self._subscriptions.append(node.create_subscription(
-                topic.message_type, topic.name, self._writes_to(topic.name, channel),
+            taken: list[Subscription[Any]] = []
+            taken.append(node.create_subscription(
+                topic.message_type, topic.name, self._writes_to(topic.name, channel, taken),
                 topic.qos, raw=True))
+            self._subscriptions.append(taken[0])
 
-    def _writes_to(self, topic: str, channel: int) -> Any:
-        def write(data: bytes) -> None:
-            if self._stream is None:
-                return
+    def _writes_to(self, topic: str, channel: int, subscription: list[Subscription[Any]]) -> Any:
+        """The callback for one topic: writes the message, then every one queued behind it.
+
+        rclpy's executor takes one message per subscription each time it waits, and builds its
+        wait set anew each time; the 50 Hz score arrives in bursts of five per I/O period, so
+        taking the queue in one go saves the executive four waits in five on that topic.
+        """
+        def write_one(data: bytes) -> None:
             now = self.node.get_clock().now().nanoseconds
             self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
                                      data=data, sequence=self.counts[topic])
             self.counts[topic] += 1
+
+        def write(data: bytes) -> None:
+            if self._stream is None:
+                return
+            write_one(data)
+            for queued in _queued_raw_messages(subscription[0]):
+                write_one(queued)
 
         return write
 
@@ -222,6 +237,19 @@ class McapRecorder:
         self._writer.finish()
         self._stream.close()
         self._stream = None
+
+
+def _queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:
+    """Take the messages waiting in a raw subscription's queue, oldest first, until none is."""
+    while True:
+        try:
+            with subscription.handle:
+                taken = subscription.handle.take_message(subscription.msg_type, True)
+        except InvalidHandle:
+            return
+        if taken is None:
+            return
+        yield taken[0]
 
 
 # ------------------------------------------------------------------------ the run's own topics

@@ -167,6 +167,23 @@ def test_every_recorded_message_decodes_to_what_was_published_at_sim_time(
         assert_same_fields(published, decoded, topic)
 
 
+def test_a_burst_of_messages_is_recorded_whole_and_in_order_in_one_callback(
+        graph: Graph) -> None:
+    recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
+    graph.start_sim_clock()
+    score = graph.publishers["/servicesim/score"]
+    graph.spin_until(lambda: score.get_subscription_count() > 0, "the recorder to match")
+    for value in range(8):  # within the subscription's queue depth (50)
+        score.publish(Score(score=float(value)))
+    time.sleep(0.5)  # let DDS deliver the whole burst before anything is taken
+    graph.spin_until(lambda: recorder.counts["/servicesim/score"] > 0, "the first score")
+    assert recorder.counts["/servicesim/score"] == 8, "the first callback takes the queue"
+    recorder.close()
+    scores = [decoded.score for topic, _, _, decoded in read_back(graph.path)
+              if topic == "/servicesim/score"]
+    assert scores == [float(value) for value in range(8)]
+
+
 def test_the_file_follows_the_ros2_profile_with_qos_metadata(graph: Graph) -> None:
     McapRecorder(node=graph.recorder_node, path=graph.path).close()
     with graph.path.open("rb") as stream:
