@@ -13,10 +13,14 @@ refuse. So the mission closes in before asking for the guest:
   Each cell of the map near the sightings counts the robot positions it contradicts; the cells
   that contradict fewest are the guest's possible spots and their centroid is the estimate. So
   a silence misread as absence, or a guest who moved, leaves the best cells, not an empty set.
-- :func:`approach_goal` picks a reachable spot, about 1.1 m from the estimate (outside the
-  0.75 m the referee penalises, clear of the costmap's berth around people), from which most
-  of the possible spots lie within pick-up reach. An estimate from an edge sighting is a
-  crescent; the robot closes in, hears more and estimates again.
+- :func:`approach_goal` picks a reachable spot, about 1.4 m from the estimate (the referee
+  books "approximation" every physics step while a person is within 0.75 m of the robot's
+  body, i.e. 1.0 m of its centre), from which most of the possible spots lie within pick-up
+  reach. An estimate from an edge sighting is a crescent; the robot closes in, hears more and
+  estimates again. Given where the guest is to be led (``leave_towards``), it stands on the
+  guest's side towards there: a robot that must drive past the guest it just picked up
+  crowds them, and a guest following the robot's trail first walks back to where the robot
+  stood. It keeps off walls where it can (the referee books objects within 0.35 m too).
 - :class:`GuestSteadilyInRange` holds the pick-up back until every reading over the last half
   sim second, taken while the robot stands, names the guest.
 
@@ -39,7 +43,7 @@ import numpy as np
 import py_trees
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
 
-from bt_servicesim.geometry import Pose2D
+from bt_servicesim.geometry import Box, Pose2D
 from bt_servicesim.goals import PERSON_CLEARANCE, RFID_RANGE, ROBOT_CLEARANCE
 from bt_servicesim.occupancy import OccupancyGrid2D
 from bt_servicesim.sim_time import clock_from_setup_kwargs, sim_now_s
@@ -78,18 +82,29 @@ ESTIMATE_SPACING = 0.1
 """Metres between the cells the estimate weighs."""
 POSITION_ROUNDING = 0.1
 """Readings whose robot positions agree to this are one piece of evidence."""
-APPROACH_DISTANCE = 1.1
-"""Metres from the estimate an approach goal prefers (the referee penalises within 0.75 m)."""
+APPROACH_DISTANCE = 1.4
+"""Metres from the estimate an approach goal prefers: between :data:`TOO_CLOSE` and reach."""
 APPROACH_RADIUS = 1.8
 """How far from the estimate an approach goal may lie."""
 PICKUP_REACH = 1.8
 """A possible spot counts as within reach of a goal this close (2.0 m less the goal tolerance)."""
-TOO_CLOSE = 0.8
-"""A possible spot this close to a goal puts the robot in the guest's personal space."""
+TOO_CLOSE = 1.1
+"""A possible spot this close to a goal puts the robot in the guest's personal space (the
+referee's 0.75 m from the body's edge is 1.0 m from the robot's centre)."""
 CLOSE_ENOUGH = 1.5
 """A robot this near the estimate need not move if no spot is clearly better ..."""
 STAY_SLACK = 0.1
 """... clearly better meaning this much more of the possible spots in reach."""
+WALL_BERTH = 0.6
+"""Clearance (m from the robot's centre) below which the referee books "approximation" to an
+object: 0.35 m from the body's edge."""
+WALL_WEIGHT = 0.15
+"""Score lost by a goal right at :data:`~bt_servicesim.goals.ROBOT_CLEARANCE` from a wall."""
+DEPARTURE_WEIGHT = 0.3
+"""Score gained by a goal a clear :data:`DEPARTURE_SCALE` ahead of the guest on the way out
+(and lost by one as far behind them)."""
+DEPARTURE_SCALE = 1.0
+"""Metres of route, ahead of or behind the guest, over which the departure term saturates."""
 STEADY_FOR = 0.5
 """Sim seconds of readings that must all name the guest before a pick-up."""
 STEADY_READINGS = 3
@@ -239,16 +254,20 @@ def _count_beyond(cells: np.ndarray, points: np.ndarray, radius: float) -> np.nd
 
 # ============================================================================ the approach
 def approach_goal(
-    estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D
+    estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D,
+    leave_towards: Point | None = None,
 ) -> Pose2D | None:
     """A reachable spot near the estimate, facing it, from which the guest is within reach.
 
     Every reachable cell within :data:`APPROACH_RADIUS` of the estimate is scored by the share
     of the possible spots within :data:`PICKUP_REACH` of it, less the share within
     :data:`TOO_CLOSE`, less a little for straying from :data:`APPROACH_DISTANCE` from the
-    estimate and for the distance from the robot. For a compact estimate the best cell lies
-    about 1.1 m from it on the robot's side; for an estimate split in two (a robot that drove
-    a straight line cannot tell its left from its right) it may lie between the two halves.
+    estimate and for the distance from the robot, less a little for a wall within
+    :data:`WALL_BERTH`. With ``leave_towards``, cells ahead of the guest on the route there
+    score up to :data:`DEPARTURE_WEIGHT` more and cells behind them as much less. For a compact
+    estimate the best cell lies about 1.4 m from it, on the robot's side when nothing says
+    otherwise; for an estimate split in two (a robot that drove a straight line cannot tell
+    its left from its right) it may lie between the two halves.
     None if the robot already stands :data:`CLOSE_ENOUGH` and no cell scores clearly better
     (:data:`STAY_SLACK`), or nothing near is reachable.
     """
@@ -256,8 +275,11 @@ def approach_goal(
                                                                 ROBOT_CLEARANCE))
     if cells.size == 0:
         return None
-    scores = _score(estimate, cells, robot)
-    here = _score(estimate, np.array([[robot.x, robot.y]]), robot)[0]
+    here_and_cells = np.vstack([[robot.x, robot.y], cells])
+    scores = _score(estimate, here_and_cells, robot) + _wall_berth(grid, here_and_cells)
+    if leave_towards is not None:
+        scores += _departure(estimate, grid, here_and_cells, leave_towards)
+    here, scores = scores[0], scores[1:]
     near = math.hypot(estimate.x - robot.x, estimate.y - robot.y) <= CLOSE_ENOUGH
     if near and here >= scores.max() - STAY_SLACK:
         return None
@@ -289,6 +311,37 @@ def _score(estimate: GuestEstimate, cells: np.ndarray, robot: Pose2D) -> np.ndar
                       - APPROACH_DISTANCE)
     travel = np.hypot(cells[:, 0] - robot.x, cells[:, 1] - robot.y)
     return in_reach - crowding - 0.1 * off_ring - 1e-3 * travel
+
+
+def _wall_berth(grid: OccupancyGrid2D, cells: np.ndarray) -> np.ndarray:
+    """0 for cells with :data:`WALL_BERTH` of clearance, down to −:data:`WALL_WEIGHT` at
+    :data:`~bt_servicesim.goals.ROBOT_CLEARANCE`."""
+    rows, cols = _cells_of(grid, cells)
+    shortfall = (WALL_BERTH - grid.clearances[rows, cols]) / (WALL_BERTH - ROBOT_CLEARANCE)
+    return -WALL_WEIGHT * np.clip(shortfall, 0.0, 1.0)
+
+
+def _departure(estimate: GuestEstimate, grid: OccupancyGrid2D, cells: np.ndarray,
+               leave_towards: Point) -> np.ndarray:
+    """How far ahead of the guest each cell lies on the route to ``leave_towards``, scaled to
+    ±:data:`DEPARTURE_WEIGHT`; 0 everywhere when no route is known.
+
+    The guest's own route length is taken through the best cell (cells around them have
+    room for the robot; they may stand closer to a wall than that)."""
+    routes = grid.routes_from(*leave_towards, ROBOT_CLEARANCE)
+    if routes is None:
+        return np.zeros(len(cells))
+    to_exit = routes.distances_at(cells[:, 0], cells[:, 1])
+    guest_to_exit = np.min(to_exit + np.hypot(cells[:, 0] - estimate.x, cells[:, 1] - estimate.y))
+    if not np.isfinite(guest_to_exit):
+        return np.zeros(len(cells))
+    return DEPARTURE_WEIGHT * np.clip((guest_to_exit - to_exit) / DEPARTURE_SCALE, -1.0, 1.0)
+
+
+def _cells_of(grid: OccupancyGrid2D, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    rows = np.floor((points[:, 1] - grid.origin_y) / grid.resolution).astype(np.intp)
+    cols = np.floor((points[:, 0] - grid.origin_x) / grid.resolution).astype(np.intp)
+    return np.clip(rows, 0, grid.height - 1), np.clip(cols, 0, grid.width - 1)
 
 
 # ============================================================================ behaviours
@@ -375,6 +428,9 @@ class GuestApproachGoal(BehaviourWithPorts):
         "sighting_gap": PortInformation(
             data_type=float, required=False,
             description="sim s of pause that ends a run of sightings (long: a waiting guest)"),
+        "leave_towards": PortInformation(
+            data_type=Box, required=False,
+            description="the area the guest is to be led to: stand on their side towards it"),
     }
     OUTPUT_PORTS: ClassVar[Ports] = {
         "goal": PortInformation(data_type=Pose2D, required=False),
@@ -401,7 +457,7 @@ class GuestApproachGoal(BehaviourWithPorts):
         if estimate is None:
             self.feedback_message = f"{guest} not heard lately: no estimate"
             return Status.FAILURE
-        goal = approach_goal(estimate, grid, robot)
+        goal = approach_goal(estimate, grid, robot, leave_towards=self._leave_towards())
         where = f"{guest} near ({estimate.x:.2f}, {estimate.y:.2f})"
         if goal is None:
             self.feedback_message = f"{where}: already close, or no reachable spot near"
@@ -409,6 +465,13 @@ class GuestApproachGoal(BehaviourWithPorts):
         self._set_output("goal", goal)
         self.feedback_message = f"{where}: approach ({goal.x:.2f}, {goal.y:.2f})"
         return Status.SUCCESS
+
+    def _leave_towards(self) -> Point | None:
+        try:
+            box = self.get_input("leave_towards")
+        except (NoDataAvailable, TypeError):
+            return None
+        return box.centre if isinstance(box, Box) else None
 
     def _sighting_gap(self) -> float:
         try:

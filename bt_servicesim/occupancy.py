@@ -20,6 +20,7 @@ unknown. Rotated map origins are refused.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -302,6 +303,28 @@ class RouteTree:
         """Route length from the start to (x, y) (via the best nearby node); inf if unreachable."""
         best = self._best_node(x, y)
         return math.inf if best is None else best[1]
+
+    def distances_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Route lengths from the start to many points (each via its best node within one
+        lattice step, as :meth:`distance_to`); inf where unreachable."""
+        xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+        grid, stride = self.grid, self.stride
+        rows = np.rint(np.floor((ys - grid.origin_y) / grid.resolution) / stride).astype(np.intp)
+        cols = np.rint(np.floor((xs - grid.origin_x) / grid.resolution) / stride).astype(np.intp)
+        height, width = self.node_of.shape
+        best = np.full(xs.shape, np.inf)
+        for d_row, d_col in itertools.product((-1, 0, 1), repeat=2):
+            r, c = rows + d_row, cols + d_col
+            inside = (r >= 0) & (r < height) & (c >= 0) & (c < width)
+            nodes = np.where(inside, self.node_of[np.clip(r, 0, height - 1),
+                                                  np.clip(c, 0, width - 1)], -1)
+            found = nodes >= 0
+            centres = self.node_cells[np.where(found, nodes, 0)] + 0.5
+            hop = np.hypot(grid.origin_x + centres[..., 1] * grid.resolution - xs,
+                           grid.origin_y + centres[..., 0] * grid.resolution - ys)
+            totals = np.where(found, self.distances[np.where(found, nodes, 0)] + hop, np.inf)
+            best = np.minimum(best, totals)
+        return best
 
     def path_back_from(self, x: float, y: float, max_length: float) -> np.ndarray:
         """World points of the route to (x, y), walking back from (x, y) towards the start.

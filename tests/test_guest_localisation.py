@@ -175,10 +175,38 @@ def test_a_robot_already_close_to_the_guest_stays_where_it_is() -> None:
     spots = np.array([[7.0 + dx, 7.0 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
     estimate = GuestEstimate(7.0, 7.0, spots, sightings=20)
     grid = open_room()
-    assert approach_goal(estimate, grid, Pose2D(7.0, 5.9, math.pi / 2.0)) is None
+    assert approach_goal(estimate, grid, Pose2D(7.0, 5.6, math.pi / 2.0)) is None
     far = approach_goal(estimate, grid, Pose2D(7.0, 3.0, math.pi / 2.0))
-    assert far is not None and 0.9 <= math.dist((far.x, far.y), (7.0, 7.0)) <= 1.3
+    assert far is not None and 1.2 <= math.dist((far.x, far.y), (7.0, 7.0)) <= 1.6
     assert far.y < 7.0  # on the robot's side
+
+
+def test_a_robot_inside_the_guests_personal_space_backs_off() -> None:
+    spots = np.array([[7.0 + dx, 7.0 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
+    estimate = GuestEstimate(7.0, 7.0, spots, sightings=20)
+    goal = approach_goal(estimate, open_room(), Pose2D(7.0, 6.1, math.pi / 2.0))
+    assert goal is not None and math.dist((goal.x, goal.y), (7.0, 7.0)) >= 1.2
+
+
+def test_the_robot_stands_on_the_guests_side_towards_where_they_are_led() -> None:
+    # the robot comes along the corridor from the west; the guest is to be led east
+    spots = np.array([[7.0 + dx, 1.5 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
+    estimate = GuestEstimate(7.0, 1.5, spots, sightings=20)
+    grid, robot = corridor(), Pose2D(5.2, 1.5, 0.0)
+    stay_west = approach_goal(estimate, grid, robot)
+    assert stay_west is not None and stay_west.x < 7.0
+    lead_east = approach_goal(estimate, grid, robot, leave_towards=(12.5, 1.5))
+    assert lead_east is not None and lead_east.x > 7.0
+    assert 1.1 <= math.dist((lead_east.x, lead_east.y), (7.0, 1.5)) <= 1.8
+    lead_west = approach_goal(estimate, grid, robot, leave_towards=(1.5, 1.5))
+    assert lead_west is not None and lead_west.x < 7.0
+
+
+def test_the_approach_keeps_off_walls_where_it_can() -> None:
+    spots = np.array([[7.0 + dx, 1.5 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
+    estimate = GuestEstimate(7.0, 1.5, spots, sightings=20)
+    goal = approach_goal(estimate, corridor(), Pose2D(3.0, 0.5, 0.0))
+    assert goal is not None and corridor().clearance(goal.x, goal.y) >= 0.6
 
 
 # ============================================================================ behaviours

@@ -177,3 +177,13 @@ def test_bad_messages_are_refused_with_the_reason() -> None:
     zero = grid_message(np.zeros((3, 4), dtype=np.int8), resolution=0.0)
     with pytest.raises(ValueError, match="resolution must be positive"):
         OccupancyGrid2D.from_message(zero)
+
+
+def test_route_lengths_to_many_points_at_once_agree_with_one_at_a_time() -> None:
+    grid = two_rooms(door_width=1.0)
+    routes = grid.routes_from(2.0, 1.0, 0.35)
+    assert routes is not None
+    xs, ys = np.array([8.0, 2.5, 5.1, 6.33, 1.07]), np.array([1.0, 3.3, 1.0, 2.71, 0.52])
+    many = routes.distances_at(xs, ys)
+    assert many.tolist() == [routes.distance_to(x, y) for x, y in zip(xs, ys, strict=True)]
+    assert many[2] == math.inf  # inside the wall
