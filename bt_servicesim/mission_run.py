@@ -53,7 +53,7 @@ from bt_servicesim.run import (
 from bt_servicesim.simulator_process import SimulatorProcess
 from bt_servicesim.trajectory import (
     TRAJECTORY_NAME,
-    TrajectoryRecorder,
+    TraceBuilder,
     boxes_from_blackboard,
     render_trajectory,
 )
@@ -229,8 +229,13 @@ class RunRecords:
         self.out = out
         self.tree = behaviour_tree_of(executive)
         self.mcap = McapRecorder(node=node, path=out / MCAP_NAME)
-        self.task = TaskTopic(node=node)
-        self.trajectory = TrajectoryRecorder(node=node)
+        self.task = TaskTopic(node=node, recorder=self.mcap)
+        self.trajectory = TraceBuilder(now_s=lambda: _sim_seconds(node))
+        for topic, listener in (("/servicebot/map", self.trajectory.on_map),
+                                ("/servicebot/odom", self.trajectory.on_odom),
+                                ("/servicesim/actors", self.trajectory.on_actors),
+                                ("/servicesim/referee", self.trajectory.on_referee)):
+            self.mcap.add_listener(topic, listener)
         self.tree_log: TreeLog | None = None
         if self.tree is not None:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
@@ -245,7 +250,7 @@ class RunRecords:
     def finish(self, *, title: str) -> None:
         """Write what is written at the end and close the rest; a failure is a warning."""
         steps: list[tuple[str, Callable[[], None]]] = [
-            (MCAP_NAME, self.mcap.close),
+            (MCAP_NAME, self.mcap.close),  # the trajectory is complete once the recording ends
             (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
         ]
         if self.tree_log is not None:
@@ -257,7 +262,6 @@ class RunRecords:
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
 
     def _render_trajectory(self, title: str) -> None:
-        self.trajectory.close()
         boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
         render_trajectory(self.trajectory.trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
                           title=title)

@@ -26,7 +26,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -38,6 +38,7 @@ from py_trees.common import Status
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 from rclpy.task import Future
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
@@ -185,6 +186,8 @@ class McapRecorder:
         self.node = node
         self.path = path
         self.counts: dict[str, int] = {}
+        self._listeners: dict[str, list[Callable[[Any], None]]] = {}
+        self._types: dict[str, type] = {}
         self._stream: BinaryIO | None = path.open("wb")
         self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
         self._writer.start(profile="ros2", library="bt_servicesim")
@@ -199,11 +202,22 @@ class McapRecorder:
                 topic=topic.name, message_encoding="cdr", schema_id=schemas[name],
                 metadata={"offered_qos_profiles": offered_qos_yaml(topic.qos)})
             self.counts[topic.name] = 0
+            self._types[topic.name] = topic.message_type
             taken: list[Subscription[Any]] = []
             taken.append(node.create_subscription(
                 topic.message_type, topic.name, self._writes_to(topic.name, channel, taken),
                 topic.qos, raw=True))
             self._subscriptions.append(taken[0])
+
+    def add_listener(self, topic: str, callback: Callable[[Any], None]) -> None:
+        """Also hand every message recorded on ``topic``, deserialised, to ``callback``.
+
+        Whoever needs a recorded topic only for the run's records listens here rather than
+        subscribing again: each subscription in the process is one more wake-up per message.
+        """
+        if topic not in self._types:
+            raise ValueError(f"{topic} is not recorded")
+        self._listeners.setdefault(topic, []).append(callback)
 
     def _writes_to(self, topic: str, channel: int, subscription: list[Subscription[Any]]) -> Any:
         """The callback for one topic: writes the message, then every one queued behind it.
@@ -217,6 +231,11 @@ class McapRecorder:
             self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
                                      data=data, sequence=self.counts[topic])
             self.counts[topic] += 1
+            listeners = self._listeners.get(topic)
+            if listeners:
+                message = deserialize_message(data, self._types[topic])
+                for listener in listeners:
+                    listener(message)
 
         def write(data: bytes) -> None:
             if self._stream is None:
@@ -256,13 +275,17 @@ def _queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:
 class TaskTopic:
     """Publishes the task (``task_info``) on ``/bt_servicesim/task`` once a task is running."""
 
-    def __init__(self, *, node: Node) -> None:
+    def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
+        """Reads the referee's state from ``recorder`` when given, else subscribes to it."""
         self.node = node
         self.task: dict[str, Any] | None = None
         latched = RecordedTopic(TASK_TOPIC, String, latched=True).qos
         self.publisher = node.create_publisher(String, TASK_TOPIC, latched)
         self.client = node.create_client(TaskInfo, "/servicesim/task_info")
         self._pending: Future | None = None
+        if recorder is not None:
+            recorder.add_listener("/servicesim/referee", self._on_referee)
+            return
         self._referee = node.create_subscription(
             RefereeState, "/servicesim/referee", self._on_referee,
             RecordedTopic("/servicesim/referee", RefereeState, latched=True).qos)

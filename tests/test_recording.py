@@ -184,6 +184,25 @@ def test_a_burst_of_messages_is_recorded_whole_and_in_order_in_one_callback(
     assert scores == [float(value) for value in range(8)]
 
 
+def test_listeners_get_each_recorded_message_decoded_without_a_subscription_of_their_own(
+        graph: Graph) -> None:
+    recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
+    heard: list[float] = []
+    subscriptions = len(list(graph.recorder_node.subscriptions))
+    recorder.add_listener("/servicesim/score", lambda message: heard.append(message.score))
+    assert len(list(graph.recorder_node.subscriptions)) == subscriptions
+    with pytest.raises(ValueError, match="not recorded"):
+        recorder.add_listener("/servicesim/nothing", heard.append)
+    graph.start_sim_clock()
+    score = graph.publishers["/servicesim/score"]
+    graph.spin_until(lambda: score.get_subscription_count() > 0, "the recorder to match")
+    for value in range(3):
+        score.publish(Score(score=float(value)))
+    graph.spin_until(lambda: recorder.counts["/servicesim/score"] == 3, "three scores")
+    recorder.close()
+    assert heard == [0.0, 1.0, 2.0]
+
+
 def test_the_file_follows_the_ros2_profile_with_qos_metadata(graph: Graph) -> None:
     McapRecorder(node=graph.recorder_node, path=graph.path).close()
     with graph.path.open("rb") as stream:

@@ -35,6 +35,7 @@ PICKUP_RANGE_M = 2.0
 PERSON_BODY_RADIUS = 0.25
 PERSON_APPROXIMATION_M = 0.75
 OBJECT_APPROXIMATION_M = 0.35
+CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
 CMD_VEL_TIMEOUT_S = 0.5
 CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
 CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
@@ -79,6 +80,7 @@ class SimEngine:
         self._drifts = list(scenario.drift_times)
         self._seen_revision = -1
         self._steps = 0
+        self._nobody_near_until = -math.inf
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
         task, areas = self.scenario.task, self.world.areas
@@ -272,8 +274,7 @@ class SimEngine:
 
     def _book_contacts(self, dt: float) -> None:
         wall_gap = self.robot.wall_gap()
-        if wall_gap >= OBJECT_APPROXIMATION_M and self._nearest_person_gap() >= (
-                PERSON_APPROXIMATION_M):
+        if wall_gap >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
             return  # nobody and nothing near: the common case, nothing to book
         gaps = self._person_gaps()
         touching = np.clip(PERSON_BODY_RADIUS - gaps, 0.0, None)
@@ -284,6 +285,21 @@ class SimEngine:
             person_depth=float(approach.sum()),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - wall_gap)),
             dt=dt)
+
+    def _anyone_may_be_near(self) -> bool:
+        """Whether someone may be within the approximation distance of the robot's body.
+
+        When the nearest person is farther, nobody can come within it before the gap closes
+        at :data:`CLOSING_SPEED_BOUND`, so the people need not be looked at again until then.
+        """
+        if self.sim_time < self._nobody_near_until:
+            return False
+        gap = self._nearest_person_gap()
+        if gap < PERSON_APPROXIMATION_M:
+            return True
+        self._nobody_near_until = self.sim_time + (gap - PERSON_APPROXIMATION_M) / (
+            CLOSING_SPEED_BOUND)
+        return False
 
     def _nearest_person_gap(self) -> float:
         """Distance from the robot's body edge to the nearest person's origin (plain floats:

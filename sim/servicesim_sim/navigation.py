@@ -46,6 +46,9 @@ NavigationStatus = Literal["idle", "running", "succeeded", "aborted", "canceled"
 Pose = tuple[float, float, float]
 Twist = tuple[float, float]
 STOP: Twist = (0.0, 0.0)
+OBSTRUCTION_RECHECK_M = 0.1
+"""Metres along the path after which a path obstruction is looked for again (sooner if the
+costmap changed)."""
 
 
 class FollowPathError(IntEnum):
@@ -228,6 +231,8 @@ class Navigator:
         self._replan_needed = True
         self._planned_at = -math.inf
         self._planned_version = -1
+        self._obstruction_checked: tuple[int, int] | None = None
+        self._obstructed = False
         self._blocked_since: float | None = None
         self._blocked_code = 0
         self._blocked_msg = ""
@@ -303,10 +308,20 @@ class Navigator:
             since >= self.tuning.replan_period and self._path_obstructed())
 
     def _path_obstructed(self) -> bool:
-        """Whether the next metres of the path now cross lethal or inscribed cost."""
+        """Whether the next metres of the path now cross lethal or inscribed cost.
+
+        The answer is kept until the costmap changes, the path changes or the robot has gone
+        :data:`OBSTRUCTION_RECHECK_M` further along it: asked every physics step while people
+        move in view, it was a tenth of the simulator's time.
+        """
         assert self._track is not None
-        ahead = self._track.samples(self._s, self.tuning.obstruction_horizon)
-        return bool(np.any(self.costmap.costs_at(ahead[:, 0], ahead[:, 1]) >= INSCRIBED))
+        key = (self.costmap.version, math.floor(self._s / OBSTRUCTION_RECHECK_M))
+        if self._obstruction_checked != key:
+            ahead = self._track.samples(self._s, self.tuning.obstruction_horizon)
+            self._obstructed = bool(
+                np.any(self.costmap.costs_at(ahead[:, 0], ahead[:, 1]) >= INSCRIBED))
+            self._obstruction_checked = key
+        return self._obstructed
 
     def _reconsider(self, pose: Pose, now: float) -> None:
         """Plan afresh, but keep the current path unless the new one is worth the switch.
@@ -351,6 +366,7 @@ class Navigator:
     def _take(self, result: PlanResult) -> None:
         assert result.waypoints is not None and result.goal is not None and self._goal is not None
         self._track = PolylinePath(result.waypoints)
+        self._obstruction_checked = None
         self._s = self._off_path = 0.0
         self.path = list(result.waypoints)
         self.distance_remaining = path_length(result.waypoints)

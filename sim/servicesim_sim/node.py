@@ -17,6 +17,7 @@ import array
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import rclpy
@@ -88,7 +89,7 @@ class SimulatorNode:
         self.steps_per_io = max(1, round(IO_PERIOD_S / self.engine.dt))
         self._sleepers: list[tuple[float, Future]] = []
         self._active_goal: ServerGoalHandle | None = None
-        self._preempted: set[int] = set()
+        self._navigations: list[_Navigation] = []
         self._io_count = 0
         self._dropped = 0
         self._camera_next = 0.0
@@ -229,38 +230,54 @@ class SimulatorNode:
 
     # ----------------------------------------------------------- navigation
     def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
-        if self._active_goal is not None and self._active_goal.is_active:
-            self._preempted.add(id(self._active_goal))
-        self._active_goal = goal_handle
+        self._active_goal = goal_handle  # an older goal still running is preempted
         goal_handle.execute()
 
     async def _navigate(self, goal_handle: ServerGoalHandle) -> NavigateToPose.Result:
+        """Start the goal and wait for its result, which :meth:`_advance_navigation` sets.
+
+        The goal is followed by the loop itself, once per I/O period, rather than by this
+        coroutine waking each period: every wake-up of a coroutine costs the executor another
+        pass over its wait set, and that was a fifth of the simulator's time.
+        """
         pose = goal_handle.request.pose.pose
         yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
-        ticket = self.engine.navigate(pose.position.x, pose.position.y, yaw)
-        started = feedback_due = self.engine.sim_time
-        while True:
-            await self.sim_sleep(IO_PERIOD_S)
-            if id(goal_handle) in self._preempted:
-                self._preempted.discard(id(goal_handle))
-                goal_handle.abort()
-                return NavigateToPose.Result(error_code=NavigateToPose.Result.UNKNOWN,
-                                             error_msg="preempted by a newer goal")
-            if goal_handle.is_cancel_requested:
-                self.engine.cancel_navigation(ticket)
-                goal_handle.canceled()
-                return NavigateToPose.Result(error_msg="canceled")
-            state = self.engine.navigation_state(ticket)
-            if self.engine.sim_time >= feedback_due - 1e-9:
-                feedback_due = self.engine.sim_time + FEEDBACK_PERIOD_S
-                goal_handle.publish_feedback(self._feedback(state, started))
-            if state.status == "succeeded":
-                goal_handle.succeed()
-                return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE)
-            if state.status != "running":
-                goal_handle.abort()
-                return NavigateToPose.Result(error_code=state.error_code,
-                                             error_msg=state.error_msg)
+        navigation = _Navigation(
+            handle=goal_handle, ticket=self.engine.navigate(pose.position.x, pose.position.y, yaw),
+            started=self.engine.sim_time, feedback_due=self.engine.sim_time + IO_PERIOD_S)
+        self._navigations.append(navigation)
+        return await navigation.result
+
+    def _advance_navigation(self) -> None:
+        """Once per I/O period: feedback, and the result of every goal that ended."""
+        for navigation in list(self._navigations):
+            result = self._navigation_outcome(navigation)
+            if result is not None:
+                self._navigations.remove(navigation)
+                navigation.result.set_result(result)
+
+    def _navigation_outcome(self, navigation: _Navigation) -> NavigateToPose.Result | None:
+        """The goal's result if it ended (preempted, canceled, reached, failed), else None."""
+        handle = navigation.handle
+        if handle is not self._active_goal:
+            handle.abort()
+            return NavigateToPose.Result(error_code=NavigateToPose.Result.UNKNOWN,
+                                         error_msg="preempted by a newer goal")
+        if handle.is_cancel_requested:
+            self.engine.cancel_navigation(navigation.ticket)
+            handle.canceled()
+            return NavigateToPose.Result(error_msg="canceled")
+        state = self.engine.navigation_state(navigation.ticket)
+        if self.engine.sim_time >= navigation.feedback_due - 1e-9:
+            navigation.feedback_due = self.engine.sim_time + FEEDBACK_PERIOD_S
+            handle.publish_feedback(self._feedback(state, navigation.started))
+        if state.status == "succeeded":
+            handle.succeed()
+            return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE)
+        if state.status != "running":
+            handle.abort()
+            return NavigateToPose.Result(error_code=state.error_code, error_msg=state.error_msg)
+        return None
 
     def _feedback(self, state: NavigationState, started: float) -> NavigateToPose.Feedback:
         feedback = NavigateToPose.Feedback()
@@ -404,6 +421,7 @@ class SimulatorNode:
                     self._score_message.score = float(self.engine.score())
                     self._send(self._score, self._score_message)
             self._publish_io()
+            self._advance_navigation()
             self._wake_sleepers()
             executor.drain()
             speed = self._pace()
@@ -445,6 +463,17 @@ class DrainingExecutor(SingleThreadedExecutor):
             handler()
             handler.result()  # raise what the callback raised
         return limit
+
+
+@dataclass
+class _Navigation:
+    """A NavigateToPose goal the loop follows; ``result`` completes the goal's coroutine."""
+
+    handle: ServerGoalHandle
+    ticket: int
+    started: float
+    feedback_due: float
+    result: Future = field(default_factory=Future)
 
 
 def simulator_ros_node(name: str = "servicesim") -> Node:
