@@ -1,11 +1,13 @@
 """The simulator's real-time factor: alone, and with one executive driving a full mission.
 
-``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]`` prints
+``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]
+[--missions N]`` prints
 
 * alone: the simulator at ``--speed`` (default 0, as fast as it can) with its task started
   (before ``new_task`` it never runs faster than real time) but nobody driving the robot and
   nobody but this script listening to ``/clock``, over ``S`` wall seconds after a warm-up;
 * driven: ``python -m bt_servicesim.run --headless`` on the default (shipped) task, same speed,
+  ``N`` times one after another (then the median, least and greatest factor too),
   measured from the referee's own stamps between the task's start and its end, which is the
   part of a run an evaluation pays for; and the run's report (completed, sim and wall time);
 * the CPU time the executive's and the simulator's processes spent over the task (from
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -41,6 +44,9 @@ def build_parser() -> OneLineArgumentParser:
                         help="sim speed factor (default 0: as fast as possible)")
     parser.add_argument("--executive", choices=("bt", "baseline"), default="bt",
                         help="the executive driving the mission (default bt)")
+    parser.add_argument("--missions", type=int, default=5,
+                        help="driven missions to run one after another (default 5): a "
+                             "mission's cost per sim second depends on what happens in it")
     return parser
 
 
@@ -129,7 +135,8 @@ class ProcessCpu:
         return (int(fields[11]) + int(fields[12])) / self.TICKS
 
 
-def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -> None:
+def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -> float:
+    """Run one mission, print its figures; the real-time factor over its task."""
     from servicesim_competition.msg import RefereeState
 
     from bt_servicesim.referee_monitor import LATCHED, REFEREE_TOPIC
@@ -149,7 +156,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
             if cpu:
                 cpu[0].mark()
 
-    node.create_subscription(RefereeState, REFEREE_TOPIC, on_state, LATCHED)
+    subscription = node.create_subscription(RefereeState, REFEREE_TOPIC, on_state, LATCHED)
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
         command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed",
                    repr(speed), "--executive", executive, "--out", out]
@@ -165,6 +172,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
         spin_until(executor, run_over, 1800.0, "the mission")
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
+    node.destroy_subscription(subscription)
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()
@@ -179,6 +187,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
         print("  CPU over the task: " + ", ".join(
             f"{name} {cpu[0].spent(pid):.2f} s ({1000.0 * cpu[0].spent(pid) / sim_s:.1f} ms "
             f"per sim s)" for name, pid in processes))
+    return factor
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -187,6 +196,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         build_parser().error(f"--seconds {args.seconds}: must be more than 0")
     if not args.speed >= 0.0:
         build_parser().error(f"--speed {args.speed}: must be 0 or more")
+    if args.missions < 1:
+        build_parser().error(f"--missions {args.missions}: must be 1 or more")
     domain = isolate()
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -200,7 +211,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.add_node(node)
     try:
         measure_alone(node, executor, speed=args.speed, seconds=args.seconds)
-        measure_mission(node, executor, speed=args.speed, executive=args.executive)
+        factors = [measure_mission(node, executor, speed=args.speed, executive=args.executive)
+                   for _mission in range(args.missions)]
+        if len(factors) > 1:
+            print(f"driven by {args.executive}, {len(factors)} missions: real-time factor "
+                  f"median {statistics.median(factors):.1f}, min {min(factors):.1f}, "
+                  f"max {max(factors):.1f}")
     finally:
         executor.shutdown()
         node.destroy_node()

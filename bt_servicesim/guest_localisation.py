@@ -42,10 +42,11 @@ from typing import Any, ClassVar
 import numpy as np
 import py_trees
 from py_trees.ports import BehaviourWithPorts, NoDataAvailable, PortInformation
+from scipy import ndimage
 
 from bt_servicesim.geometry import Box, Pose2D
 from bt_servicesim.goals import PERSON_CLEARANCE, RFID_RANGE, ROBOT_CLEARANCE
-from bt_servicesim.occupancy import OccupancyGrid2D
+from bt_servicesim.occupancy import OccupancyGrid2D, Window
 from bt_servicesim.sim_time import clock_from_setup_kwargs, sim_now_s
 
 __all__ = [
@@ -103,6 +104,14 @@ WALL_WEIGHT = 0.15
 DEPARTURE_WEIGHT = 0.3
 """Score gained by a goal a clear :data:`DEPARTURE_SCALE` ahead of the guest on the way out
 (and lost by one as far behind them)."""
+PASSING_BERTH = 1.0
+"""Metres (centre to centre) the robot keeps from where the guest may stand on its way to an
+approach spot: closer, the referee books approximation (0.75 m from the body's edge)."""
+PASSING_PENALTY = 0.6
+"""Score lost by an approach spot the robot cannot reach with that berth."""
+PASSING_WINDOW = 3.0
+"""Metres beyond :data:`APPROACH_RADIUS` around the estimate searched for a way with that
+berth (a longer way round counts as none: the spot is then taken to need passing)."""
 DEPARTURE_SCALE = 1.0
 """Metres of route, ahead of or behind the guest, over which the departure term saturates."""
 STEADY_FOR = 0.5
@@ -266,7 +275,10 @@ def approach_goal(
     :data:`WALL_BERTH`. With ``leave_towards``, cells ahead of the guest on the route there
     score up to :data:`DEPARTURE_WEIGHT` more and cells behind them as much less. For a compact
     estimate the best cell lies about 1.4 m from it, on the robot's side when nothing says
-    otherwise; for an estimate split in two (a robot that drove a straight line cannot tell
+    otherwise. A cell the robot could only reach by passing within :data:`PASSING_BERTH` of
+    where the guest may stand scores :data:`PASSING_PENALTY` less (a waiting guest does not
+    step aside: in a narrow corridor the way past them is a squeeze, or contact). For an
+    estimate split in two (a robot that drove a straight line cannot tell
     its left from its right) it may lie between the two halves.
     None if the robot already stands :data:`CLOSE_ENOUGH` and no cell scores clearly better
     (:data:`STAY_SLACK`), or nothing near is reachable.
@@ -279,6 +291,7 @@ def approach_goal(
     scores = _score(estimate, here_and_cells, robot) + _wall_berth(grid, here_and_cells)
     if leave_towards is not None:
         scores += _departure(estimate, grid, here_and_cells, leave_towards)
+    scores[~_reachable_without_passing(estimate, grid, robot, here_and_cells)] -= PASSING_PENALTY
     here, scores = scores[0], scores[1:]
     near = math.hypot(estimate.x - robot.x, estimate.y - robot.y) <= CLOSE_ENOUGH
     if near and here >= scores.max() - STAY_SLACK:
@@ -291,13 +304,15 @@ def approach_goal(
 def _reachable_near(
     estimate: GuestEstimate, grid: OccupancyGrid2D, reachable: np.ndarray
 ) -> np.ndarray:
-    """Centres (n, 2) of reachable cells within APPROACH_RADIUS of the estimate."""
+    """Centres (n, 2) of reachable cells within APPROACH_RADIUS of the estimate, about
+    :data:`ESTIMATE_SPACING` apart (finer would only cost time: the goal tolerance is 0.3 m)."""
     window = grid.window(estimate.x - APPROACH_RADIUS, estimate.y - APPROACH_RADIUS,
                          estimate.x + APPROACH_RADIUS, estimate.y + APPROACH_RADIUS)
     if window.is_empty:
         return np.zeros((0, 2))
-    xs, ys = np.meshgrid(window.xs, window.ys)
-    keep = reachable[window.rows, window.cols] & (
+    stride = max(1, round(ESTIMATE_SPACING / grid.resolution))
+    xs, ys = np.meshgrid(window.xs[::stride], window.ys[::stride])
+    keep = reachable[window.rows, window.cols][::stride, ::stride] & (
         np.hypot(xs - estimate.x, ys - estimate.y) <= APPROACH_RADIUS)
     return np.column_stack([xs[keep], ys[keep]])
 
@@ -338,9 +353,50 @@ def _departure(estimate: GuestEstimate, grid: OccupancyGrid2D, cells: np.ndarray
     return DEPARTURE_WEIGHT * np.clip((guest_to_exit - to_exit) / DEPARTURE_SCALE, -1.0, 1.0)
 
 
-def _cells_of(grid: OccupancyGrid2D, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _reachable_without_passing(estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D,
+                               cells: np.ndarray) -> np.ndarray:
+    """Which cells the robot reaches, near the estimate, keeping :data:`PASSING_BERTH` from
+    every possible spot of the guest; all of them when the robot already stands that close
+    or outside the window looked at (nothing to tell)."""
+    reach = APPROACH_RADIUS + PASSING_WINDOW
+    window = grid.window(estimate.x - reach, estimate.y - reach,
+                         estimate.x + reach, estimate.y + reach)
+    everywhere = np.ones(len(cells), dtype=bool)
+    if window.is_empty:
+        return everywhere
+    spots = np.zeros((len(window.ys), len(window.xs)), dtype=bool)
+    rows, cols = _window_indices(grid, window, np.vstack([estimate.spots,
+                                                          [[estimate.x, estimate.y]]]))
+    spots[rows, cols] = True
+    berth = ndimage.distance_transform_edt(~spots) * grid.resolution >= PASSING_BERTH
+    open_cells = grid.passable(ROBOT_CLEARANCE)[window.rows, window.cols] & berth
+    labels, _count = ndimage.label(open_cells, structure=np.ones((3, 3), dtype=bool))
+    robot_rows, robot_cols = _window_indices(grid, window, np.array([[robot.x, robot.y]]),
+                                             clip=False)
+    inside = 0 <= robot_rows[0] < labels.shape[0] and 0 <= robot_cols[0] < labels.shape[1]
+    if not inside or labels[robot_rows[0], robot_cols[0]] == 0:
+        return everywhere
+    cell_rows, cell_cols = _window_indices(grid, window, cells)
+    return labels[cell_rows, cell_cols] == labels[robot_rows[0], robot_cols[0]]
+
+
+def _window_indices(grid: OccupancyGrid2D, window: Window, points: np.ndarray,
+                    clip: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of each point (n, 2) within ``window`` (clipped to it unless not)."""
+    rows, cols = _cells_of(grid, points, clip=False)
+    rows, cols = rows - window.rows.start, cols - window.cols.start
+    if clip:
+        rows = np.clip(rows, 0, len(window.ys) - 1)
+        cols = np.clip(cols, 0, len(window.xs) - 1)
+    return rows, cols
+
+
+def _cells_of(grid: OccupancyGrid2D, points: np.ndarray,
+              clip: bool = True) -> tuple[np.ndarray, np.ndarray]:
     rows = np.floor((points[:, 1] - grid.origin_y) / grid.resolution).astype(np.intp)
     cols = np.floor((points[:, 0] - grid.origin_x) / grid.resolution).astype(np.intp)
+    if not clip:
+        return rows, cols
     return np.clip(rows, 0, grid.height - 1), np.clip(cols, 0, grid.width - 1)
 
 

@@ -53,9 +53,9 @@ from bt_servicesim.run import (
 from bt_servicesim.simulator_process import SimulatorProcess
 from bt_servicesim.trajectory import (
     TRAJECTORY_NAME,
-    TraceBuilder,
     boxes_from_blackboard,
     render_trajectory,
+    trace_from_recording,
 )
 from bt_servicesim.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 
@@ -230,12 +230,10 @@ class RunRecords:
         self.tree = behaviour_tree_of(executive)
         self.mcap = McapRecorder(node=node, path=out / MCAP_NAME)
         self.task = TaskTopic(node=node, recorder=self.mcap)
-        self.trajectory = TraceBuilder(now_s=lambda: _sim_seconds(node))
-        for topic, listener in (("/servicebot/map", self.trajectory.on_map),
-                                ("/servicebot/odom", self.trajectory.on_odom),
-                                ("/servicesim/actors", self.trajectory.on_actors),
-                                ("/servicesim/referee", self.trajectory.on_referee)):
-            self.mcap.add_listener(topic, listener)
+        # the picture is drawn from the recording after the run: decoding the people's
+        # positions as they come would cost the executive a tenth of its time
+        self.phases: list[tuple[float, str]] = []
+        self._node = node
         self.tree_log: TreeLog | None = None
         if self.tree is not None:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
@@ -245,12 +243,14 @@ class RunRecords:
             self.tree.add_post_tick_handler(self.tree_log)
 
     def note_phase(self, phase: str) -> None:
-        self.trajectory.note_phase(phase)
+        """The mission's phase now (the executive's ``phase()``), kept for the picture."""
+        if not self.phases or self.phases[-1][1] != phase:
+            self.phases.append((_sim_seconds(self._node), phase))
 
     def finish(self, *, title: str) -> None:
         """Write what is written at the end and close the rest; a failure is a warning."""
         steps: list[tuple[str, Callable[[], None]]] = [
-            (MCAP_NAME, self.mcap.close),  # the trajectory is complete once the recording ends
+            (MCAP_NAME, self.mcap.close),  # the picture is drawn from the finished recording
             (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
         ]
         if self.tree_log is not None:
@@ -263,7 +263,8 @@ class RunRecords:
 
     def _render_trajectory(self, title: str) -> None:
         boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
-        render_trajectory(self.trajectory.trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
+        trace = trace_from_recording(self.out / MCAP_NAME, phases=self.phases)
+        render_trajectory(trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
                           title=title)
 
     def _write_final_tree(self) -> None:

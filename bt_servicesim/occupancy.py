@@ -37,6 +37,9 @@ OCCUPIED_FROM = 50
 SEED_RADIUS = 0.5
 """How far (m) a start may be snapped to reach a cell with the requested clearance."""
 
+ROUTES_KEPT = 4
+"""Route trees an :class:`OccupancyGrid2D` keeps (see :meth:`OccupancyGrid2D.routes_from`)."""
+
 LATTICE_SPACING = 0.1
 """Spacing (m) of the lattice :class:`RouteTree` searches over."""
 
@@ -84,6 +87,8 @@ class OccupancyGrid2D:
     clearances: np.ndarray = field(init=False, repr=False)
     """Metres from each cell's centre to the nearest blocked cell; 0 for blocked cells."""
     _components: dict[float, np.ndarray] = field(init=False, repr=False, default_factory=dict)
+    _routes: dict[tuple[float, float, float], RouteTree | None] = field(
+        init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         values = np.array(self.values, dtype=np.int16, copy=True)
@@ -250,8 +255,17 @@ class OccupancyGrid2D:
         return labels == labels[self.world_to_cell(*seed)]
 
     def routes_from(self, x: float, y: float, clearance: float) -> RouteTree | None:
-        """The shortest routes from (x, y) over cells with ``clearance``; None if boxed in."""
-        return RouteTree.build(self, x, y, clearance)
+        """The shortest routes from (x, y) over cells with ``clearance``; None if boxed in.
+
+        The last :data:`ROUTES_KEPT` are kept (a route tree over a building takes tens of
+        milliseconds, and behaviours ask again from the same places, such as an area).
+        """
+        key = (round(float(x), 3), round(float(y), 3), round(float(clearance), 4))
+        if key not in self._routes:
+            if len(self._routes) >= ROUTES_KEPT:
+                del self._routes[next(iter(self._routes))]
+            self._routes[key] = RouteTree.build(self, x, y, clearance)
+        return self._routes[key]
 
 
 def _clearances(values: np.ndarray, resolution: float) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Where everyone went: the run's trajectory picture, ``trajectory.png``.
 
-:class:`TrajectoryRecorder` listens, during the run, to the map (``/servicebot/map``), the
+:class:`TrajectoryRecorder` listens, during a run, to the map (``/servicebot/map``), the
 robot's odometry, the people's ground truth (``/servicesim/actors``) and the referee's state
 (``/servicesim/referee``). These are records, never inputs to the mission: the executive
 decides from its own sensors. From them it keeps the robot's path, the guest's path, every
@@ -26,8 +26,8 @@ from __future__ import annotations
 import json
 import re
 import sys
-from collections import Counter
-from collections.abc import Callable, Mapping
+from collections import Counter, deque
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -358,23 +358,36 @@ def phase_of_tip(tip: str | None) -> str:
     return "-"
 
 
-def trace_from_recording(mcap_path: Path) -> RunTrace:
-    """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived."""
+def trace_from_recording(mcap_path: Path,
+                         phases: Sequence[tuple[float, str]] | None = None) -> RunTrace:
+    """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived.
+
+    The mission's phases come from ``phases`` ((sim time, phase) in time order, as the run
+    noted them) when given, else from the recorded tree snapshots.
+    """
     types = {topic.name: topic.message_type for topic in RECORDED_TOPICS}
     now_ns = [0]
     builder = TraceBuilder(now_s=lambda: now_ns[0] / 1e9)
+    noted = deque(phases or ())
     handlers: dict[str, Callable[[Any], None]] = {
         "/servicebot/map": builder.on_map, "/servicebot/odom": builder.on_odom,
         "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
     }
     with mcap_path.open("rb") as stream:
         for _schema, channel, message in make_reader(stream).iter_messages():
+            while noted and noted[0][0] * 1e9 < message.log_time:  # ties: message first
+                when, phase = noted.popleft()
+                now_ns[0] = round(when * 1e9)
+                builder.note_phase(phase)
             now_ns[0] = message.log_time
             if channel.topic in handlers:
                 handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
-            elif channel.topic == TREE_TOPIC:
+            elif channel.topic == TREE_TOPIC and phases is None:
                 snapshot = json.loads(deserialize_message(message.data, String).data)
                 builder.note_phase(phase_of_tip(snapshot.get("tip")))
+    for when, phase in noted:  # noted after the last message
+        now_ns[0] = round(when * 1e9)
+        builder.note_phase(phase)
     return builder.trace
 
 

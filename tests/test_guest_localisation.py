@@ -188,18 +188,32 @@ def test_a_robot_inside_the_guests_personal_space_backs_off() -> None:
     assert goal is not None and math.dist((goal.x, goal.y), (7.0, 7.0)) >= 1.2
 
 
+def spots_around(x: float, y: float) -> GuestEstimate:
+    spots = np.array([[x + dx, y + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
+    return GuestEstimate(x, y, spots, sightings=20)
+
+
 def test_the_robot_stands_on_the_guests_side_towards_where_they_are_led() -> None:
-    # the robot comes along the corridor from the west; the guest is to be led east
-    spots = np.array([[7.0 + dx, 1.5 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
-    estimate = GuestEstimate(7.0, 1.5, spots, sightings=20)
-    grid, robot = corridor(), Pose2D(5.2, 1.5, 0.0)
+    # the robot comes from the west; there is room to pass the guest at a distance
+    estimate, grid, robot = spots_around(7.0, 7.0), open_room(), Pose2D(5.2, 7.0, 0.0)
     stay_west = approach_goal(estimate, grid, robot)
     assert stay_west is not None and stay_west.x < 7.0
-    lead_east = approach_goal(estimate, grid, robot, leave_towards=(12.5, 1.5))
+    lead_east = approach_goal(estimate, grid, robot, leave_towards=(12.5, 7.0))
     assert lead_east is not None and lead_east.x > 7.0
-    assert 1.1 <= math.dist((lead_east.x, lead_east.y), (7.0, 1.5)) <= 1.8
-    lead_west = approach_goal(estimate, grid, robot, leave_towards=(1.5, 1.5))
+    assert 1.1 <= math.dist((lead_east.x, lead_east.y), (7.0, 7.0)) <= 1.8
+    lead_west = approach_goal(estimate, grid, robot, leave_towards=(1.5, 7.0))
     assert lead_west is not None and lead_west.x < 7.0
+
+
+def test_the_robot_does_not_squeeze_past_a_waiting_guest_to_stand_beyond_them() -> None:
+    # 1.6 m wide: passing the guest in the middle would come within 0.8 m of them
+    values = cells(14.0, 2.0)
+    for wall in ((0, 0, 14.0, 0.2), (0, 1.8, 14.0, 2.0), (0, 0, 0.1, 2.0), (13.9, 0, 14.0, 2.0)):
+        fill(values, *wall)
+    grid = OccupancyGrid2D.from_message(grid_message(values))
+    goal = approach_goal(spots_around(7.0, 1.0), grid, Pose2D(4.8, 1.0, 0.0),
+                         leave_towards=(12.5, 1.0))
+    assert goal is not None and goal.x < 7.0 - 1.1
 
 
 def test_the_approach_keeps_off_walls_where_it_can() -> None:

@@ -187,3 +187,14 @@ def test_route_lengths_to_many_points_at_once_agree_with_one_at_a_time() -> None
     many = routes.distances_at(xs, ys)
     assert many.tolist() == [routes.distance_to(x, y) for x, y in zip(xs, ys, strict=True)]
     assert many[2] == math.inf  # inside the wall
+
+
+def test_route_trees_are_kept_for_the_places_last_asked_about() -> None:
+    grid = two_rooms(door_width=1.0)
+    routes = grid.routes_from(2.0, 1.0, 0.35)
+    assert grid.routes_from(2.0, 1.0, 0.35) is routes
+    for x in (1.0, 1.5, 2.5, 3.0):
+        grid.routes_from(x, 1.0, 0.35)
+    again = grid.routes_from(2.0, 1.0, 0.35)
+    assert again is not routes and again is not None
+    assert again.distance_to(8.0, 1.0) == routes.distance_to(8.0, 1.0)

@@ -246,6 +246,26 @@ def test_a_recorded_run_is_drawn_again_from_its_mcap(story: Story, tmp_path: Pat
         assert image.format == "PNG" and image.size[0] >= 1000
 
 
+def test_phases_noted_during_a_run_are_marked_where_the_live_recorder_marked_them(
+        story: Story, tmp_path: Path) -> None:
+    recording = McapRecorder(node=story.node, path=tmp_path / "run.mcap")
+    recorder = TrajectoryRecorder(node=story.node)
+    noted: list[tuple[float, str]] = []
+    live_note = recorder.note_phase
+
+    def note(phase: str) -> None:
+        noted.append((story.node.get_clock().now().nanoseconds / 1e9, phase))
+        live_note(phase)
+
+    recorder.note_phase = note  # type: ignore[method-assign]
+    play(story, recorder, recording.counts)
+    recording.close()
+    rebuilt = trace_from_recording(tmp_path / "run.mcap", phases=noted)
+    assert [event.kind for event in rebuilt.events].count("phase") == 3
+    assert rebuilt.events == recorder.trace.events
+    recorder.close()
+
+
 def write_tree_log(directory: Path, blackboard: dict[str, Any]) -> None:
     """A one-node tree ticked once, with ``blackboard`` as the blackboard's contents."""
     tree = py_trees.trees.BehaviourTree(py_trees.behaviours.Success(name="Done"))
