@@ -38,7 +38,14 @@ from bt_servicesim.dump import ShadowTree
 from bt_servicesim.executive import Executive
 from bt_servicesim.executive_node import ExecutiveNode
 from bt_servicesim.progress import ProgressView
-from bt_servicesim.recording import MCAP_NAME, McapRecorder, TaskTopic, TreeTopic
+from bt_servicesim.recording import (
+    MCAP_NAME,
+    TASK_TOPIC,
+    TREE_TOPIC,
+    McapRecorder,
+    TaskTopic,
+    TreeTopic,
+)
 from bt_servicesim.referee_monitor import RefereeMonitor
 from bt_servicesim.run import (
     EXIT_BAD_INPUT,
@@ -228,7 +235,8 @@ class RunRecords:
     def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path) -> None:
         self.out = out
         self.tree = behaviour_tree_of(executive)
-        self.mcap = McapRecorder(node=node, path=out / MCAP_NAME)
+        self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
+                                 own_topics=(TASK_TOPIC, TREE_TOPIC))
         self.task = TaskTopic(node=node, recorder=self.mcap)
         # the picture is drawn from the recording after the run: decoding the people's
         # positions as they come would cost the executive a tenth of its time
@@ -239,7 +247,7 @@ class RunRecords:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
                                     sim_time_s=lambda: _sim_seconds(node),
                                     tree_file=str(tree_file))
-            self.tree_log.listeners.append(TreeTopic(node=node).publish)
+            self.tree_log.listeners.append(TreeTopic(node=node, recorder=self.mcap).publish)
             self.tree.add_post_tick_handler(self.tree_log)
 
     def note_phase(self, phase: str) -> None:

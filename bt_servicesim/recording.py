@@ -26,7 +26,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Collection, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -38,7 +38,7 @@ from py_trees.common import Status
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.subscription import Subscription
 from rclpy.task import Future
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
@@ -179,15 +179,20 @@ class McapRecorder:
         node: the node to subscribe on; its clock stamps the messages (sim time in a run)
         path: the MCAP file to write (truncated)
         topics: what to record
+        own_topics: those of ``topics`` this process publishes itself: recorded through
+            :meth:`record` as they are published, not by a subscription (which would wake the
+            process once more for each of its own messages)
     """
 
     def __init__(self, *, node: Node, path: Path,
-                 topics: Iterable[RecordedTopic] = RECORDED_TOPICS) -> None:
+                 topics: Iterable[RecordedTopic] = RECORDED_TOPICS,
+                 own_topics: Collection[str] = ()) -> None:
         self.node = node
         self.path = path
         self.counts: dict[str, int] = {}
         self._listeners: dict[str, list[Callable[[Any], None]]] = {}
         self._types: dict[str, type] = {}
+        self._own: dict[str, Callable[[bytes], None]] = {}
         self._stream: BinaryIO | None = path.open("wb")
         self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
         self._writer.start(profile="ros2", library="bt_servicesim")
@@ -204,10 +209,24 @@ class McapRecorder:
             self.counts[topic.name] = 0
             self._types[topic.name] = topic.message_type
             taken: list[Subscription[Any]] = []
+            if topic.name in own_topics:
+                self._own[topic.name] = self._writes_to(topic.name, channel, taken)
+                continue
             taken.append(node.create_subscription(
                 topic.message_type, topic.name, self._writes_to(topic.name, channel, taken),
                 topic.qos, raw=True))
             self._subscriptions.append(taken[0])
+
+    def records_own(self, topic: str) -> bool:
+        """Whether ``topic`` is recorded through :meth:`record` (one of ``own_topics``)."""
+        return topic in self._own
+
+    def record(self, topic: str, message: Any) -> None:
+        """Write a message this process publishes on one of its ``own_topics``."""
+        write = self._own.get(topic)
+        if write is None:
+            raise ValueError(f"{topic} is not recorded as one of this process's own topics")
+        write(serialize_message(message))
 
     def add_listener(self, topic: str, callback: Callable[[Any], None]) -> None:
         """Also hand every message recorded on ``topic``, deserialised, to ``callback``.
@@ -241,8 +260,9 @@ class McapRecorder:
             if self._stream is None:
                 return
             write_one(data)
-            for queued in _queued_raw_messages(subscription[0]):
-                write_one(queued)
+            if subscription:
+                for queued in _queued_raw_messages(subscription[0]):
+                    write_one(queued)
 
         return write
 
@@ -276,9 +296,11 @@ class TaskTopic:
     """Publishes the task (``task_info``) on ``/bt_servicesim/task`` once a task is running."""
 
     def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
-        """Reads the referee's state from ``recorder`` when given, else subscribes to it."""
+        """Reads the referee's state from ``recorder`` when given, else subscribes to it, and
+        writes the task to ``recorder`` when it records the task topic as its own."""
         self.node = node
         self.task: dict[str, Any] | None = None
+        self.recorder = recorder
         latched = RecordedTopic(TASK_TOPIC, String, latched=True).qos
         self.publisher = node.create_publisher(String, TASK_TOPIC, latched)
         self.client = node.create_client(TaskInfo, "/servicesim/task_info")
@@ -309,7 +331,10 @@ class TaskTopic:
             "guest_name": response.guest_name,
             "robot_start_pose": {"x": start.x, "y": start.y, "yaw": start.yaw},
         }
-        self.publisher.publish(String(data=json.dumps(self.task)))
+        message = String(data=json.dumps(self.task))
+        self.publisher.publish(message)
+        if self.recorder is not None and self.recorder.records_own(TASK_TOPIC):
+            self.recorder.record(TASK_TOPIC, message)
 
 
 class TreeTopic:
@@ -318,14 +343,19 @@ class TreeTopic:
     Register :meth:`publish` as a :class:`~bt_servicesim.tree_log.TreeLog` listener.
     """
 
-    def __init__(self, *, node: Node) -> None:
+    def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
+        """Writes each snapshot to ``recorder`` too, when given (see its ``own_topics``)."""
         self.publisher = node.create_publisher(
             String, TREE_TOPIC, RecordedTopic(TREE_TOPIC, String).qos)
+        self.recorder = recorder
         self._state = TreeState()
 
     def publish(self, record: TickRecord) -> None:
         self._state = self._state.apply(record)
-        self.publisher.publish(String(data=json.dumps(snapshot_json(self._state))))
+        message = String(data=json.dumps(snapshot_json(self._state)))
+        self.publisher.publish(message)
+        if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
+            self.recorder.record(TREE_TOPIC, message)
 
 
 def snapshot_json(state: TreeState) -> dict[str, Any]:

@@ -29,6 +29,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import TaskInfo
+from std_msgs.msg import String
 
 from bt_servicesim.recording import (
     RECORDED_TOPICS,
@@ -279,6 +280,24 @@ def test_tree_snapshots_are_published_whole_and_recorded(graph: Graph) -> None:
         "nodes": {"Main": {"status": "RUNNING", "feedback": ""},
                   "Main.Go": {"status": "SUCCESS", "feedback": "arrived"},
                   "Main.Then": {"status": "RUNNING", "feedback": ""}}}
+
+
+def test_own_topics_are_recorded_as_published_without_a_subscription(graph: Graph) -> None:
+    recorder = McapRecorder(node=graph.recorder_node, path=graph.path, own_topics=(TREE_TOPIC,))
+    subscribed = {subscription.topic_name for subscription in graph.recorder_node.subscriptions}
+    assert TREE_TOPIC not in subscribed and "/servicebot/odom" in subscribed
+    assert recorder.records_own(TREE_TOPIC) and not recorder.records_own(TASK_TOPIC)
+    with pytest.raises(ValueError, match="own topics"):
+        recorder.record(TASK_TOPIC, String(data="{}"))
+    tree_topic = TreeTopic(node=graph.recorder_node, recorder=recorder)
+    graph.start_sim_clock()
+    tree_topic.publish(TickRecord(tick=1, sim_time_s=1.5, root=Status.RUNNING, tip="Main",
+                                  nodes={"Main": (Status.RUNNING, "")}, blackboard={}))
+    assert recorder.counts[TREE_TOPIC] == 1  # written at once, no spinning
+    recorder.close()
+    (snapshot,) = [json.loads(decoded.data) for topic, _, _, decoded in read_back(graph.path)
+                   if topic == TREE_TOPIC]
+    assert snapshot["tick"] == 1 and snapshot["tip"] == "Main"
 
 
 def test_schemas_hold_every_type_a_message_uses_once_each() -> None:
