@@ -243,11 +243,13 @@ class RunRecords:
         self.phases: list[tuple[float, str]] = []
         self._node = node
         self.tree_log: TreeLog | None = None
+        self.tree_topic: TreeTopic | None = None
         if self.tree is not None:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
                                     sim_time_s=lambda: _sim_seconds(node),
                                     tree_file=str(tree_file))
-            self.tree_log.listeners.append(TreeTopic(node=node, recorder=self.mcap).publish)
+            self.tree_topic = TreeTopic(node=node, recorder=self.mcap)
+            self.tree_log.listeners.append(self.tree_topic.publish)
             self.tree.add_post_tick_handler(self.tree_log)
 
     def note_phase(self, phase: str) -> None:
@@ -258,7 +260,7 @@ class RunRecords:
     def finish(self, *, title: str) -> None:
         """Write what is written at the end and close the rest; a failure is a warning."""
         steps: list[tuple[str, Callable[[], None]]] = [
-            (MCAP_NAME, self.mcap.close),  # the picture is drawn from the finished recording
+            (MCAP_NAME, self._close_recording),  # the picture is drawn from the finished recording
             (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
         ]
         if self.tree_log is not None:
@@ -268,6 +270,11 @@ class RunRecords:
                 step()
             except Exception as error:  # a record is not worth losing the report for
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
+
+    def _close_recording(self) -> None:
+        if self.tree_topic is not None:
+            self.tree_topic.flush()  # the last state, if the period held it back
+        self.mcap.close()
 
     def _render_trajectory(self, title: str) -> None:
         boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)

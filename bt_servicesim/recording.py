@@ -51,6 +51,7 @@ from bt_servicesim.tree_log import TickRecord, TreeState
 MCAP_NAME = "run.mcap"
 TASK_TOPIC = "/bt_servicesim/task"
 TREE_TOPIC = "/bt_servicesim/tree"
+SNAPSHOT_PERIOD_S = 0.5  # sim s between tree snapshots while the tip stays put
 DEFINITION_SEPARATOR = "=" * 80
 PRIMITIVE_TYPES = frozenset({
     "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
@@ -338,24 +339,41 @@ class TaskTopic:
 
 
 class TreeTopic:
-    """Publishes a self-contained tree snapshot on ``/bt_servicesim/tree`` for each log record.
+    """Publishes a self-contained tree snapshot on ``/bt_servicesim/tree`` as the tree runs.
 
-    Register :meth:`publish` as a :class:`~bt_servicesim.tree_log.TreeLog` listener.
+    Register :meth:`publish` as a :class:`~bt_servicesim.tree_log.TreeLog` listener. A snapshot
+    goes out when the tip or the root's status changes, else at most every ``period_s`` sim
+    seconds: a viewer needs no more, and encoding the whole tree as JSON every tick is work the
+    executive does between ticks (``tree_log.jsonl`` keeps every tick). :meth:`flush` sends
+    the latest state if it has not gone out.
     """
 
-    def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
+    def __init__(self, *, node: Node, recorder: McapRecorder | None = None,
+                 period_s: float = SNAPSHOT_PERIOD_S) -> None:
         """Writes each snapshot to ``recorder`` too, when given (see its ``own_topics``)."""
         self.publisher = node.create_publisher(
             String, TREE_TOPIC, RecordedTopic(TREE_TOPIC, String).qos)
         self.recorder = recorder
+        self.period_s = period_s
         self._state = TreeState()
+        self._sent: TreeState | None = None
 
     def publish(self, record: TickRecord) -> None:
-        self._state = self._state.apply(record)
+        previous, self._state = self._state, self._state.apply(record)
+        if (self._sent is None or (record.tip, record.root) != (previous.tip, previous.root)
+                or record.sim_time_s >= self._sent.sim_time_s + self.period_s):
+            self._send()
+
+    def flush(self) -> None:
+        if self._state.tick and self._sent is not self._state:
+            self._send()
+
+    def _send(self) -> None:
         message = String(data=json.dumps(snapshot_json(self._state)))
         self.publisher.publish(message)
         if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
             self.recorder.record(TREE_TOPIC, message)
+        self._sent = self._state
 
 
 def snapshot_json(state: TreeState) -> dict[str, Any]:

@@ -300,6 +300,30 @@ def test_own_topics_are_recorded_as_published_without_a_subscription(graph: Grap
     assert snapshot["tick"] == 1 and snapshot["tip"] == "Main"
 
 
+def test_snapshots_go_out_on_a_new_tip_or_after_the_period_and_on_flush(graph: Graph) -> None:
+    recorder = McapRecorder(node=graph.recorder_node, path=graph.path, own_topics=(TREE_TOPIC,))
+    tree_topic = TreeTopic(node=graph.recorder_node, recorder=recorder, period_s=0.5)
+    graph.start_sim_clock()
+
+    def tick(number: int, at: float, tip: str, feedback: str) -> None:
+        tree_topic.publish(TickRecord(tick=number, sim_time_s=at, root=Status.RUNNING, tip=tip,
+                                      nodes={tip: (Status.RUNNING, feedback)}, blackboard={}))
+
+    tick(1, 1.0, "Main.Go", "3.0 m to go")  # the first: sent
+    tick(2, 1.1, "Main.Go", "2.9 m to go")  # same tip, within the period: held back
+    tick(3, 1.2, "Main.Then", "")  # a new tip: sent
+    tick(4, 1.3, "Main.Then", "waiting")  # held back
+    tick(5, 1.7, "Main.Then", "still waiting")  # the period passed: sent
+    tick(6, 1.8, "Main.Then", "done waiting")  # held back, until the flush
+    tree_topic.flush()
+    tree_topic.flush()  # nothing new: nothing sent
+    recorder.close()
+    snapshots = [json.loads(decoded.data) for topic, _, _, decoded in read_back(graph.path)
+                 if topic == TREE_TOPIC]
+    assert [snapshot["tick"] for snapshot in snapshots] == [1, 3, 5, 6]
+    assert snapshots[-1]["nodes"]["Main.Then"]["feedback"] == "done waiting"
+
+
 def test_schemas_hold_every_type_a_message_uses_once_each() -> None:
     definition = complete_definition("nav_msgs/msg/Odometry")
     included = [line[5:] for line in definition.splitlines() if line.startswith("MSG: ")]
