@@ -55,6 +55,9 @@ DEFAULT_SPEED = 20.0
 DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
 STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
 REPORT_NAME = "report.json"
+EPISODE_CPU_S_PER_SIM_S = 0.036
+"""CPU seconds an episode spends per sim second, simulator and executive together (measured
+with ``benchmarks/sim_rtf.py``: about 18 ms each)."""
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
 INTERRUPTED = "evaluation interrupted"
 PARENT_FIELD, START_TIME_FIELD = 4, 22  # of /proc/<pid>/stat
@@ -160,6 +163,27 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
         resume=args.resume,
     )
+
+
+def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
+    """Why these settings will overload the machine, or None.
+
+    An episode at speed X needs about X times :data:`EPISODE_CPU_S_PER_SIM_S` of CPU per wall
+    second (simulator and executive together); past the machine's cores the executives fall
+    behind the worlds they steer (they tick late, then seconds apart), and the results measure
+    the machine rather than the mission logic.
+    """
+    if speed <= 0.0:  # each simulator runs flat out on a core, its executive beside it
+        if 2 * jobs <= cores:
+            return None
+        need_text = f"--jobs {jobs} at --speed 0 keeps {2 * jobs} processes busy"
+    else:
+        needed = jobs * speed * EPISODE_CPU_S_PER_SIM_S
+        if needed <= cores:
+            return None
+        need_text = f"--jobs {jobs} at --speed {speed:g} needs about {needed:.1f} cores"
+    return (f"{need_text}; this machine has {cores}: the executives will lag behind their "
+            f"simulators (use fewer --jobs or a lower --speed)")
 
 
 def _names(value: str, flag: str, known: Iterable[str]) -> tuple[str, ...]:
@@ -810,6 +834,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     apply_localhost_defaults()
+    warning = load_warning(jobs=settings.jobs, speed=settings.speed, cores=os.cpu_count() or 1)
+    if warning is not None:
+        print(f"{PROG}: warning: {warning}", file=sys.stderr)
     _, interrupted = evaluate(settings)
     return EXIT_INTERRUPTED if interrupted else EXIT_OK
 
