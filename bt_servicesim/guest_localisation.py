@@ -104,14 +104,14 @@ WALL_WEIGHT = 0.15
 DEPARTURE_WEIGHT = 0.3
 """Score gained by a goal a clear :data:`DEPARTURE_SCALE` ahead of the guest on the way out
 (and lost by one as far behind them)."""
-PASSING_BERTH = 1.0
-"""Metres (centre to centre) the robot keeps from where the guest may stand on its way to an
-approach spot: closer, the referee books approximation (0.75 m from the body's edge)."""
-PASSING_PENALTY = 0.6
-"""Score lost by an approach spot the robot cannot reach with that berth."""
-PASSING_WINDOW = 3.0
-"""Metres beyond :data:`APPROACH_RADIUS` around the estimate searched for a way with that
-berth (a longer way round counts as none: the spot is then taken to need passing)."""
+PASSING_BERTHS = ((1.0, 0.2), (0.75, 0.4))
+"""(berth, penalty): an approach spot the robot cannot reach keeping ``berth`` metres (centre
+to centre) from every spot where the guest may stand scores ``penalty`` less, the penalties
+adding up. Within 1.0 m the referee books approximation (0.75 m from the body's edge); within
+0.75 m of a person's centre a squeeze past them risks contact (0.5 m)."""
+PASSING_WINDOW = 1.5
+"""Metres beyond :data:`APPROACH_RADIUS` around the estimate within which the berths are kept
+(the possible spots lie well inside)."""
 DEPARTURE_SCALE = 1.0
 """Metres of route, ahead of or behind the guest, over which the departure term saturates."""
 STEADY_FOR = 0.5
@@ -275,9 +275,12 @@ def approach_goal(
     :data:`WALL_BERTH`. With ``leave_towards``, cells ahead of the guest on the route there
     score up to :data:`DEPARTURE_WEIGHT` more and cells behind them as much less. For a compact
     estimate the best cell lies about 1.4 m from it, on the robot's side when nothing says
-    otherwise. A cell the robot could only reach by passing within :data:`PASSING_BERTH` of
-    where the guest may stand scores :data:`PASSING_PENALTY` less (a waiting guest does not
-    step aside: in a narrow corridor the way past them is a squeeze, or contact). For an
+    otherwise. A cell the robot could only reach by passing close to where the guest may stand
+    scores less (:data:`PASSING_BERTHS`; a waiting guest does not step aside, so in a narrow
+    corridor the way past them is a squeeze, or contact): when the guest stands between the
+    robot and the way out, the robot goes round to their far side if it can, passes them now
+    if it can do so safely (they stand still; a guest following the robot is harder to pass),
+    and otherwise stays on its side. For an
     estimate split in two (a robot that drove a straight line cannot tell
     its left from its right) it may lie between the two halves.
     None if the robot already stands :data:`CLOSE_ENOUGH` and no cell scores clearly better
@@ -291,7 +294,8 @@ def approach_goal(
     scores = _score(estimate, here_and_cells, robot) + _wall_berth(grid, here_and_cells)
     if leave_towards is not None:
         scores += _departure(estimate, grid, here_and_cells, leave_towards)
-    scores[~_reachable_without_passing(estimate, grid, robot, here_and_cells)] -= PASSING_PENALTY
+    for berth, penalty in PASSING_BERTHS:
+        scores[~_reachable_keeping(berth, estimate, grid, robot, here_and_cells)] -= penalty
     here, scores = scores[0], scores[1:]
     near = math.hypot(estimate.x - robot.x, estimate.y - robot.y) <= CLOSE_ENOUGH
     if near and here >= scores.max() - STAY_SLACK:
@@ -353,11 +357,11 @@ def _departure(estimate: GuestEstimate, grid: OccupancyGrid2D, cells: np.ndarray
     return DEPARTURE_WEIGHT * np.clip((guest_to_exit - to_exit) / DEPARTURE_SCALE, -1.0, 1.0)
 
 
-def _reachable_without_passing(estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D,
-                               cells: np.ndarray) -> np.ndarray:
-    """Which cells the robot reaches, near the estimate, keeping :data:`PASSING_BERTH` from
-    every possible spot of the guest; all of them when the robot already stands that close
-    or outside the window looked at (nothing to tell)."""
+def _reachable_keeping(berth: float, estimate: GuestEstimate, grid: OccupancyGrid2D,
+                       robot: Pose2D, cells: np.ndarray) -> np.ndarray:
+    """Which cells the robot reaches keeping ``berth`` from every possible spot of the guest,
+    by any way through the building (round a block of rooms, say); all of them when the robot
+    already stands that close (nothing to tell)."""
     reach = APPROACH_RADIUS + PASSING_WINDOW
     window = grid.window(estimate.x - reach, estimate.y - reach,
                          estimate.x + reach, estimate.y + reach)
@@ -368,27 +372,24 @@ def _reachable_without_passing(estimate: GuestEstimate, grid: OccupancyGrid2D, r
     rows, cols = _window_indices(grid, window, np.vstack([estimate.spots,
                                                           [[estimate.x, estimate.y]]]))
     spots[rows, cols] = True
-    berth = ndimage.distance_transform_edt(~spots) * grid.resolution >= PASSING_BERTH
-    open_cells = grid.passable(ROBOT_CLEARANCE)[window.rows, window.cols] & berth
+    open_cells = grid.passable(ROBOT_CLEARANCE).copy()
+    open_cells[window.rows, window.cols] &= (
+        ndimage.distance_transform_edt(~spots) * grid.resolution >= berth)
     labels, _count = ndimage.label(open_cells, structure=np.ones((3, 3), dtype=bool))
-    robot_rows, robot_cols = _window_indices(grid, window, np.array([[robot.x, robot.y]]),
-                                             clip=False)
-    inside = 0 <= robot_rows[0] < labels.shape[0] and 0 <= robot_cols[0] < labels.shape[1]
-    if not inside or labels[robot_rows[0], robot_cols[0]] == 0:
+    robot_rows, robot_cols = _cells_of(grid, np.array([[robot.x, robot.y]]))
+    robot_label = labels[robot_rows[0], robot_cols[0]]
+    if robot_label == 0:
         return everywhere
-    cell_rows, cell_cols = _window_indices(grid, window, cells)
-    return labels[cell_rows, cell_cols] == labels[robot_rows[0], robot_cols[0]]
+    cell_rows, cell_cols = _cells_of(grid, cells)
+    return labels[cell_rows, cell_cols] == robot_label
 
 
-def _window_indices(grid: OccupancyGrid2D, window: Window, points: np.ndarray,
-                    clip: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column of each point (n, 2) within ``window`` (clipped to it unless not)."""
+def _window_indices(grid: OccupancyGrid2D, window: Window,
+                    points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of each point (n, 2) within ``window``, clipped to it."""
     rows, cols = _cells_of(grid, points, clip=False)
-    rows, cols = rows - window.rows.start, cols - window.cols.start
-    if clip:
-        rows = np.clip(rows, 0, len(window.ys) - 1)
-        cols = np.clip(cols, 0, len(window.xs) - 1)
-    return rows, cols
+    return (np.clip(rows - window.rows.start, 0, len(window.ys) - 1),
+            np.clip(cols - window.cols.start, 0, len(window.xs) - 1))
 
 
 def _cells_of(grid: OccupancyGrid2D, points: np.ndarray,

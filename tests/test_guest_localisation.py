@@ -216,6 +216,18 @@ def test_the_robot_does_not_squeeze_past_a_waiting_guest_to_stand_beyond_them() 
     assert goal is not None and goal.x < 7.0 - 1.1
 
 
+def test_the_robot_goes_round_the_block_to_stand_beyond_a_guest_blocking_a_corridor() -> None:
+    # a ring of 1.6 m corridors round a 10 x 2 m block; the guest stands in the lower one
+    values = cells(14.0, 6.0)
+    for wall in ((0, 0, 14.0, 0.2), (0, 5.8, 14.0, 6.0), (0, 0, 0.2, 6.0), (13.8, 0, 14.0, 6.0),
+                 (2.0, 2.0, 12.0, 4.0)):
+        fill(values, *wall)
+    grid = OccupancyGrid2D.from_message(grid_message(values))
+    goal = approach_goal(spots_around(7.0, 1.0), grid, Pose2D(4.8, 1.0, 0.0),
+                         leave_towards=(13.0, 1.0))
+    assert goal is not None and goal.x > 7.0 + 1.1
+
+
 def test_the_approach_keeps_off_walls_where_it_can() -> None:
     spots = np.array([[7.0 + dx, 1.5 + dy] for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
     estimate = GuestEstimate(7.0, 1.5, spots, sightings=20)
