@@ -203,3 +203,12 @@ def test_random_tasks_use_three_different_areas_and_free_spots() -> None:
         assert len({task.pick_up, task.drop_off, task.start_area}) == 3
         assert office().areas[task.start_area].contains(task.start_x, task.start_y)
         assert office().map.is_free(task.guest_x, task.guest_y)
+
+
+def test_the_robot_never_starts_within_the_guests_personal_space() -> None:
+    # seed 37 draws a start area next to the pick-up area: its centre stood 0.55 m from the
+    # guest, and the robot booked contact before it moved
+    for seed in range(100):
+        task = make_scenario(office(), seed=seed).task
+        gap = math.dist((task.start_x, task.start_y), (task.guest_x, task.guest_y))
+        assert gap >= 1.0, f"seed {seed}: the robot starts {gap:.2f} m from the guest"

@@ -27,6 +27,7 @@ NARROW_AREA_M = 2.0  # narrower than this (bathrooms, cubicle strips): the centr
 PERSON_CLEARANCE_M = 0.45  # a spot for a person or the robot: this far from any wall
 RFID_RANGE_M = 2.0
 OUT_OF_RANGE_M = (2.6, 5.0)  # how far from the area centre an out-of-range guest stands
+START_GUEST_CLEARANCE_M = 1.5  # the robot's start pose keeps this far from the guest
 SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed 100
 
 
@@ -77,7 +78,8 @@ def make_scenario(world: World, *, seed: int | None = None,
     free = _spot_mask(world)
     pick_up, drop_off, start_area = _three_areas(world, rng)
     guest_x, guest_y = _guest_spot(world, world.areas[pick_up], free, rng, difficulty)
-    start_x, start_y = _start_spot(world, world.areas[start_area], free, rng)
+    start_x, start_y = _start_spot(world, world.areas[start_area], free, rng,
+                                   guest=(guest_x, guest_y))
     task = TaskSpec(
         pick_up=pick_up, drop_off=drop_off, guest_name=person_name(rng),
         guest_x=guest_x, guest_y=guest_y, guest_yaw=float(rng.uniform(-math.pi, math.pi)),
@@ -188,13 +190,38 @@ def _reachable_from(world: World, free: np.ndarray, x: float, y: float) -> np.nd
     return labels == labels[row, col]
 
 
-def _start_spot(world: World, box: AreaBox, free: np.ndarray,
-                rng: np.random.Generator) -> tuple[float, float]:
-    """The area's pivot: its centre, or the free spot in it nearest the centre."""
+def _start_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator,
+                *, guest: tuple[float, float]) -> tuple[float, float]:
+    """The area's pivot: its centre, or the free spot in it nearest the centre; in either case
+    :data:`START_GUEST_CLEARANCE_M` from the guest where the area allows (target areas can
+    adjoin, and a robot started on the guest's toes books contact before it moves)."""
     x, y = box.centre
-    if _free(world, free, x, y):
+    if _free(world, free, x, y) and math.dist((x, y), guest) >= START_GUEST_CLEARANCE_M:
         return round(x, 3), round(y, 3)
-    return _nearest_spot(world, box, free, rng)
+    clear = free.copy()
+    rows, cols = np.indices(free.shape)
+    occupancy = world.map
+    xs = occupancy.origin_x + (cols + 0.5) * occupancy.resolution
+    ys = occupancy.origin_y + (rows + 0.5) * occupancy.resolution
+    clear &= np.hypot(xs - guest[0], ys - guest[1]) >= START_GUEST_CLEARANCE_M
+    try:
+        return _nearest_spot(world, box, clear, rng)
+    except ScenarioError:  # a small area next to the guest: as far from them as it allows
+        return _farthest_spot(world, box, free, rng, away_from=guest)
+
+
+def _farthest_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator,
+                   *, away_from: tuple[float, float]) -> tuple[float, float]:
+    best: tuple[float, float, float] | None = None
+    for _ in range(400):
+        x = float(rng.uniform(box.min_x, box.max_x))
+        y = float(rng.uniform(box.min_y, box.max_y))
+        distance = math.dist((x, y), away_from)
+        if _free(world, free, x, y) and (best is None or distance > best[0]):
+            best = (distance, x, y)
+    if best is None:
+        raise ScenarioError(f"{world.path}: no free spot inside area {box}")
+    return round(best[1], 3), round(best[2], 3)
 
 
 def _nearest_spot(world: World, box: AreaBox, free: np.ndarray,
