@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -198,42 +199,35 @@ def _start_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Gen
     x, y = box.centre
     if _free(world, free, x, y) and math.dist((x, y), guest) >= START_GUEST_CLEARANCE_M:
         return round(x, 3), round(y, 3)
-    clear = free.copy()
-    rows, cols = np.indices(free.shape)
-    occupancy = world.map
-    xs = occupancy.origin_x + (cols + 0.5) * occupancy.resolution
-    ys = occupancy.origin_y + (rows + 0.5) * occupancy.resolution
-    clear &= np.hypot(xs - guest[0], ys - guest[1]) >= START_GUEST_CLEARANCE_M
+    centre = box.centre
     try:
-        return _nearest_spot(world, box, clear, rng)
+        return _sampled_spot(world, box, free, rng, cost=lambda x, y: math.dist((x, y), centre),
+                             allowed=lambda x, y: math.dist((x, y), guest) >= (
+                                 START_GUEST_CLEARANCE_M))
     except ScenarioError:  # a small area next to the guest: as far from them as it allows
-        return _farthest_spot(world, box, free, rng, away_from=guest)
-
-
-def _farthest_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator,
-                   *, away_from: tuple[float, float]) -> tuple[float, float]:
-    best: tuple[float, float, float] | None = None
-    for _ in range(400):
-        x = float(rng.uniform(box.min_x, box.max_x))
-        y = float(rng.uniform(box.min_y, box.max_y))
-        distance = math.dist((x, y), away_from)
-        if _free(world, free, x, y) and (best is None or distance > best[0]):
-            best = (distance, x, y)
-    if best is None:
-        raise ScenarioError(f"{world.path}: no free spot inside area {box}")
-    return round(best[1], 3), round(best[2], 3)
+        return _sampled_spot(world, box, free, rng, cost=lambda x, y: -math.dist((x, y), guest))
 
 
 def _nearest_spot(world: World, box: AreaBox, free: np.ndarray,
                   rng: np.random.Generator) -> tuple[float, float]:
-    centre_x, centre_y = box.centre
+    centre = box.centre
+    return _sampled_spot(world, box, free, rng, cost=lambda x, y: math.dist((x, y), centre))
+
+
+def _sampled_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator, *,
+                  cost: Callable[[float, float], float],
+                  allowed: Callable[[float, float], bool] = lambda x, y: True,
+                  ) -> tuple[float, float]:
+    """Of 400 random points in the box, the free and allowed one of least ``cost``."""
     best: tuple[float, float, float] | None = None
     for _ in range(400):
         x = float(rng.uniform(box.min_x, box.max_x))
         y = float(rng.uniform(box.min_y, box.max_y))
-        distance = math.hypot(x - centre_x, y - centre_y)
-        if _free(world, free, x, y) and (best is None or distance < best[0]):
-            best = (distance, x, y)
+        if not (_free(world, free, x, y) and allowed(x, y)):
+            continue
+        value = cost(x, y)
+        if best is None or value < best[0]:
+            best = (value, x, y)
     if best is None:
         raise ScenarioError(f"{world.path}: no free spot inside area {box}")
     return round(best[1], 3), round(best[2], 3)
