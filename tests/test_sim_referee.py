@@ -111,6 +111,51 @@ def test_the_guest_follows_the_trail_round_a_corner_and_stops_1_2_m_short() -> N
     assert all(y < 0.06 or x > 4.94 for x, y in visited)
 
 
+def test_a_guest_the_robot_drives_past_rejoins_its_trail_ahead_not_where_it_stood() -> None:
+    """Picked up from the far side, the robot drives past the guest (who steps aside) and on:
+    the guest joins the trail beside them instead of walking back to the pick-up spot."""
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0,
+                  wall_clearance=lambda x, y: 5.0)
+    guest.start_following(-1.2, 0.3)
+    farthest_back, farthest_from_robot = 0.0, 0.0
+    original_step = guest.step
+
+    def recording_step(dt: float, *, robot_x: float, robot_y: float) -> None:
+        nonlocal farthest_back, farthest_from_robot
+        original_step(dt, robot_x=robot_x, robot_y=robot_y)
+        farthest_back = min(farthest_back, guest.x)
+        farthest_from_robot = max(farthest_from_robot, guest.distance_to(robot_x, robot_y))
+
+    guest.step = recording_step  # type: ignore[method-assign]
+    walk(guest, [(-1.2, 0.3), (4.0, 0.6), (4.0, -6.0)])
+    assert farthest_back > -0.5  # never headed back to (-1.2, 0.3)
+    assert farthest_from_robot < 3.0  # kept up, far from the 4 m "too fast" loss
+    assert guest.distance_to(4.0, -6.0) == pytest.approx(STOP_DISTANCE, abs=0.06)
+
+
+def wall_between_corridors(x: float, y: float) -> float:
+    """Distance to a wall along y = 1 for x < 3 (corridors at y = 0 and y = 2 meet at x > 3)."""
+    return abs(y - 1.0) if x < 3.0 else max(math.hypot(x - 3.0, y - 1.0), 0.0)
+
+
+def test_a_rejoining_guest_goes_round_a_wall_not_through_it() -> None:
+    """Right after a step aside in the lower corridor, the trail's later points in the upper
+    corridor are the shortest way to the robot as the crow flies; the guest walks round."""
+    guest = Guest(name="human_00001", x=0.5, y=0.0, yaw=0.0, wall_clearance=wall_between_corridors)
+    guest.start_following(1.5, 0.0)
+    trail = [(1.5 + 0.05 * k, 0.0) for k in range(1, 61)]  # east to (4.5, 0)
+    trail += [(4.5, 0.05 * k) for k in range(1, 41)]  # north to (4.5, 2)
+    trail += [(4.5 - 0.05 * k, 2.0) for k in range(1, 151)]  # west to (-3, 2)
+    for x, y in trail:
+        guest.record_robot(x, y)
+    guest._off_trail = True  # as after a step aside
+    robot = trail[-1]
+    for _ in range(1000):
+        guest.step(0.02, robot_x=robot[0], robot_y=robot[1])
+        assert wall_between_corridors(guest.x, guest.y) >= 0.15
+    assert guest.distance_to(*robot) == pytest.approx(STOP_DISTANCE, abs=0.06)
+
+
 def test_the_guest_walks_no_faster_than_0_8_m_s() -> None:
     guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0)
     guest.start_following(1.5, 0.0)

@@ -10,11 +10,16 @@ makes it wander off its task and stay where it is.
 Whatever its state, a guest who is not waiting to be picked up steps out of the robot's way
 when it comes closer than 0.9 m — straight back, or aside where a wall is behind them — as a
 person would: a robot turning back past the person it guides, or leaving the spot where it
-dropped them off, does not walk through them.
+dropped them off, does not walk through them. A following guest who stepped aside rejoins the
+trail by the shortest way to the robot (straight to a trail point clear of walls, then along
+the trail), as a person would, rather than walking back to the trail point they left: that
+could lie behind them, where the robot stood when it picked them up, and lose them "too fast"
+as the robot drove on.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import deque
 from collections.abc import Callable
@@ -27,6 +32,8 @@ TRAIL_SPACING = 0.05  # m between trail points
 YIELD_DISTANCE = 0.9  # m: closer than this, the guest steps out of the robot's way
 WALL_CLEARANCE = 0.3  # m: the guest keeps this far from walls when stepping aside
 YIELD_DIRECTIONS = (0.0, 0.6, -0.6, 1.2, -1.2, 1.57, -1.57)  # rad off "straight away"
+REJOIN_LOOKAHEAD = 400  # trail points (20 m) searched for the nearest when rejoining
+REJOIN_CLEARANCE = 0.2  # m: a rejoining guest walks straight only this far clear of walls
 
 
 class GuestState(Enum):
@@ -47,6 +54,7 @@ class Guest:
         self.x, self.y, self.yaw = x, y, yaw
         self.state = GuestState.WAITING
         self.trail: deque[tuple[float, float]] = deque()
+        self._off_trail = False
 
     @property
     def following(self) -> bool:
@@ -59,6 +67,7 @@ class Guest:
         """Picked up: the trail starts with the straight line to where the robot stands."""
         self.state = GuestState.FOLLOWING
         self.trail.clear()
+        self._off_trail = False
         steps = max(1, int(self.distance_to(robot_x, robot_y) / TRAIL_SPACING))
         for index in range(1, steps + 1):
             fraction = index / steps
@@ -86,6 +95,8 @@ class Guest:
             return
         if not self.following:
             return
+        if self._off_trail:
+            self._rejoin_trail()
         budget = FOLLOW_SPEED * dt
         while budget > 1e-9 and self.trail:
             if self.distance_to(robot_x, robot_y) <= STOP_DISTANCE:
@@ -102,8 +113,35 @@ class Guest:
             self.y += budget * math.sin(self.yaw)
             budget = 0.0
 
+    def _rejoin_trail(self) -> None:
+        """Drop the trail points before the one where walking straight there, then on along
+        the trail, is the shortest way to the robot (of those the guest can walk straight to).
+
+        The trail can double back (the robot turned round, or drove past the guest it had just
+        picked up), so the nearest point is not always the right one: the shortest way skips
+        the loop.
+        """
+        self._off_trail = False
+        ahead = list(itertools.islice(self.trail, REJOIN_LOOKAHEAD))
+        along = list(itertools.accumulate(
+            (math.dist(a, b) for a, b in itertools.pairwise(ahead)), initial=0.0))
+        by_way = sorted(range(len(ahead)),
+                        key=lambda index: self.distance_to(*ahead[index]) - along[index])
+        start = next((index for index in by_way if self._walkable_to(*ahead[index])), 0)
+        for _ in range(start):
+            self.trail.popleft()
+
+    def _walkable_to(self, x: float, y: float) -> bool:
+        if self.wall_clearance is None:
+            return True
+        steps = max(1, math.ceil(self.distance_to(x, y) / TRAIL_SPACING))
+        return all(self.wall_clearance(self.x + (x - self.x) * k / steps,
+                                       self.y + (y - self.y) * k / steps) >= REJOIN_CLEARANCE
+                   for k in range(1, steps + 1))
+
     def _step_aside(self, dt: float, *, robot_x: float, robot_y: float) -> None:
         """Move away from the robot at walking speed, onto a spot clear of walls."""
+        self._off_trail = True
         away = math.atan2(self.y - robot_y, self.x - robot_x)
         step = FOLLOW_SPEED * dt
         for offset in YIELD_DIRECTIONS:
