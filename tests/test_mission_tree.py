@@ -178,20 +178,31 @@ def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
     assert script.count("CallPickUpGuest") == 1
 
 
-def test_the_robot_closes_in_on_the_guest_before_asking_for_them() -> None:
+def test_a_guest_steadily_in_range_is_asked_for_from_where_the_robot_stands() -> None:
     script = Script()
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.GuestSteadilyInRangeHere") == 1
+    assert script.count("Pickup.EstimateGuestPosition") == 0
+    assert script.count("Pickup.NavigateToGuest") == 0
+    assert script.count("Pickup.CallPickUpGuest") == 1
+
+
+def test_the_robot_closes_in_on_a_guest_at_the_edge_of_range_before_asking_for_them() -> None:
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     calls = script.calls
     order = [calls.index(next(c for c in calls if c.endswith(leaf))) for leaf in (
-        "EstimateGuestPosition", "NavigateToGuest", "GuestSteadilyInRange", "CallPickUpGuest")]
+        "GuestSteadilyInRangeHere", "EstimateGuestPosition", "NavigateToGuest",
+        "GuestSteadilyInRange", "CallPickUpGuest")]
     assert order == sorted(order)
 
 
 def test_without_an_estimate_or_a_way_there_the_pick_up_is_asked_for_from_where_it_stands(
 ) -> None:
     for trouble in ("EstimateGuestPosition", "NavigateToGuest"):
-        script = Script({trouble: [Status.FAILURE]})
+        script = Script({trouble: [Status.FAILURE], "GuestSteadilyInRangeHere": [Status.FAILURE]})
         status, _ = run_mission(script)
         assert status == Status.SUCCESS
         assert script.count("NavigateToGuest") == (trouble == "NavigateToGuest")
@@ -199,7 +210,8 @@ def test_without_an_estimate_or_a_way_there_the_pick_up_is_asked_for_from_where_
 
 
 def test_a_guest_not_steadily_in_range_is_estimated_again_not_asked_for() -> None:
-    script = Script({"GuestSteadilyInRange": [Status.FAILURE, Status.FAILURE]})
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE] * 3,
+                     "GuestSteadilyInRange": [Status.FAILURE, Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     assert script.count("Pickup.EstimateGuestPosition") == 3
@@ -208,11 +220,13 @@ def test_a_guest_not_steadily_in_range_is_estimated_again_not_asked_for() -> Non
 
 
 def test_a_guest_who_never_stays_in_range_is_searched_for_again() -> None:
-    script = Script({"GuestSteadilyInRange": [Status.FAILURE] * 4,
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE] * 4,
+                     "GuestSteadilyInRange": [Status.FAILURE] * 4,
                      "GuestAlreadyInRange": [Status.SUCCESS, Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
-    assert script.count("Pickup.GuestSteadilyInRange") == 5
+    assert script.count("Pickup.GuestSteadilyInRange") == 4  # four close-ins, all in vain
+    assert script.count("Pickup.GuestSteadilyInRangeHere") == 5  # then heard from the search
     assert script.count("PlanExploration") == 1
     assert script.count("Pickup.CallPickUpGuest") == 1
 
