@@ -29,6 +29,8 @@ PERSON_CLEARANCE_M = 0.45  # a spot for a person or the robot: this far from any
 RFID_RANGE_M = 2.0
 OUT_OF_RANGE_M = (2.6, 5.0)  # how far from the area centre an out-of-range guest stands
 START_GUEST_CLEARANCE_M = 1.5  # the robot's start pose keeps this far from the guest
+START_EDGE_MARGIN_M = 0.4  # and this far inside its area: a return within the 0.3 m goal
+# tolerance of the start pose must still put the robot's origin in the area (checkpoint 4)
 SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed 100
 
 
@@ -195,17 +197,20 @@ def _start_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Gen
                 *, guest: tuple[float, float]) -> tuple[float, float]:
     """The area's pivot: its centre, or the free spot in it nearest the centre; in either case
     :data:`START_GUEST_CLEARANCE_M` from the guest where the area allows (target areas can
-    adjoin, and a robot started on the guest's toes books contact before it moves)."""
+    adjoin, and a robot started on the guest's toes books contact before it moves), and
+    :data:`START_EDGE_MARGIN_M` inside the area's edges (a quarter of a narrow side at most)."""
     x, y = box.centre
     if _free(world, free, x, y) and math.dist((x, y), guest) >= START_GUEST_CLEARANCE_M:
         return round(x, 3), round(y, 3)
     centre = box.centre
+    margin = min(START_EDGE_MARGIN_M, box.width / 4.0, box.height / 4.0)
     try:
         return _sampled_spot(world, box, free, rng, cost=lambda x, y: math.dist((x, y), centre),
-                             allowed=lambda x, y: math.dist((x, y), guest) >= (
-                                 START_GUEST_CLEARANCE_M))
+                             allowed=lambda x, y: box.contains(x, y, margin) and math.dist(
+                                 (x, y), guest) >= START_GUEST_CLEARANCE_M)
     except ScenarioError:  # a small area next to the guest: as far from them as it allows
-        return _sampled_spot(world, box, free, rng, cost=lambda x, y: -math.dist((x, y), guest))
+        return _sampled_spot(world, box, free, rng, cost=lambda x, y: -math.dist((x, y), guest),
+                             allowed=lambda x, y: box.contains(x, y, margin))
 
 
 def _nearest_spot(world: World, box: AreaBox, free: np.ndarray,
