@@ -321,24 +321,7 @@ class RouteTree:
     def distances_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Route lengths from the start to many points (each via its best node within one
         lattice step, as :meth:`distance_to`); inf where unreachable."""
-        xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
-        grid, stride = self.grid, self.stride
-        rows = np.rint(np.floor((ys - grid.origin_y) / grid.resolution) / stride).astype(np.intp)
-        cols = np.rint(np.floor((xs - grid.origin_x) / grid.resolution) / stride).astype(np.intp)
-        height, width = self.node_of.shape
-        best = np.full(xs.shape, np.inf)
-        for d_row, d_col in itertools.product((-1, 0, 1), repeat=2):
-            r, c = rows + d_row, cols + d_col
-            inside = (r >= 0) & (r < height) & (c >= 0) & (c < width)
-            nodes = np.where(inside, self.node_of[np.clip(r, 0, height - 1),
-                                                  np.clip(c, 0, width - 1)], -1)
-            found = nodes >= 0
-            centres = self.node_cells[np.where(found, nodes, 0)] + 0.5
-            hop = np.hypot(grid.origin_x + centres[..., 1] * grid.resolution - xs,
-                           grid.origin_y + centres[..., 0] * grid.resolution - ys)
-            totals = np.where(found, self.distances[np.where(found, nodes, 0)] + hop, np.inf)
-            best = np.minimum(best, totals)
-        return best
+        return self._best_nodes(np.asarray(xs, dtype=float), np.asarray(ys, dtype=float))[1]
 
     def path_back_from(self, x: float, y: float, max_length: float) -> np.ndarray:
         """World points of the route to (x, y), walking back from (x, y) towards the start.
@@ -360,19 +343,30 @@ class RouteTree:
 
     def _best_node(self, x: float, y: float) -> tuple[int, float] | None:
         """The node within one lattice step of (x, y) minimising route length plus the last hop."""
-        cell = self.grid.world_to_cell(x, y)
-        i, j = round(cell.row / self.stride), round(cell.col / self.stride)
-        rows, cols = self.node_of.shape
-        nodes = self.node_of[max(i - 1, 0):min(i + 2, rows), max(j - 1, 0):min(j + 2, cols)]
-        nodes = nodes[nodes >= 0]
-        if nodes.size == 0:
-            return None
-        centres = self.node_cells[nodes] + 0.5
-        hop = np.hypot(self.grid.origin_x + centres[:, 1] * self.grid.resolution - x,
-                       self.grid.origin_y + centres[:, 0] * self.grid.resolution - y)
-        totals = self.distances[nodes] + hop
-        k = int(np.argmin(totals))
-        return (int(nodes[k]), float(totals[k])) if np.isfinite(totals[k]) else None
+        nodes, totals = self._best_nodes(np.array([x]), np.array([y]))
+        return (int(nodes[0]), float(totals[0])) if np.isfinite(totals[0]) else None
+
+    def _best_nodes(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For each point, the node within one lattice step minimising route length plus the
+        last hop, and that total (node -1 and inf where there is none)."""
+        grid, stride = self.grid, self.stride
+        rows = np.rint(np.floor((ys - grid.origin_y) / grid.resolution) / stride).astype(np.intp)
+        cols = np.rint(np.floor((xs - grid.origin_x) / grid.resolution) / stride).astype(np.intp)
+        height, width = self.node_of.shape
+        best_nodes, best = np.full(xs.shape, -1, dtype=np.int64), np.full(xs.shape, np.inf)
+        for d_row, d_col in itertools.product((-1, 0, 1), repeat=2):
+            r, c = rows + d_row, cols + d_col
+            inside = (r >= 0) & (r < height) & (c >= 0) & (c < width)
+            nodes = np.where(inside, self.node_of[np.clip(r, 0, height - 1),
+                                                  np.clip(c, 0, width - 1)], -1)
+            found = nodes >= 0
+            centres = self.node_cells[np.where(found, nodes, 0)] + 0.5
+            hop = np.hypot(grid.origin_x + centres[..., 1] * grid.resolution - xs,
+                           grid.origin_y + centres[..., 0] * grid.resolution - ys)
+            totals = np.where(found, self.distances[np.where(found, nodes, 0)] + hop, np.inf)
+            better = totals < best
+            best_nodes, best = np.where(better, nodes, best_nodes), np.where(better, totals, best)
+        return best_nodes, best
 
 
 def _lattice_graph(node_of: np.ndarray, spacing: float) -> sparse.csr_matrix:
