@@ -4,7 +4,8 @@ Everything that happens lives in :class:`~servicesim_sim.engine.SimEngine`, step
 physics step in sim time; this node only turns engine state into messages and requests into
 engine calls. Its loop steps the engine, publishes ``/clock`` and the sensors, then lets rclpy
 handle requests; with a speed factor it sleeps (spinning) until the wall clock catches up,
-with speed 0 it never sleeps. Nothing here reads the wall clock for simulation purposes.
+and when it falls behind it slips rather than racing (:mod:`servicesim_sim.pacing`); with
+speed 0 it never sleeps. Nothing here reads the wall clock for simulation purposes.
 
 Service answers and navigation results are coroutines that wait in *sim* time (for the
 service-latency knob and for navigation to finish), so no request ever blocks the loop, and a
@@ -49,6 +50,7 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 
 from servicesim_sim.engine import NavigationState, SimEngine
+from servicesim_sim.pacing import Pacer
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
 
@@ -413,7 +415,7 @@ class SimulatorNode:
     # ----------------------------------------------------------------- loop
     def run(self, executor: DrainingExecutor) -> None:
         """Step, publish and serve until the context shuts down, paced by the speed factor."""
-        anchor: tuple[float, float, float] | None = None  # wall, sim, speed
+        pacer = Pacer()
         while rclpy.ok(context=self.node.context):
             for _ in range(self.steps_per_io):
                 self.engine.step()
@@ -424,13 +426,10 @@ class SimulatorNode:
             self._advance_navigation()
             self._wake_sleepers()
             executor.drain()
-            speed = self._pace()
-            if anchor is None or anchor[2] != speed:
-                anchor = (time.monotonic(), self.engine.sim_time, speed)
-            if speed > 0.0:
-                due = anchor[0] + (self.engine.sim_time - anchor[1]) / speed
-                while (remaining := due - time.monotonic()) > 0.0:
-                    executor.spin_once(timeout_sec=remaining)
+            due = time.monotonic() + pacer.wait_s(sim_time=self.engine.sim_time,
+                                                  speed=self._pace())
+            while (remaining := due - time.monotonic()) > 0.0:
+                executor.spin_once(timeout_sec=remaining)
 
     def _pace(self) -> float:
         """The speed factor now: at most real time until a task starts.
