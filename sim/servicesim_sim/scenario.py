@@ -199,10 +199,9 @@ def _start_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Gen
     :data:`START_GUEST_CLEARANCE_M` from the guest where the area allows (target areas can
     adjoin, and a robot started on the guest's toes books contact before it moves), and
     :data:`START_EDGE_MARGIN_M` inside the area's edges (a quarter of a narrow side at most)."""
-    x, y = box.centre
-    if _free(world, free, x, y) and math.dist((x, y), guest) >= START_GUEST_CLEARANCE_M:
-        return round(x, 3), round(y, 3)
     centre = box.centre
+    if _free(world, free, *centre) and math.dist(centre, guest) >= START_GUEST_CLEARANCE_M:
+        return round(centre[0], 3), round(centre[1], 3)
     margin = min(START_EDGE_MARGIN_M, box.width / 4.0, box.height / 4.0)
     try:
         return _sampled_spot(world, box, free, rng, cost=lambda x, y: math.dist((x, y), centre),
