@@ -23,7 +23,8 @@ from servicesim_competition.action import NavigateToPose
 from servicesim_competition.msg import RefereeState, Score
 from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, TaskInfo
 
-from servicesim_sim.node import DrainingExecutor, SimulatorNode
+from servicesim_sim.executor import DrainingExecutor
+from servicesim_sim.node import SimulatorNode
 from servicesim_sim.scenario import Difficulty
 from servicesim_sim.settings import SimSettings
 from servicesim_sim.world import DEFAULT_WORLD, load_world

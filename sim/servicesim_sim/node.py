@@ -28,7 +28,6 @@ from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.executors import ShutdownException, SingleThreadedExecutor, TimeoutException
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -50,6 +49,7 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 
 from servicesim_sim.engine import NavigationState, SimEngine
+from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.pacing import Pacer
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
@@ -150,12 +150,14 @@ class SimulatorNode:
         self._sleepers.append((self.engine.sim_time + max(seconds, 0.0), future))
         return future
 
-    def _wake_sleepers(self) -> None:
+    def _wake_sleepers(self) -> bool:
+        """Complete the sleeps that are over; whether any was."""
         now = self.engine.sim_time
         due = [future for when, future in self._sleepers if when <= now]
         self._sleepers = [(when, future) for when, future in self._sleepers if when > now]
         for future in due:
             future.set_result(True)
+        return bool(due)
 
     async def _latency(self) -> None:
         latency = self.settings.difficulty.service_latency_s
@@ -250,13 +252,17 @@ class SimulatorNode:
         self._navigations.append(navigation)
         return await navigation.result
 
-    def _advance_navigation(self) -> None:
-        """Once per I/O period: feedback, and the result of every goal that ended."""
+    def _advance_navigation(self) -> bool:
+        """Once per I/O period: feedback, and the result of every goal that ended; whether
+        any ended."""
+        ended = False
         for navigation in list(self._navigations):
             result = self._navigation_outcome(navigation)
             if result is not None:
                 self._navigations.remove(navigation)
                 navigation.result.set_result(result)
+                ended = True
+        return ended
 
     def _navigation_outcome(self, navigation: _Navigation) -> NavigateToPose.Result | None:
         """The goal's result if it ended (preempted, canceled, reached, failed), else None."""
@@ -423,13 +429,13 @@ class SimulatorNode:
                     self._score_message.score = float(self.engine.score())
                     self._send(self._score, self._score_message)
             self._publish_io()
-            self._advance_navigation()
-            self._wake_sleepers()
-            executor.drain()
+            if self._advance_navigation() | self._wake_sleepers():
+                executor.note_resumable()
+            executor.run_ready()
             due = time.monotonic() + pacer.wait_s(sim_time=self.engine.sim_time,
                                                   speed=self._pace())
             while (remaining := due - time.monotonic()) > 0.0:
-                executor.spin_once(timeout_sec=remaining)
+                executor.wait_and_run(timeout_sec=remaining)
 
     def _pace(self) -> float:
         """The speed factor now: at most real time until a task starts.
@@ -442,27 +448,6 @@ class SimulatorNode:
         if self.engine.task_started or 0.0 < speed <= 1.0:
             return speed
         return 1.0
-
-class DrainingExecutor(SingleThreadedExecutor):
-    """An executor that can run everything ready now, without waiting for more.
-
-    Once per I/O period the simulator handles all pending requests, goal and cancel messages
-    and resumed service/navigation coroutines before stepping on. A fixed number of
-    ``spin_once`` calls would starve them when the sim runs many times faster than real time,
-    and the executive would see its goals accepted late and feedback stall.
-    """
-
-    def drain(self, *, limit: int = 500) -> int:
-        """Run ready callbacks until none is ready (or ``limit`` ran); how many ran."""
-        for count in range(limit):
-            try:
-                handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=0.0)
-            except (TimeoutException, ShutdownException):
-                return count
-            handler()
-            handler.result()  # raise what the callback raised
-        return limit
-
 
 @dataclass
 class _Navigation:

@@ -1,0 +1,197 @@
+"""The simulator's executor: run what is ready, wait for requests, never spin on a parked task.
+
+The simulator's loop owns time: it steps the engine, publishes, then lets rclpy handle what
+arrived, and with a speed factor waits for the wall clock. Two things make rclpy's
+``SingleThreadedExecutor`` a poor fit for that loop as it stands:
+
+* it yields every unfinished coroutine task before it waits. A navigation goal's result
+  coroutine stays unfinished for the whole goal, so ``spin_once(timeout)`` resumed it and
+  returned at once instead of waiting: a simulator pacing itself at speed 5 kept a core busy
+  for as long as the robot drove, and two such simulators (an evaluation at ``--jobs 2``)
+  left their executives none;
+* it builds its wait set anew, in Python, from every entity of the node each time it waits;
+  done once per I/O period only to find nothing new, that was a fifth of the simulator's time.
+
+So :class:`DrainingExecutor` waits on its nodes' entities only (:class:`EntityWaitSet`:
+subscriptions, services, clients, waitables such as the action server, and a guard condition
+the context's shutdown triggers) and hands over to rclpy's executor only when one of them has
+work, or when the loop itself completed a future a coroutine awaits (a navigation result, a
+sim-time sleep) and says so with :meth:`DrainingExecutor.note_resumable`. Those are the only
+ways anything new becomes runnable here: the simulator has no timers and no guard conditions
+of its own.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.exceptions import InvalidHandle
+from rclpy.executors import ShutdownException, SingleThreadedExecutor, TimeoutException
+from rclpy.guard_condition import GuardCondition
+from rclpy.impl.implementation_singleton import rclpy_implementation
+from rclpy.node import Node
+from rclpy.waitable import NumberOfEntities
+
+_READY_KINDS = ("subscription", "client", "service", "timer", "guard_condition")
+
+
+class EntityWaitSet:
+    """A wait over some nodes' entities that says whether any of them has work.
+
+    Only entities are waited on, never tasks, so a wait with a timeout really blocks. Each
+    wait builds its rcl wait set directly (a few microseconds), without the executor's
+    callback-group and task bookkeeping, and destroys it before returning: a wait set kept
+    across waits outlived the ROS context at interpreter exit and aborted the process.
+    """
+
+    def __init__(self, nodes: list[Node], context: Any, *,
+                 wake_up: GuardCondition | None = None) -> None:
+        self.nodes = nodes
+        self._context = context
+        self._wake_up = () if wake_up is None else (wake_up,)
+
+    def wait(self, timeout_sec: float) -> bool:
+        """Wait up to ``timeout_sec`` (0: only look) for an entity to have work; whether one has.
+
+        Every handle is held while the wait set uses it, as rclpy's executor holds them, so a
+        node destroyed meanwhile (from another thread) is destroyed only after the wait; an
+        entity already destroyed counts as work, for the executor to find out.
+        """
+        subscriptions, clients, services, timers, guards, waitables = self._current()
+        held: list[Any] = []
+        try:
+            for entity in (*subscriptions, *clients, *services, *timers, *guards):
+                entity.handle.__enter__()
+                held.append(entity.handle)
+            for waitable in waitables:
+                waitable.__enter__()
+                held.append(waitable)
+            self._context.handle.__enter__()
+            held.append(self._context.handle)
+        except InvalidHandle:
+            self._release(held)
+            return True
+        try:
+            return self._wait(timeout_sec, subscriptions, clients, services, timers, guards,
+                              waitables)
+        finally:
+            self._release(held)
+
+    def _wait(self, timeout_sec: float, subscriptions: tuple[Any, ...],
+              clients: tuple[Any, ...], services: tuple[Any, ...], timers: tuple[Any, ...],
+              guards: tuple[Any, ...], waitables: tuple[Any, ...]) -> bool:
+        wait_set = self._new_wait_set(subscriptions, clients, services, timers, guards,
+                                      waitables)
+        try:
+            for subscription in subscriptions:
+                wait_set.add_subscription(subscription.handle)
+            for client in clients:
+                wait_set.add_client(client.handle)
+            for service in services:
+                wait_set.add_service(service.handle)
+            for timer in timers:
+                wait_set.add_timer(timer.handle)
+            for guard in guards:
+                wait_set.add_guard_condition(guard.handle)
+            for waitable in waitables:
+                waitable.add_to_wait_set(wait_set)
+            wait_set.wait(max(int(timeout_sec * 1e9), 0))
+            if any(wait_set.get_ready_entities(kind) for kind in _READY_KINDS):
+                return True
+            return any(waitable.is_ready(wait_set) for waitable in waitables)
+        finally:
+            wait_set.destroy_when_not_in_use()
+
+    @staticmethod
+    def _release(held: list[Any]) -> None:
+        for handle in reversed(held):
+            handle.__exit__(None, None, None)
+
+    def _current(self) -> tuple[tuple[Any, ...], ...]:
+        """The nodes' entities now."""
+        subscriptions, clients, services, timers, guards, waitables = (
+            tuple(item for node in self.nodes for item in getattr(node, kind))
+            for kind in ("subscriptions", "clients", "services", "timers", "guards",
+                         "waitables"))
+        return subscriptions, clients, services, timers, guards + self._wake_up, waitables
+
+    def _new_wait_set(self, subscriptions: tuple[Any, ...], clients: tuple[Any, ...],
+                      services: tuple[Any, ...], timers: tuple[Any, ...],
+                      guards: tuple[Any, ...], waitables: tuple[Any, ...]) -> Any:
+        count = NumberOfEntities(len(subscriptions), len(guards), len(timers), len(clients),
+                                 len(services))
+        for waitable in waitables:
+            count += waitable.get_num_entities()
+        return rclpy_implementation.WaitSet(
+            count.num_subscriptions, count.num_guard_conditions, count.num_timers,
+            count.num_clients, count.num_services, count.num_events, self._context.handle)
+
+
+class DrainingExecutor(SingleThreadedExecutor):
+    """An executor that runs everything ready now, and waits only for its entities.
+
+    Once per I/O period the loop calls :meth:`run_ready`: all pending requests, goal and cancel
+    messages and resumed service/navigation coroutines run before the loop steps on (a fixed
+    number of ``spin_once`` calls would starve them when the sim runs many times faster than
+    real time). While it waits for the wall clock it calls :meth:`wait_and_run`.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._entity_wait_set: EntityWaitSet | None = None
+        self._resumable = True  # whatever was added before the first pass runs in it
+        # the context shutting down ends a wait at once, as it does rclpy's own waits
+        self._shutting_down = GuardCondition(None, None, context=self.context)
+        self.context.on_shutdown(self._shutting_down.trigger)
+
+    def note_resumable(self) -> None:
+        """The loop completed a future a coroutine awaits: the next pass must resume it."""
+        self._resumable = True
+
+    def run_ready(self) -> int:
+        """Drain when an entity has work or a coroutine can resume; how many callbacks ran."""
+        if self._resumable or self._entities().wait(0.0):
+            return self.drain()
+        return 0
+
+    def wait_and_run(self, *, timeout_sec: float) -> int:
+        """Block up to ``timeout_sec`` for an entity to have work, then drain."""
+        if self._resumable or self._entities().wait(timeout_sec):
+            return self.drain()
+        return 0
+
+    def create_task(self, callback: Any, *args: Any, **kwargs: Any) -> Any:
+        """rclpy's ``create_task``; the new task runs in the current pass or the next one."""
+        self._resumable = True
+        return super().create_task(callback, *args, **kwargs)
+
+    def drain(self, *, limit: int = 500) -> int:
+        """Run ready callbacks until none is ready (or ``limit`` ran); how many ran.
+
+        A pass ends once the entities' wait finds nothing more; a task created meanwhile (a
+        goal's execution, a future's done callback) gets another pass.
+        """
+        ran = 0
+        while ran < limit:
+            self._resumable = False
+            ran += self._pass(limit - ran)
+            if not self._resumable:
+                break
+        return ran
+
+    def _pass(self, limit: int) -> int:
+        for count in range(limit):
+            try:
+                handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=0.0)
+            except (TimeoutException, ShutdownException):
+                return count
+            handler()
+            handler.result()  # raise what the callback raised
+        return limit
+
+    def _entities(self) -> EntityWaitSet:
+        nodes = self.get_nodes()
+        if self._entity_wait_set is None or self._entity_wait_set.nodes != nodes:
+            self._entity_wait_set = EntityWaitSet(nodes, self.context,
+                                                  wake_up=self._shutting_down)
+        return self._entity_wait_set
