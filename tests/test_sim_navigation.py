@@ -215,6 +215,23 @@ def test_a_mark_seen_free_again_is_removed_and_a_mover_leaves_one_mark() -> None
     assert costmap.cost_at(6.0, 1.6) == 0
 
 
+def test_costs_at_points_match_the_combined_grid_whether_or_not_it_was_built() -> None:
+    costmap = Costmap(occupancy(room(12.0, 6.0)))
+    rng = np.random.default_rng(3)
+    people = [(3.0, 1.5), (4.0, 4.4), (6.0, 2.6), (6.4, 3.1), (9.0, 4.0), (10.5, 1.2)]
+    costmap.observe(0.5, 3.0, 0.0, people, now=0.0)
+    xs, ys = rng.uniform(-0.5, 12.5, 400), rng.uniform(-0.5, 6.5, 400)  # some off the grid
+    before_the_grid = costmap.costs_at(xs, ys)  # worked out from the marks
+    grid = costmap.costs()  # the combined grid, built now
+    from_the_grid = costmap.costs_at(xs, ys)
+    frame = costmap.frame
+    cells = [frame.cell_of(x, y) for x, y in zip(xs, ys, strict=True)]
+    expected = [grid[cell] if frame.contains(*cell) else LETHAL for cell in cells]
+    assert len(costmap.marks) >= 3
+    assert before_the_grid.tolist() == expected and from_the_grid.tolist() == expected
+    assert np.any((before_the_grid > 0) & (before_the_grid < INSCRIBED))  # people's berths
+
+
 def test_the_costmap_version_changes_only_when_the_marks_do() -> None:
     costmap = Costmap(corridor_map(3.0))
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
@@ -579,3 +596,66 @@ def test_clear_costmaps_forgets_people_and_idle_commands_are_zero() -> None:
     assert len(nav.costmap.marks) == 1
     nav.clear_costmaps()
     assert nav.costmap.marks == ()
+
+
+def test_the_length_bound_never_exceeds_a_plan_and_follows_the_walls() -> None:
+    costmap = Costmap(two_corridor_map())
+    costmap.observe(1.0, 0.8, 0.0, [(6.0, 0.8)], now=0.0)  # a person in the lower corridor
+    planner = Planner(costmap)
+    spots = [(1.0, 0.8), (1.0, 5.2), (6.0, 5.2), (11.0, 0.8), (11.0, 5.2), (10.5, 3.0)]
+    for start, goal in itertools.permutations(spots, 2):
+        plan = planner.plan(start, goal)
+        assert plan.succeeded
+        assert planner.length_bound(start, goal) <= path_length(plan.waypoints)
+    round_the_block = planner.length_bound((6.0, 5.2), (6.0, 0.8))
+    assert round_the_block > 2.0 * math.dist((6.0, 5.2), (6.0, 0.8))  # not through the block
+    assert planner.length_bound((6.0, 5.2), (50.0, 0.8)) == 0.0  # off the map: no bound
+
+
+class CountedPlans:
+    """Wraps a navigator's planner to note the sim time of every plan."""
+
+    def __init__(self, nav: Navigator) -> None:
+        self.times: list[float] = []
+        self.now = 0.0
+        self._plan = nav.planner.plan
+        nav.planner.plan = self._counted  # type: ignore[method-assign]
+
+    def _counted(self, *args: object, **kwargs: object) -> object:
+        self.times.append(self.now)
+        return self._plan(*args, **kwargs)
+
+
+def test_a_clearly_shorter_way_opened_by_a_person_leaving_is_taken() -> None:
+    occupancy_map = two_corridor_map()
+    nav = navigator(occupancy_map)
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    heights = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        heights.append(robot.y)
+        return [(4.0, 0.8)] if now < 1.0 else []  # stands in the lower corridor, then goes
+
+    ended = drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    assert max(heights[:100]) > 2.0  # set off for the top corridor, round the person ...
+    assert max(heights) < 4.5  # ... and came back to the lower one once they had gone
+    assert ended < 40.0
+
+
+def test_on_the_shortest_way_no_periodic_replan_is_spent() -> None:
+    occupancy_map = occupancy(room(14.0, 3.0))
+    nav = navigator(occupancy_map)
+    plans = CountedPlans(nav)
+    robot = Unicycle(occupancy_map, 1.0, 1.5, 0.0)
+    nav.start(13.0, 1.5, 0.0, now=0.0)
+
+    def people(now: float) -> list[tuple[float, float]]:
+        plans.now = now
+        return [(7.0, 2.55)] if int(now) % 2 else []  # beside the way, comes and goes
+
+    ended = drive(nav, robot, people=people)
+    assert nav.status == "succeeded" and ended > 20.0
+    assert nav.costmap.version > 10  # the marks kept changing ...
+    assert plans.times == [0.0]  # ... but the way was planned once

@@ -225,6 +225,7 @@ class Navigator:
         self._goal = goal
         self._abort_at = None if abort_after_s is None else now + abort_after_s
         self._track: PolylinePath | None = None
+        self._located: tuple[PolylinePath, float, float] | None = None
         self._s = self._off_path = 0.0
         self._arrival_radius = self.xy_tolerance
         self._turning_to_goal = False
@@ -281,7 +282,7 @@ class Navigator:
         if self._blocked_since is not None:
             return self._while_blocked(pose, now)
         if self._track is not None:
-            self._s, self._off_path = self._track.locate(pose[0], pose[1], near=self._s)
+            self._locate(pose)
             if self._person_ahead():  # stop first: replanning round them comes after a wait
                 self._block(now, FollowPathError.FAILED_TO_MAKE_PROGRESS,
                             "a person stands on the path ahead")
@@ -329,21 +330,25 @@ class Navigator:
         Round people obstructing the path the new way is taken unless it is a long detour
         (a person crossing will likely be gone; one who stays stops the robot, which then
         waits and goes round). Otherwise only a clearly shorter way is taken, so the robot
-        does not dither between routes as people come and go.
+        does not dither between routes as people come and go; that plan is skipped when even
+        the static map's shortest way would not be short enough
+        (:meth:`~servicesim_sim.planner.Planner.length_bound`).
         """
         assert self._track is not None and self._goal is not None
-        obstructed = self._path_obstructed()
-        result = self.planner.plan((pose[0], pose[1]), (self._goal[0], self._goal[1]))
-        self._planned_at, self._planned_version = now, self.costmap.version
-        if result.waypoints is None:
-            return
+        start, goal = (pose[0], pose[1]), (self._goal[0], self._goal[1])
         tuning = self.tuning
         remaining = self._off_path + self._track.total - self._s
-        if obstructed:
+        if self._path_obstructed():
             worth = tuning.detour_allowance
         else:
             worth = -max(tuning.shortcut_gain, tuning.shortcut_fraction * remaining)
-        if path_length(result.waypoints) <= remaining + worth:
+            if self.planner.length_bound(start, goal) > remaining + worth:
+                # no way is short enough to switch to: already on (nearly) the shortest
+                self._planned_at, self._planned_version = now, self.costmap.version
+                return
+        result = self.planner.plan(start, goal)
+        self._planned_at, self._planned_version = now, self.costmap.version
+        if result.waypoints is not None and path_length(result.waypoints) <= remaining + worth:
             self._take(result)
 
     def _replan(self, pose: Pose, now: float) -> bool:
@@ -377,7 +382,7 @@ class Navigator:
     def _follow(self, pose: Pose, now: float) -> Twist:
         assert self._track is not None
         x, y, _ = pose
-        self._s, _ = self._track.locate(x, y, near=self._s)
+        self._locate(pose)
         self.distance_remaining = max(self._track.total - self._s, 0.0)
         end = self._track.points[-1]
         if math.hypot(end[0] - x, end[1] - y) <= self._arrival_radius:
@@ -387,6 +392,14 @@ class Navigator:
         if recovery is not None:
             return recovery
         return pursue(self._track, self._s, pose, self.limits, self.tuning)
+
+    def _locate(self, pose: Pose) -> None:
+        """Where along the path the robot is (``_s``) and how far off it; once per pose and path."""
+        assert self._track is not None
+        key = (self._track, pose[0], pose[1])
+        if self._located != key:
+            self._s, self._off_path = self._track.locate(pose[0], pose[1], near=self._s)
+            self._located = key
 
     def _turn_to_goal(self, pose: Pose) -> Twist:
         assert self._goal is not None

@@ -41,6 +41,12 @@ from servicesim_sim.costmap import INSCRIBED, MAX_INFLATED, Costmap
 
 Point = tuple[float, float]
 
+#: The octile grid distance between a straight line's ends is at most this many times its
+#: length (the worst case, 22.5 degrees off a grid axis).
+OCTILE_RATIO = math.sqrt(4.0 - 2.0 * math.sqrt(2.0))
+#: How many goals' static distance fields the planner keeps (about 1 MB each on the office).
+DISTANCE_FIELDS_KEPT = 4
+
 #: The first search stops at this many times the straight-line distance to the goal, plus
 #: the margin (in cells); only a goal beyond that is searched for over the whole grid.
 SEARCH_BOUND_FACTOR = 1.6
@@ -107,6 +113,11 @@ class GridGraph:
         self.lengths = np.concatenate(lengths)[order]
         self.indptr = np.searchsorted(sources_all[order], np.arange(rows * cols + 1))
 
+    def unweighted(self) -> sparse.csr_matrix:
+        """The graph with each step weighted by its length alone (it is symmetric)."""
+        size = self.shape[0] * self.shape[1]
+        return sparse.csr_matrix((self.lengths, self.targets, self.indptr), shape=(size, size))
+
     def weighted(self, costs: np.ndarray, *, cost_weight: float) -> sparse.csr_matrix:
         """The graph with each step weighted by the cost of the cell it enters."""
         entered = costs.ravel()[self.targets].astype(np.float64)
@@ -134,6 +145,7 @@ class Planner:
         self.escape_radius = escape_radius
         self.graph = GridGraph(costmap.static)
         self._weighted: dict[bool, tuple[int, sparse.csr_matrix]] = {}
+        self._distance_fields: dict[int, np.ndarray] = {}  # goal cell index to cells away
 
     def plan(self, start: Point, goal: Point, *, with_people: bool = True) -> PlanResult:
         """A path from ``start`` to ``goal``; ``with_people=False`` ignores the people marks."""
@@ -162,6 +174,36 @@ class Planner:
                            f"no path from ({start[0]:.2f}, {start[1]:.2f}) to "
                            f"({goal[0]:.2f}, {goal[1]:.2f}): the goal is cut off")
         return self._result(costs, cells, start, goal, goal_cell=goal_cell)
+
+    def length_bound(self, start: Point, goal: Point) -> float:
+        """A lower bound on the length of any path :meth:`plan` can return (0 if unknown).
+
+        People only ever lengthen a plan, so the static grid's shortest distance bounds it,
+        shrunk by the most a straight line undercuts the octile grid (8.24 %) and by a cell
+        at either end. One search out from the goal gives it for every start; the last few
+        goals' searches are kept. The navigator uses it to skip a periodic replan that could
+        not find a way short enough to be worth switching to.
+        """
+        frame = self.costmap.frame
+        start_cell, goal_cell = frame.cell_of(*start), frame.cell_of(*goal)
+        if not (frame.contains(*start_cell) and frame.contains(*goal_cell)
+                and self._statically_open(start_cell) and self._statically_open(goal_cell)):
+            return 0.0
+        cols = self.graph.shape[1]
+        cells_away = self._distance_field(goal_cell[0] * cols + goal_cell[1])
+        away = float(cells_away[start_cell[0] * cols + start_cell[1]])
+        if not math.isfinite(away):
+            return 0.0
+        return max((away / OCTILE_RATIO - 2.0) * frame.resolution, 0.0)
+
+    def _distance_field(self, goal_index: int) -> np.ndarray:
+        field = self._distance_fields.get(goal_index)
+        if field is None:
+            field = csgraph.dijkstra(self.graph.unweighted(), directed=True, indices=goal_index)
+            while len(self._distance_fields) >= DISTANCE_FIELDS_KEPT:
+                self._distance_fields.pop(next(iter(self._distance_fields)))
+            self._distance_fields[goal_index] = field
+        return field
 
     # ------------------------------------------------------------------ search
     def _cheapest_cells(self, costs: np.ndarray, source: tuple[int, int],
