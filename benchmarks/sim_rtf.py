@@ -9,7 +9,10 @@
 * driven: ``python -m bt_servicesim.run --headless`` on the default (shipped) task, same speed,
   ``N`` times one after another (then the median, least and greatest factor too),
   measured from the referee's own stamps between the task's start and its end, which is the
-  part of a run an evaluation pays for; and the run's report (completed, sim and wall time);
+  part of a run an evaluation pays for; the run's report (completed, sim and wall time); and
+  how often the tree ticked per sim second over the task, from its tree log: 10 when the
+  executive keeps up with the simulator, fewer when it falls behind (its timer fires at most
+  once per /clock message it gets to);
 * the CPU time the executive's and the simulator's processes spent over the task (from
   ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
   second cannot keep X times real time even with a core of its own, so these say which of
@@ -21,6 +24,7 @@ with its load; nothing here is asserted. Bad arguments give one line and exit st
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import statistics
@@ -172,6 +176,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
         spin_until(executor, run_over, 1800.0, "the mission")
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
+        ticks = tick_times(Path(out) / "tree_log.jsonl")
     node.destroy_subscription(subscription)
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
@@ -181,6 +186,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
           f"wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
+    print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
     if len(cpu[0].marks) == 2:
         processes = [("executive", cpu[0].pid)] + [("simulator", pid)
                                                    for pid in cpu[0].children()]
@@ -188,6 +194,28 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
             f"{name} {cpu[0].spent(pid):.2f} s ({1000.0 * cpu[0].spent(pid) / sim_s:.1f} ms "
             f"per sim s)" for name, pid in processes))
     return factor
+
+
+def tick_times(tree_log: Path) -> list[float]:
+    """The sim times of the tree's ticks, from the run's tree log (none for the baseline)."""
+    if not tree_log.is_file():
+        return []
+    times = []
+    for line in tree_log.read_text().splitlines():
+        record = json.loads(line)
+        if record.get("kind") == "tick":
+            times.append(float(record["sim_time_s"]))
+    return times
+
+
+def print_ticks(ticks: list[float], *, start: float, end: float) -> None:
+    """How often the tree ticked over the task (10 a sim second when it keeps up)."""
+    during = [t for t in ticks if start <= t <= end]
+    if len(during) < 2:
+        return
+    gaps = [b - a for a, b in itertools.pairwise(during)]
+    print(f"  the tree ticked {len(during) / (end - start):.1f} times a sim second over the "
+          f"task (longest gap {max(gaps):.1f} sim s)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -342,9 +342,28 @@ class RouteTree:
                                 self.grid.origin_y + centres[:, 0]])
 
     def _best_node(self, x: float, y: float) -> tuple[int, float] | None:
-        """The node within one lattice step of (x, y) minimising route length plus the last hop."""
-        nodes, totals = self._best_nodes(np.array([x]), np.array([y]))
-        return (int(nodes[0]), float(totals[0])) if np.isfinite(totals[0]) else None
+        """The node within one lattice step of (x, y) minimising route length plus the last hop.
+
+        The same search as :meth:`_best_nodes` (same order, same ties), on plain floats: a
+        drop-off goal asks this for one point at a time, dozens of times in one tick, and
+        numpy's per-call cost made that most of the tick.
+        """
+        grid, stride, resolution = self.grid, self.stride, self.grid.resolution
+        row = round(math.floor((y - grid.origin_y) / resolution) / stride)
+        col = round(math.floor((x - grid.origin_x) / resolution) / stride)
+        height, width = self.node_of.shape
+        best: tuple[int, float] | None = None
+        for d_row, d_col in itertools.product((-1, 0, 1), repeat=2):
+            r, c = row + d_row, col + d_col
+            if not (0 <= r < height and 0 <= c < width) or (node := int(self.node_of[r, c])) < 0:
+                continue
+            cell_row, cell_col = self.node_cells[node]
+            hop = math.hypot(grid.origin_x + (cell_col + 0.5) * resolution - x,
+                             grid.origin_y + (cell_row + 0.5) * resolution - y)
+            total = float(self.distances[node]) + hop
+            if math.isfinite(total) and (best is None or total < best[1]):
+                best = (node, total)
+        return best
 
     def _best_nodes(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For each point, the node within one lattice step minimising route length plus the

@@ -26,7 +26,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Callable, Collection, Iterable, Iterator
+from collections.abc import Callable, Collection, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -35,17 +35,16 @@ import yaml
 from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
-from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import deserialize_message, serialize_message
-from rclpy.subscription import Subscription
+from rclpy.serialization import serialize_message
 from rclpy.task import Future
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 
 from bt_servicesim.geometry import Pose2D
+from bt_servicesim.shared_subscription import Reader, shared_subscription
 from bt_servicesim.tree_log import TickRecord, TreeState
 
 MCAP_NAME = "run.mcap"
@@ -191,14 +190,12 @@ class McapRecorder:
         self.node = node
         self.path = path
         self.counts: dict[str, int] = {}
-        self._listeners: dict[str, list[Callable[[Any], None]]] = {}
-        self._types: dict[str, type] = {}
         self._own: dict[str, Callable[[bytes], None]] = {}
         self._stream: BinaryIO | None = path.open("wb")
         self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
         self._writer.start(profile="ros2", library="bt_servicesim")
         schemas: dict[str, int] = {}
-        self._subscriptions = []
+        self._readers: list[Reader] = []
         for topic in topics:
             name = type_name(topic.message_type)
             if name not in schemas:
@@ -208,15 +205,12 @@ class McapRecorder:
                 topic=topic.name, message_encoding="cdr", schema_id=schemas[name],
                 metadata={"offered_qos_profiles": offered_qos_yaml(topic.qos)})
             self.counts[topic.name] = 0
-            self._types[topic.name] = topic.message_type
-            taken: list[Subscription[Any]] = []
+            write = self._writes_to(topic.name, channel)
             if topic.name in own_topics:
-                self._own[topic.name] = self._writes_to(topic.name, channel, taken)
+                self._own[topic.name] = write
                 continue
-            taken.append(node.create_subscription(
-                topic.message_type, topic.name, self._writes_to(topic.name, channel, taken),
-                topic.qos, raw=True))
-            self._subscriptions.append(taken[0])
+            self._readers.append(shared_subscription(
+                node, topic.message_type, topic.name, write, topic.qos, raw=True))
 
     def records_own(self, topic: str) -> bool:
         """Whether ``topic`` is recorded through :meth:`record` (one of ``own_topics``)."""
@@ -229,41 +223,20 @@ class McapRecorder:
             raise ValueError(f"{topic} is not recorded as one of this process's own topics")
         write(serialize_message(message))
 
-    def add_listener(self, topic: str, callback: Callable[[Any], None]) -> None:
-        """Also hand every message recorded on ``topic``, deserialised, to ``callback``.
+    def _writes_to(self, topic: str, channel: int) -> Callable[[bytes], None]:
+        """The callback for one topic: writes the message.
 
-        Whoever needs a recorded topic only for the run's records listens here rather than
-        subscribing again: each subscription in the process is one more wake-up per message.
+        The topic is read through the node's shared subscription
+        (:mod:`bt_servicesim.shared_subscription`), which takes a burst of messages (the 50 Hz
+        score arrives five at a time) in one wake-up.
         """
-        if topic not in self._types:
-            raise ValueError(f"{topic} is not recorded")
-        self._listeners.setdefault(topic, []).append(callback)
-
-    def _writes_to(self, topic: str, channel: int, subscription: list[Subscription[Any]]) -> Any:
-        """The callback for one topic: writes the message, then every one queued behind it.
-
-        rclpy's executor takes one message per subscription each time it waits, and builds its
-        wait set anew each time; the 50 Hz score arrives in bursts of five per I/O period, so
-        taking the queue in one go saves the executive four waits in five on that topic.
-        """
-        def write_one(data: bytes) -> None:
+        def write(data: bytes) -> None:
+            if self._stream is None:
+                return
             now = self.node.get_clock().now().nanoseconds
             self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
                                      data=data, sequence=self.counts[topic])
             self.counts[topic] += 1
-            listeners = self._listeners.get(topic)
-            if listeners:
-                message = deserialize_message(data, self._types[topic])
-                for listener in listeners:
-                    listener(message)
-
-        def write(data: bytes) -> None:
-            if self._stream is None:
-                return
-            write_one(data)
-            if subscription:
-                for queued in _queued_raw_messages(subscription[0]):
-                    write_one(queued)
 
         return write
 
@@ -271,25 +244,12 @@ class McapRecorder:
         """Stop recording and finish the file (summary and index); idempotent."""
         if self._stream is None:
             return
-        for subscription in self._subscriptions:
-            self.node.destroy_subscription(subscription)
-        self._subscriptions.clear()
+        for reader in self._readers:
+            reader.cancel()
+        self._readers.clear()
         self._writer.finish()
         self._stream.close()
         self._stream = None
-
-
-def _queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:
-    """Take the messages waiting in a raw subscription's queue, oldest first, until none is."""
-    while True:
-        try:
-            with subscription.handle:
-                taken = subscription.handle.take_message(subscription.msg_type, True)
-        except InvalidHandle:
-            return
-        if taken is None:
-            return
-        yield taken[0]
 
 
 # ------------------------------------------------------------------------ the run's own topics
@@ -297,8 +257,8 @@ class TaskTopic:
     """Publishes the task (``task_info``) on ``/bt_servicesim/task`` once a task is running."""
 
     def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
-        """Reads the referee's state from ``recorder`` when given, else subscribes to it, and
-        writes the task to ``recorder`` when it records the task topic as its own."""
+        """Reads the referee's state through the node's shared subscription, and writes the
+        task to ``recorder`` when it records the task topic as its own."""
         self.node = node
         self.task: dict[str, Any] | None = None
         self.recorder = recorder
@@ -306,11 +266,8 @@ class TaskTopic:
         self.publisher = node.create_publisher(String, TASK_TOPIC, latched)
         self.client = node.create_client(TaskInfo, "/servicesim/task_info")
         self._pending: Future | None = None
-        if recorder is not None:
-            recorder.add_listener("/servicesim/referee", self._on_referee)
-            return
-        self._referee = node.create_subscription(
-            RefereeState, "/servicesim/referee", self._on_referee,
+        self._referee = shared_subscription(
+            node, RefereeState, "/servicesim/referee", self._on_referee,
             RecordedTopic("/servicesim/referee", RefereeState, latched=True).qos)
 
     def _on_referee(self, state: RefereeState) -> None:

@@ -15,6 +15,8 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from servicesim_competition.msg import RefereeState
 
+from bt_servicesim.shared_subscription import shared_subscription
+
 REFEREE_TOPIC = "/servicesim/referee"
 CHECKPOINT_NAMES = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
 LATCHED = QoSProfile(
@@ -27,9 +29,8 @@ class RefereeMonitor:
 
     def __init__(self, node: Node) -> None:
         self.latest: RefereeState | None = None
-        self._subscription = node.create_subscription(
-            RefereeState, REFEREE_TOPIC, self._on_state, LATCHED
-        )
+        self._reader = shared_subscription(node, RefereeState, REFEREE_TOPIC, self._on_state,
+                                           LATCHED)
 
     def _on_state(self, message: RefereeState) -> None:
         self.latest = message

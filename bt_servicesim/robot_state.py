@@ -33,6 +33,7 @@ from rclpy.qos import (
 from servicesim_competition.msg import ActorNames
 
 from bt_servicesim.geometry import Pose2D
+from bt_servicesim.shared_subscription import shared_subscription
 from bt_servicesim.sim_time import SimStopwatch, node_from_setup_kwargs, sim_now_s
 
 try:  # written by a colleague; until it exists the port carries whatever the reader stores
@@ -86,9 +87,11 @@ class _TopicReader(BehaviourWithPorts, register=False):
         self._received_s = 0.0
 
     def setup(self, **kwargs: Any) -> None:
-        """Subscribe on ``kwargs["node"]``."""
+        """Subscribe on ``kwargs["node"]``, sharing its subscription to the topic if it has one
+        (:mod:`bt_servicesim.shared_subscription`); only the newest of a burst is decoded."""
         self.node = node_from_setup_kwargs(self.name, kwargs)
-        self.node.create_subscription(self.MESSAGE_TYPE, self.topic, self._on_message, self.QOS)
+        shared_subscription(self.node, self.MESSAGE_TYPE, self.topic, self._on_message, self.QOS,
+                            latest_only=True)
 
     def initialise(self) -> None:
         """Nothing to start: the subscription runs from setup onwards."""

@@ -108,6 +108,10 @@ class TreeLog:
         self._sim_time_s = sim_time_s
         self._blackboard = blackboard
         self._behaviours = walk(tree.root)
+        self._keys = self.shape.keys
+        self._key_of = {id(behaviour): key
+                        for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
+        self._last_states: list[NodeState | None] = [None] * len(self._behaviours)
         self._last_nodes: dict[str, NodeState] = {}
         self._last_tip: str | None = None
         self._last_values: dict[str, tuple[Any, str]] = {}
@@ -138,26 +142,32 @@ class TreeLog:
             listener(record)
 
     def capture(self, *, tick: int) -> TickRecord | None:
-        """What changed since the last record, or ``None`` when nothing did."""
-        nodes = {key: (behaviour.status, behaviour.feedback_message)
-                 for key, behaviour in zip(self.shape.keys, self._behaviours, strict=True)}
-        changed = {key: state for key, state in nodes.items() if self._last_nodes.get(key) != state}
+        """What changed since the last record, or ``None`` when nothing did.
+
+        Runs after every tick, so it compares node by node against the states last written
+        without building a dictionary of the whole tree each time.
+        """
+        last = self._last_states
+        changed_at: list[tuple[int, NodeState]] = []
+        for index, behaviour in enumerate(self._behaviours):
+            state = (behaviour.status, behaviour.feedback_message)
+            if last[index] != state:
+                changed_at.append((index, state))
         tip = self._tip_key()
         values = self._blackboard_changes()
-        if not changed and not values and tip == self._last_tip:
+        if not changed_at and not values and tip == self._last_tip:
             return None
-        self._last_nodes, self._last_tip = nodes, tip
+        changed: dict[str, NodeState] = {}
+        for index, state in changed_at:
+            key = self._keys[index]
+            last[index] = self._last_nodes[key] = changed[key] = state
+        self._last_tip = tip
         return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
                           tip=tip, nodes=changed, blackboard=values)
 
     def _tip_key(self) -> str | None:
         tip = self.tree.root.tip()
-        if tip is None:
-            return None
-        for key, behaviour in zip(self.shape.keys, self._behaviours, strict=True):
-            if behaviour is tip:
-                return key
-        return None
+        return None if tip is None else self._key_of.get(id(tip))
 
     def _blackboard_changes(self) -> dict[str, str | None]:
         current = self._blackboard()

@@ -187,6 +187,10 @@ def test_route_lengths_to_many_points_at_once_agree_with_one_at_a_time() -> None
     many = routes.distances_at(xs, ys)
     assert many.tolist() == [routes.distance_to(x, y) for x, y in zip(xs, ys, strict=True)]
     assert many[2] == math.inf  # inside the wall
+    scattered = np.random.default_rng(5).uniform(-1.0, 11.0, (2, 500))  # some off the map
+    at_once = routes.distances_at(*scattered).tolist()
+    one_by_one = [routes.distance_to(x, y) for x, y in scattered.T]
+    assert at_once == one_by_one and any(math.isinf(d) for d in at_once)
 
 
 def test_route_trees_are_kept_for_the_places_last_asked_about() -> None:

@@ -41,6 +41,7 @@ from bt_servicesim.recording import (
     complete_definition,
     field_types,
 )
+from bt_servicesim.shared_subscription import shared_subscription
 from bt_servicesim.tree_log import TickRecord
 
 SIM_NS = 42_500_000_000
@@ -185,15 +186,13 @@ def test_a_burst_of_messages_is_recorded_whole_and_in_order_in_one_callback(
     assert scores == [float(value) for value in range(8)]
 
 
-def test_listeners_get_each_recorded_message_decoded_without_a_subscription_of_their_own(
-        graph: Graph) -> None:
+def test_a_reader_of_a_recorded_topic_shares_the_recorders_subscription(graph: Graph) -> None:
     recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
     heard: list[float] = []
     subscriptions = len(list(graph.recorder_node.subscriptions))
-    recorder.add_listener("/servicesim/score", lambda message: heard.append(message.score))
+    shared_subscription(graph.recorder_node, Score, "/servicesim/score",
+                        lambda message: heard.append(message.score), 10)
     assert len(list(graph.recorder_node.subscriptions)) == subscriptions
-    with pytest.raises(ValueError, match="not recorded"):
-        recorder.add_listener("/servicesim/nothing", heard.append)
     graph.start_sim_clock()
     score = graph.publishers["/servicesim/score"]
     graph.spin_until(lambda: score.get_subscription_count() > 0, "the recorder to match")
