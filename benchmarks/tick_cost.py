@@ -80,6 +80,7 @@ def scripted(tree_file: Path, drive_ticks: int) -> None:
     import py_trees
     from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
+    from bt_servicesim.lean_tree import LeanBehaviourTree
     from tests.mission_script import ManualClock, Script, scripted_registry
 
     drive = (py_trees.common.Status.SUCCESS, drive_ticks)
@@ -89,7 +90,7 @@ def scripted(tree_file: Path, drive_ticks: int) -> None:
     script = Script(outcomes)
     root = parse_behaviour_tree_xml(str(tree_file),
                                     node_registry=scripted_registry(tree_file, script))
-    tree = py_trees.trees.BehaviourTree(root)
+    tree = LeanBehaviourTree(root)
     clock = ManualClock()
     tree.setup(node=clock)
     durations = timed_ticks(tree, None, lambda: clock.advance(0.1))
@@ -105,6 +106,7 @@ def idle(tree_file: Path, ticks: int) -> None:
     from rclpy.node import Node
     from rclpy.parameter import Parameter
 
+    from bt_servicesim.lean_tree import LeanBehaviourTree
     from bt_servicesim.mission_tree import load_mission_tree
 
     py_trees.blackboard.Blackboard.clear()
@@ -113,7 +115,7 @@ def idle(tree_file: Path, ticks: int) -> None:
     node = Node("benchmark_tick_cost",
                 parameter_overrides=[Parameter("use_sim_time", Parameter.Type.BOOL, True)])
     try:
-        tree = py_trees.trees.BehaviourTree(root)
+        tree = LeanBehaviourTree(root)
         tree.setup(timeout=15.0, node=node)
         durations = timed_ticks(tree, ticks)
         tip = tree.root.tip()

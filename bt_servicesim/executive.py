@@ -14,6 +14,8 @@ from typing import Protocol
 import py_trees
 from rclpy.node import Node
 
+from bt_servicesim.lean_tree import LeanBehaviourTree
+
 Status = py_trees.common.Status
 TickHandler = Callable[[py_trees.trees.BehaviourTree], None]
 MISSION_SEQUENCE = "Mission"
@@ -49,7 +51,7 @@ class MissionExecutive:
         tick_period_s: float = 0.1,
     ) -> None:
         self.node = node
-        self.tree = py_trees.trees.BehaviourTree(root=root)
+        self.tree = LeanBehaviourTree(root=root)
         self.tick_period_s = tick_period_s
         self.outcome: Status | None = None
         self.ticks = 0
