@@ -44,13 +44,13 @@ from rclpy.client import Client
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.task import Future
-from rclpy.timer import Timer
 from servicesim_competition import srv
 from servicesim_competition.action import NavigateToPose
 from std_srvs.srv import Empty
 
 from bt_servicesim.geometry import Box, Pose2D
 from bt_servicesim.initial_pose import INITIAL_POSE_QOS, initial_pose_message
+from bt_servicesim.sim_ticker import SimTicker
 from bt_servicesim.sim_time import SimStopwatch, sim_now_s
 
 __all__ = ["SEED_STATES", "SeedStateMachine", "seed_goal"]
@@ -107,7 +107,7 @@ class SeedStateMachine:
         self._clients: dict[str, Client] = {}
         self._navigator: ActionClient | None = None
         self._initial_pose: Publisher | None = None
-        self._timer: Timer | None = None
+        self._ticker: SimTicker | None = None
         self._clock: SimStopwatch | None = None
         self._body: Iterator[None] | None = None
         self._pending_call: tuple[Client, Future] | None = None
@@ -132,11 +132,11 @@ class SeedStateMachine:
             INITIAL_POSE_QOS)
 
     def start(self) -> None:
-        """Poll the state machine from a timer on the node's (sim) clock."""
+        """Poll the state machine every POLL_PERIOD_S of the node's (sim) clock."""
         self._clock = SimStopwatch(self.node.get_clock())
         self._clock.restart()
         self._body = self._run_states()
-        self._timer = self.node.create_timer(POLL_PERIOD_S, self.poll)
+        self._ticker = SimTicker(self.node, POLL_PERIOD_S, self.poll)
 
     @property
     def finished(self) -> bool:
@@ -179,9 +179,9 @@ class SeedStateMachine:
         self.outcome = outcome
 
     def _stop_timer(self) -> None:
-        if self._timer is not None:
-            self.node.destroy_timer(self._timer)
-            self._timer = None
+        if self._ticker is not None:
+            self._ticker.cancel()
+            self._ticker = None
 
     # ---------------------------------------------------------------- the four states
     def _run_states(self) -> Iterator[None]:

@@ -1,8 +1,9 @@
 """Tick a mission tree on a ROS node, in simulation time.
 
 The executive owns no mission logic: it sets the tree up with the node (every behaviour creates
-its ROS handles in ``setup``), ticks it from a timer on the node's clock — which follows
-``/clock`` when the node runs with ``use_sim_time`` — and remembers how the mission ended.
+its ROS handles in ``setup``), ticks it every 0.1 s of the node's clock — which follows
+``/clock`` when the node runs with ``use_sim_time`` (:mod:`bt_servicesim.sim_ticker`) — and
+remembers how the mission ended.
 Interrupting it stops the tree, so behaviours cancel whatever they have in flight.
 """
 
@@ -15,6 +16,7 @@ import py_trees
 from rclpy.node import Node
 
 from bt_servicesim.lean_tree import LeanBehaviourTree
+from bt_servicesim.sim_ticker import SimTicker
 
 Status = py_trees.common.Status
 TickHandler = Callable[[py_trees.trees.BehaviourTree], None]
@@ -55,7 +57,7 @@ class MissionExecutive:
         self.tick_period_s = tick_period_s
         self.outcome: Status | None = None
         self.ticks = 0
-        self._timer = None
+        self._ticker: SimTicker | None = None
         self._phase: tuple[int, str] = (-1, "-")
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
@@ -66,8 +68,8 @@ class MissionExecutive:
         self.tree.add_post_tick_handler(handler)
 
     def start(self) -> None:
-        """Tick on the node's clock (sim time under ``use_sim_time``)."""
-        self._timer = self.node.create_timer(self.tick_period_s, self.tick)
+        """Tick every ``tick_period_s`` of the node's clock (sim time under ``use_sim_time``)."""
+        self._ticker = SimTicker(self.node, self.tick_period_s, self.tick)
 
     @property
     def finished(self) -> bool:
@@ -83,9 +85,9 @@ class MissionExecutive:
             self.stop_ticking()
 
     def stop_ticking(self) -> None:
-        if self._timer is not None:
-            self.node.destroy_timer(self._timer)
-            self._timer = None
+        if self._ticker is not None:
+            self._ticker.cancel()
+            self._ticker = None
 
     def interrupt(self) -> None:
         """Stop the tree: running behaviours are terminated and cancel what is in flight."""

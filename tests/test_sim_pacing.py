@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from servicesim_sim.pacing import MAX_LAG_SIM_S, Pacer
+from servicesim_sim.pacing import MAX_LAG_WALL_S, MIN_LAG_SIM_S, Pacer
 
 
 class FakeClock:
@@ -46,15 +46,19 @@ def test_far_behind_it_slips_instead_of_racing_to_catch_up() -> None:
     assert pacer.wait_s(sim_time=0.2, speed=20.0) == pytest.approx(0.004)
 
 
-def test_the_lag_allowed_is_in_sim_seconds() -> None:
+@pytest.mark.parametrize(("speed", "lag_sim_s"), [(50.0, 2.0), (20.0, 0.8), (1.0, 0.2)])
+def test_the_lag_allowed_is_a_little_wall_time_and_at_least_two_periods(
+        speed: float, lag_sim_s: float) -> None:
     clock = FakeClock()
     pacer = Pacer(clock=clock)
-    pacer.wait_s(sim_time=0.0, speed=10.0)
-    clock.now += 0.01 + 0.99 * MAX_LAG_SIM_S / 10.0  # just within the lag at speed 10
-    pacer.wait_s(sim_time=0.1, speed=10.0)
+    assert pacer.max_lag_sim_s(speed) == pytest.approx(lag_sim_s)
+    assert max(MAX_LAG_WALL_S * speed, MIN_LAG_SIM_S) == pytest.approx(lag_sim_s)
+    pacer.wait_s(sim_time=0.0, speed=speed)
+    clock.now += (0.1 + 0.99 * lag_sim_s) / speed  # just within the lag
+    pacer.wait_s(sim_time=0.1, speed=speed)
     assert pacer.slips == 0
-    clock.now += 0.02 * MAX_LAG_SIM_S / 10.0 + 0.001
-    pacer.wait_s(sim_time=0.1, speed=10.0)
+    clock.now += 0.02 * lag_sim_s / speed + 0.001
+    pacer.wait_s(sim_time=0.1, speed=speed)
     assert pacer.slips == 1
 
 

@@ -444,9 +444,11 @@ class SimulatorNode:
             self._publish_io()
             if self._advance_navigation() | self._wake_sleepers():
                 executor.note_resumable()
-            executor.run_ready()
-            due = time.monotonic() + pacer.wait_s(sim_time=self.engine.sim_time,
-                                                  speed=self._pace())
+            wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
+            if wait_s <= 0.0:  # flat out or behind: only look for requests
+                executor.run_ready()
+                continue
+            due = time.monotonic() + wait_s  # waiting for the wall clock, serve requests
             while (remaining := due - time.monotonic()) > 0.0:
                 executor.wait_and_run(timeout_sec=remaining)
 
