@@ -55,9 +55,9 @@ DEFAULT_SPEED = 20.0
 DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
 STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
 REPORT_NAME = "report.json"
-EPISODE_CPU_S_PER_SIM_S = 0.036
+EPISODE_CPU_S_PER_SIM_S = 0.027
 """CPU seconds an episode spends per sim second, simulator and executive together (measured
-with ``benchmarks/sim_rtf.py``: about 18 ms each)."""
+with ``benchmarks/sim_rtf.py`` at speed 50: about 13 ms each)."""
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
 INTERRUPTED = "evaluation interrupted"
 PARENT_FIELD, START_TIME_FIELD = 4, 22  # of /proc/<pid>/stat
