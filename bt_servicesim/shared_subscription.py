@@ -17,8 +17,9 @@ executive from ticking on time. So readers in one node share a subscription per 
   (reliable over best effort, transient local over volatile, a deeper history) gets a
   subscription of its own: sharing never weakens what a reader asked for;
 * a transient-local (latched) subscription keeps the last messages its history holds and
-  hands them to a reader that joins later, at once, as DDS would have given a subscription of
-  its own: the map, published once, reaches the tree's reader however late it subscribes.
+  hands them to a latched reader that joins later, at once, as DDS would have given a
+  subscription of its own: the map, published once, reaches the tree's reader however late
+  it subscribes. A volatile reader gets only what arrives after it joined.
 
 Readers given messages share the same message object, so none may change it.
 """
@@ -80,11 +81,12 @@ class SharedSubscription:
             want.history != HistoryPolicy.KEEP_ALL and have.depth >= want.depth)
         return reliable and durable and deep
 
-    def add(self, callback: Callable[[Any], None], *, raw: bool, latest_only: bool) -> Reader:
-        """A new reader; a latched topic's kept messages are handed to it before this returns."""
+    def add(self, callback: Callable[[Any], None], *, raw: bool, latest_only: bool,
+            latched: bool) -> Reader:
+        """A new reader; a ``latched`` one gets the kept messages before this returns."""
         reader = Reader(self, callback, raw=raw, latest_only=latest_only)
         self.readers.append(reader)
-        kept = list(self._kept or ())
+        kept = list(self._kept or ()) if latched else []
         for data in kept[-1:] if latest_only else kept:
             callback(data if raw else deserialize_message(data, self.message_type))
         return reader
@@ -128,13 +130,14 @@ def shared_subscription(node: Node, message_type: type, topic: str,
     ``latest_only=True`` the newest of each burst that arrived together.
     """
     profile = qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos)
+    latched = profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
     shared_list = _registry(node).setdefault((topic, message_type), [])
     for shared in shared_list:
         if shared.covers(profile):
-            return shared.add(callback, raw=raw, latest_only=latest_only)
+            return shared.add(callback, raw=raw, latest_only=latest_only, latched=latched)
     shared = SharedSubscription(node, message_type, topic, profile)
     shared_list.append(shared)
-    return shared.add(callback, raw=raw, latest_only=latest_only)
+    return shared.add(callback, raw=raw, latest_only=latest_only, latched=latched)
 
 
 def queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:

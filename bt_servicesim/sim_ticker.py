@@ -55,6 +55,9 @@ class SimTicker:
         self._timer = None
         self._jump_handle = None
         if isinstance(self._clock, ROSClock) and self._clock.ros_time_is_active:
+            if node.executor is None:
+                raise RuntimeError(f"{node.get_name()}: add the node to an executor before "
+                                   "ticking on its sim clock")
             threshold = JumpThreshold(min_forward=Duration(nanoseconds=1), min_backward=None,
                                       on_clock_change=False)
             self._jump_handle = self._clock.create_jump_callback(

@@ -135,3 +135,18 @@ def test_a_latest_only_reader_gets_the_newest_of_a_burst(
     time.sleep(0.3)
     executor.spin_once(timeout_sec=5.0)
     assert every == [0, 1, 2, 3] and newest == [3]
+
+
+def test_a_volatile_reader_joining_a_latched_subscription_gets_no_old_message(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, writer, executor = nodes
+    first: list[bytes] = []
+    shared_subscription(node, Int32, "/shared/latched", first.append, LATCHED, raw=True)
+    writer.create_publisher(Int32, "/shared/latched", LATCHED).publish(Int32(data=7))
+    deadline = time.monotonic() + 10.0
+    while not first:
+        assert time.monotonic() < deadline, "the latched message never came"
+        executor.spin_once(timeout_sec=0.1)
+    late: list[Int32] = []
+    shared_subscription(node, Int32, "/shared/latched", late.append, 1)  # volatile
+    assert subscription_count(node) == 1 and late == []

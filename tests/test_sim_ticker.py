@@ -119,3 +119,11 @@ def test_without_sim_time_it_ticks_on_a_timer(ros_context: Context) -> None:
 def test_a_period_that_is_not_positive_is_refused(graph: SimClockGraph) -> None:
     with pytest.raises(ValueError, match=r"tick period 0\.0: must be more than 0"):
         SimTicker(graph.node, 0.0, graph.record)
+
+
+def test_a_node_on_sim_time_without_an_executor_is_refused(ros_context: Context) -> None:
+    node = Node("ticker_alone", context=ros_context, parameter_overrides=[
+        Parameter("use_sim_time", Parameter.Type.BOOL, True)])
+    with pytest.raises(RuntimeError, match="add the node to an executor"):
+        SimTicker(node, 0.1, lambda: None)
+    node.destroy_node()
