@@ -42,6 +42,20 @@ def subscription_count(node: Node) -> int:
     return len(list(node.subscriptions))
 
 
+def burst_then_one_wake_up(writer: Node, executor: SingleThreadedExecutor, *,
+                           count: int) -> None:
+    """Publish 0..count-1 on /shared/a, let them all arrive, then spin the reader once."""
+    publisher = writer.create_publisher(Int32, "/shared/a", RELIABLE_50)
+    deadline = time.monotonic() + 10.0
+    while publisher.get_subscription_count() == 0:
+        assert time.monotonic() < deadline, "the reader never matched"
+        time.sleep(0.01)
+    for value in range(count):
+        publisher.publish(Int32(data=value))
+    time.sleep(0.3)  # all of them delivered to the reader's queue
+    executor.spin_once(timeout_sec=5.0)
+
+
 def test_readers_asking_no_more_than_the_first_share_its_subscription(
         nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
     node, _, _ = nodes
@@ -72,15 +86,7 @@ def test_one_wake_up_hands_every_waiting_message_to_every_reader(
     shared_subscription(node, Int32, "/shared/a", raw.append, RELIABLE_50, raw=True)
     shared_subscription(node, Int32, "/shared/a", decoded.append, 10)
     shared_subscription(node, Int32, "/shared/a", also_decoded.append, 10)
-    publisher = writer.create_publisher(Int32, "/shared/a", RELIABLE_50)
-    deadline = time.monotonic() + 10.0
-    while publisher.get_subscription_count() == 0:
-        assert time.monotonic() < deadline, "the reader never matched"
-        time.sleep(0.01)
-    for value in range(4):
-        publisher.publish(Int32(data=value))
-    time.sleep(0.3)  # all four delivered to the reader's queue
-    executor.spin_once(timeout_sec=5.0)
+    burst_then_one_wake_up(writer, executor, count=4)
     assert [deserialize_message(data, Int32).data for data in raw] == [0, 1, 2, 3]
     assert [message.data for message in decoded] == [0, 1, 2, 3]
     assert all(a is b for a, b in zip(decoded, also_decoded, strict=True))  # decoded once
@@ -125,15 +131,7 @@ def test_a_latest_only_reader_gets_the_newest_of_a_burst(
     shared_subscription(node, Int32, "/shared/a", lambda m: every.append(m.data), RELIABLE_50)
     shared_subscription(node, Int32, "/shared/a", lambda m: newest.append(m.data), 10,
                         latest_only=True)
-    publisher = writer.create_publisher(Int32, "/shared/a", RELIABLE_50)
-    deadline = time.monotonic() + 10.0
-    while publisher.get_subscription_count() == 0:
-        assert time.monotonic() < deadline, "the reader never matched"
-        time.sleep(0.01)
-    for value in range(4):
-        publisher.publish(Int32(data=value))
-    time.sleep(0.3)
-    executor.spin_once(timeout_sec=5.0)
+    burst_then_one_wake_up(writer, executor, count=4)
     assert every == [0, 1, 2, 3] and newest == [3]
 
 
