@@ -1,10 +1,11 @@
 """The executive's ROS node: on sim time, and cheap to spin.
 
 A run spins one node for everything on the executive's side: the tree's behaviours, the
-referee monitor and the run's records. rclpy's executor builds its wait set from every entity
-of that node each time it waits, and a run waits once per batch of incoming messages --
-thousands of times a wall second when the simulator runs 50 times faster than real time. So
-the node leaves out what nobody uses on it:
+referee monitor and the run's records. Every entity of that node is one more DDS endpoint and
+one more thing the executor looks after -- rclpy's Python executors rebuild their wait set
+from all of them each time they wait, which is thousands of times a wall second when the
+simulator runs 50 times faster than real time (the run itself uses the ``EventsExecutor``,
+:mod:`bt_servicesim.mission_run`). So the node leaves out what nobody uses on it:
 
 * the parameter and type-description services (the executive's one parameter,
   ``use_sim_time``, is set here and never changed from outside);
