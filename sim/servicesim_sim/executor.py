@@ -132,10 +132,11 @@ class EntityWaitSet:
 class DrainingExecutor(SingleThreadedExecutor):
     """An executor that runs everything ready now, and waits only for its entities.
 
-    Once per I/O period the loop calls :meth:`run_ready`: all pending requests, goal and cancel
-    messages and resumed service/navigation coroutines run before the loop steps on (a fixed
-    number of ``spin_once`` calls would starve them when the sim runs many times faster than
-    real time). While it waits for the wall clock it calls :meth:`wait_and_run`.
+    Once per I/O period all pending requests, goal and cancel messages and resumed
+    service/navigation coroutines run before the loop steps on (a fixed number of
+    ``spin_once`` calls would starve them when the sim runs many times faster than real time):
+    through :meth:`wait_and_run` while the loop waits for the wall clock, else through
+    :meth:`run_ready`.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:

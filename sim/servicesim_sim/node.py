@@ -354,7 +354,6 @@ class SimulatorNode:
         for score in scores:
             self._score_message.score = score
             self._send(self._score, self._score_message)
-        scores.clear()
 
     def _send(self, publisher: Any, message: Any) -> None:
         """Publish; a message DDS refuses is dropped with a warning, never the simulator.
@@ -434,15 +433,17 @@ class SimulatorNode:
     def run(self, executor: DrainingExecutor) -> None:
         """Step, publish and serve until the context shuts down, paced by the speed factor."""
         pacer = Pacer()
-        scores: list[float] = []
         while rclpy.ok(context=self.node.context):
+            scores: list[float] = []
             for _ in range(self.steps_per_io):
                 self.engine.step()
                 if self.engine.task_running():
                     scores.append(float(self.engine.score()))
             self._publish_scores(scores)
             self._publish_io()
-            if self._advance_navigation() | self._wake_sleepers():
+            goals_ended = self._advance_navigation()
+            sleeps_over = self._wake_sleepers()
+            if goals_ended or sleeps_over:
                 executor.note_resumable()
             wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
             if wait_s <= 0.0:  # flat out or behind: only look for requests
