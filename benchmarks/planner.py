@@ -19,17 +19,12 @@ import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from typing import NoReturn
 
 import numpy as np
 
-EXIT_BAD_INPUT = 2
+from bt_servicesim.cli import OneLineArgumentParser
+
 HEADLINE = ((10.9, 3.75), (-20.1, 10.0))
-
-
-class OneLineArgumentParser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

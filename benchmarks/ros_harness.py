@@ -10,7 +10,6 @@ the run command starts it (``python -m servicesim_sim``), with its output in a t
 
 from __future__ import annotations
 
-import argparse
 import os
 import signal
 import subprocess
@@ -19,19 +18,11 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
-EXIT_BAD_INPUT = 2
 REPO = Path(__file__).resolve().parents[1]
-
-
-class OneLineArgumentParser(argparse.ArgumentParser):
-    """argparse, but errors are a single line and exit 2."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
 def isolate() -> int:

@@ -36,6 +36,8 @@ from ros_harness import (
     start_task,
 )
 
+from bt_servicesim.ros.messages import pose_to_msg
+
 _NUMBERS = itertools.count()
 FAR_GOAL = (-20.1, 10.0)  # across the building from the shipped start
 START = (10.975, 3.75, math.pi)  # the shipped task's start pose
@@ -95,11 +97,11 @@ class Client:
         return time.perf_counter() - began, result
 
     def goal(self, x: float, y: float, yaw: float) -> Any:
-        from bt_servicesim.geometry import Pose2D
+        from bt_servicesim.planning.geometry import Pose2D
 
         message = self.goal_type()
         message.pose.header.frame_id = "map"
-        message.pose.pose = Pose2D(x, y, yaw).to_pose()
+        message.pose.pose = pose_to_msg(Pose2D(x, y, yaw))
         return message
 
     def close(self) -> None:
@@ -111,8 +113,8 @@ def localise(client: Client) -> None:
     """Publish the start pose (the simulator, like AMCL, accepts goals only once localised)."""
     from geometry_msgs.msg import PoseWithCovarianceStamped
 
-    from bt_servicesim.geometry import Pose2D
-    from bt_servicesim.initial_pose import INITIAL_POSE_QOS, initial_pose_message
+    from bt_servicesim.planning.geometry import Pose2D
+    from bt_servicesim.ros.initial_pose import INITIAL_POSE_QOS, initial_pose_message
 
     publisher = client.node.create_publisher(PoseWithCovarianceStamped,
                                              "/servicebot/initialpose", INITIAL_POSE_QOS)

@@ -146,7 +146,7 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
     """Run one mission, print its figures; the real-time factor over its task."""
     from servicesim_competition.msg import RefereeState
 
-    from bt_servicesim.referee_monitor import LATCHED, REFEREE_TOPIC
+    from bt_servicesim.mission.referee_monitor import LATCHED, REFEREE_TOPIC
 
     task = Stamps()
     ended: list[bool] = []

@@ -36,7 +36,7 @@ STILL_DRIVING = ("RobotInPickUpArea",)
 
 
 def build_parser() -> OneLineArgumentParser:
-    from bt_servicesim.mission_tree import DEFAULT_TREE
+    from bt_servicesim.tree.loading import DEFAULT_TREE
 
     parser = OneLineArgumentParser(prog="benchmarks/tick_cost.py",
                                    description="Tick cost of the mission tree.")
@@ -80,7 +80,7 @@ def scripted(tree_file: Path, drive_ticks: int) -> None:
     import py_trees
     from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
-    from bt_servicesim.lean_tree import LeanBehaviourTree
+    from bt_servicesim.tree.lean_tree import LeanBehaviourTree
     from tests.mission_script import ManualClock, Script, scripted_registry
 
     drive = (py_trees.common.Status.SUCCESS, drive_ticks)
@@ -106,8 +106,8 @@ def idle(tree_file: Path, ticks: int) -> None:
     from rclpy.node import Node
     from rclpy.parameter import Parameter
 
-    from bt_servicesim.lean_tree import LeanBehaviourTree
-    from bt_servicesim.mission_tree import load_mission_tree
+    from bt_servicesim.tree.lean_tree import LeanBehaviourTree
+    from bt_servicesim.tree.loading import load_mission_tree
 
     py_trees.blackboard.Blackboard.clear()
     root = load_mission_tree(tree_file)
@@ -131,7 +131,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.drive_ticks < 0 or args.idle_ticks < 1:
         build_parser().error("--drive-ticks must be 0 or more and --idle-ticks 1 or more")
     domain = isolate()
-    from bt_servicesim.mission_tree import MissionTreeError, load_mission_tree
+    from bt_servicesim.tree.loading import MissionTreeError, load_mission_tree
 
     try:
         load_mission_tree(args.tree)

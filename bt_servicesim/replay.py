@@ -1,7 +1,7 @@
 """``python -m bt_servicesim.replay DIR``: the tree of a recorded run, as it was at any moment.
 
-It reads the run's snapshot log (``DIR/tree_log.jsonl``, see :mod:`bt_servicesim.tree_log`) and
-prints the unicode tree with every node's status and feedback message as logged: at the end of
+It reads the run's snapshot log (``DIR/tree_log.jsonl``, see :mod:`bt_servicesim.records.tree_log`)
+and prints the unicode tree with every node's status and feedback message as logged: at the end of
 the run by default, at a tick (``--tick N``) or at a sim time (``--time S``). ``--step`` walks
 through the run one change at a time from there: Enter shows the next change, ``b`` the previous
 one, ``q`` quits. It reads whole lines, so it works as well with a script piped into stdin as at
@@ -19,9 +19,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
-from bt_servicesim.dump import ShadowTree
-from bt_servicesim.run import OneLineArgumentParser
-from bt_servicesim.tree_log import LOG_NAME, TreeHistory, TreeLogError, TreeState, read_tree_log
+from bt_servicesim.cli import OneLineArgumentParser
+from bt_servicesim.records.tree_log import (
+    LOG_NAME,
+    TreeHistory,
+    TreeLogError,
+    TreeState,
+    read_tree_log,
+)
+from bt_servicesim.tree.shape import ShadowTree
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 PROG = "python -m bt_servicesim.replay"

@@ -11,59 +11,31 @@ Exit status: 0 when the referee counted all four checkpoints, 1 when the mission
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
-import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING
 
-from bt_servicesim.mission_tree import DEFAULT_TREE, MissionTreeError, load_mission_tree
-from bt_servicesim.ros_environment import apply_localhost_defaults
+from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
+from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, EXECUTIVES, RunSettings
+from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.tree.loading import DEFAULT_TREE, MissionTreeError, load_mission_tree
 
 if TYPE_CHECKING:
     from rclpy.node import Node
 
-    from bt_servicesim.executive import Executive
+    from bt_servicesim.tree.executive import Executive
 
+PROG = "python -m bt_servicesim.run"
 ExecutiveFactory = Callable[["Node"], "Executive"]
-EXECUTIVES = ("bt", "baseline")  # the behaviour tree, and the seed's state machine
 
-EXIT_COMPLETED, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
-DEFAULT_TIME_LIMIT_S = 900.0
-STARTUP_LIMIT_S = 60.0  # wall seconds for the simulator to come up
-REPORT_NAME = "report.json"
-
-
-class UsageError(ValueError):
-    """Bad command-line input; the message is the one line the user sees."""
-
-
-class OneLineArgumentParser(argparse.ArgumentParser):
-    """argparse, but errors are a single line and exit 2."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
-
-
-@dataclass(frozen=True)
-class RunSettings:
-    world: Path | None
-    seed: int | None
-    speed: float
-    tree: Path
-    out: Path
-    time_limit_s: float
-    headless: bool
-    executive: str
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineArgumentParser(
-        prog="python -m bt_servicesim.run",
+        prog=PROG,
         description="Run the ServiceSim mission: simulator + behaviour-tree executive.",
     )
     parser.add_argument("--world", type=Path, help="world file (default: the ServiceSim office)")
@@ -111,11 +83,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         make_executive = executive_factory(settings)
         settings.out.mkdir(parents=True, exist_ok=True)
     except (UsageError, MissionTreeError, OSError) as error:
-        print(f"python -m bt_servicesim.run: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return error_line(PROG, error)
     apply_localhost_defaults()
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 101))
-    from bt_servicesim.mission_run import MissionRun  # rclpy only once the input is good
+    from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
 
     return MissionRun(
         settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
@@ -129,7 +100,7 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
     """
     if settings.executive == "baseline":
         def make_baseline(node: Node) -> Executive:
-            from bt_servicesim.baseline import SeedStateMachine
+            from bt_servicesim.evaluation.baseline import SeedStateMachine
 
             return SeedStateMachine(node=node, seed=settings.seed,
                                     time_limit_s=settings.time_limit_s)
@@ -138,19 +109,11 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
     root = load_mission_tree(settings.tree, time_limit_s=settings.time_limit_s)
 
     def make_tree(node: Node) -> Executive:
-        from bt_servicesim.executive import MissionExecutive
+        from bt_servicesim.tree.executive import MissionExecutive
 
         return MissionExecutive(node=node, root=root)
 
     return make_tree
-
-
-def write_report(path: Path, report: dict[str, Any]) -> None:
-    path.write_text(json.dumps(report, indent=2) + "\n")
-
-
-def wall_clock() -> float:
-    return time.monotonic()
 
 
 if __name__ == "__main__":

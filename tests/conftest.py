@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from bt_servicesim.ros_environment import apply_localhost_defaults
+from bt_servicesim.ros.environment import apply_localhost_defaults
 
 DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
 

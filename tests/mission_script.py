@@ -20,7 +20,7 @@ from py_trees.ports import BehaviourWithPorts, PortInformation
 from rclpy.clock import ClockType
 from rclpy.time import Time
 
-from bt_servicesim.geometry import Box, Pose2D
+from bt_servicesim.planning.geometry import Box, Pose2D
 
 Status = py_trees.common.Status
 KEEP_REAL = ("SimTimeout", "SimWait")
@@ -149,9 +149,9 @@ def leaf_ports(tree_file: Path) -> dict[str, set[str]]:
 
 
 def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[..., Any]]:
-    from bt_servicesim.mission_tree import register_leaves
+    from bt_servicesim.behaviours import node_registry
 
-    real = register_leaves()
+    real = node_registry()
     registry: dict[str, Callable[..., Any]] = {tag: real[tag] for tag in KEEP_REAL}
     for tag, ports in leaf_ports(tree_file).items():
         if tag not in KEEP_REAL:

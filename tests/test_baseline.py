@@ -29,10 +29,12 @@ from servicesim_competition import srv
 from servicesim_competition.action import NavigateToPose
 from std_srvs.srv import Empty
 
-from bt_servicesim.baseline import SEED_STATES, SeedStateMachine
-from bt_servicesim.geometry import Pose2D
-from bt_servicesim.mission_tree import MissionTreeError
-from bt_servicesim.run import RunSettings, executive_factory
+from bt_servicesim.evaluation.baseline import SEED_STATES, SeedStateMachine
+from bt_servicesim.mission.settings import RunSettings
+from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.ros.messages import pose_from_msg, pose_to_msg
+from bt_servicesim.run import executive_factory
+from bt_servicesim.tree.loading import MissionTreeError
 
 Status = py_trees.common.Status
 _names = itertools.count()
@@ -95,7 +97,7 @@ class FakeSimulator:
         if self.task_given:
             response.pick_up_location, response.drop_off_location = "PickUp", "DropOff"
             response.guest_name = "human_20843"
-            pose = Pose2D(*START).to_pose()
+            pose = pose_to_msg(Pose2D(*START))
             response.robot_start_pose = pose
         return response
 
@@ -124,7 +126,7 @@ class FakeSimulator:
         return CancelResponse.ACCEPT
 
     def navigate(self, handle: Any) -> Any:
-        self.log("goal", Pose2D.from_pose(handle.request.pose.pose))
+        self.log("goal", pose_from_msg(handle.request.pose.pose))
         outcome = self.goal_outcomes.pop(0) if self.goal_outcomes else "succeed"
         while outcome == "hang" and not handle.is_cancel_requested and not self.stopping:
             time.sleep(0.005)

@@ -18,7 +18,8 @@ import pytest
 from PIL import Image
 
 from bt_servicesim import dump
-from bt_servicesim.mission_tree import DEFAULT_TREE, load_mission_tree
+from bt_servicesim.tree.loading import DEFAULT_TREE, load_mission_tree
+from bt_servicesim.tree.shape import TreeShape, walk
 
 REPO = Path(__file__).resolve().parents[1]
 DOCS_DOT = REPO / "docs" / "images" / "mission_tree.dot"
@@ -170,8 +171,8 @@ def test_the_command_runs_as_a_module(small_tree: Path) -> None:
 
 def test_short_labels_keep_keys_unique() -> None:
     root = load_mission_tree(DEFAULT_TREE)
-    shape = dump.TreeShape.of(root)
-    assert len(set(shape.keys)) == len(shape.nodes) == len(dump.walk(root))
+    shape = TreeShape.of(root)
+    assert len(set(shape.keys)) == len(shape.nodes) == len(walk(root))
     assert all("." not in node.label for node in shape.nodes)
 
 

@@ -17,7 +17,20 @@ from typing import Any
 
 import pytest
 
-from bt_servicesim import evaluate as ev
+from bt_servicesim.evaluate import evaluate
+from bt_servicesim.evaluation.episodes import (
+    Episode,
+    EpisodeCommand,
+    EpisodeOutcome,
+    domain_ids,
+    episode_row,
+    plan_episodes,
+    run_command,
+    start_time,
+)
+from bt_servicesim.evaluation.report import PLOTS, markdown_report
+from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
+from bt_servicesim.evaluation.summary import summarise
 
 FAKE_EPISODE = r"""
 import json, os, signal, subprocess, sys, time
@@ -60,28 +73,28 @@ SUMMARY_KEYS = {"episodes", "success_rate", "mean_score", "median_score", "mean_
                 "penalties", "wall_time_s", "not_run", "rows"}
 
 
-def settings(tmp_path: Path, **changes: Any) -> ev.EvaluationSettings:
+def settings(tmp_path: Path, **changes: Any) -> EvaluationSettings:
     values: dict[str, Any] = dict(
         episodes=2, scenarios=("default", "random"), executives=("bt", "baseline"), jobs=2,
         seed=0, out=tmp_path / "evaluation", speed=0.0, episode_timeout_s=60.0,
         time_limit_s=900.0, docs=None, command_line="python -m bt_servicesim.evaluate (test)")
     values.update(changes)
-    return ev.EvaluationSettings(**values)
+    return EvaluationSettings(**values)
 
 
-def fake(mode_for: dict[tuple[str, int | None], str] | None = None) -> ev.EpisodeCommand:
+def fake(mode_for: dict[tuple[str, int | None], str] | None = None) -> EpisodeCommand:
     """The fake episode; ``mode_for[(executive, seed)]`` makes that one hang or crash."""
-    def command(episode: ev.Episode, _: ev.EvaluationSettings) -> list[str]:
+    def command(episode: Episode, _: EvaluationSettings) -> list[str]:
         mode = (mode_for or {}).get((episode.executive, episode.seed), "report")
         return [sys.executable, "-c", FAKE_EPISODE, str(episode.out), episode.executive,
                 str(episode.seed), episode.scenario, mode]
     return command
 
 
-def quietly(tmp_path: Path, chosen: ev.EvaluationSettings,
-            command: ev.EpisodeCommand) -> list[dict[str, Any]]:
+def quietly(tmp_path: Path, chosen: EvaluationSettings,
+            command: EpisodeCommand) -> list[dict[str, Any]]:
     with (tmp_path / "progress.log").open("w") as stream:
-        rows, interrupted = ev.evaluate(chosen, command=command, stream=stream)
+        rows, interrupted = evaluate(chosen, command=command, stream=stream)
     assert not interrupted
     return rows
 
@@ -106,7 +119,7 @@ def test_summary_maps_each_executive_to_its_statistics_and_rows(tmp_path: Path) 
     assert baseline["mean_score"] == pytest.approx((200 + 200 + 202) / 3)
     assert baseline["penalties"]["failed_pickup"] == 1.0
     assert baseline["penalties"]["approximation"] == 2.0
-    assert set(baseline["penalties"]) == set(ev.PENALTY_KEYS)
+    assert set(baseline["penalties"]) == set(PENALTY_KEYS)
 
 
 def test_rows_are_the_run_reports_with_their_place_in_the_evaluation(tmp_path: Path) -> None:
@@ -146,7 +159,7 @@ def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     # random: both completed episode 0 (100 vs 200); both dropped off in 0 and 1 (60 vs 90 s)
     assert "| random | 1 | 100.0 | 200.0 | 1/1 | 2 | 60.0 | 90.0 | 2/2 |" in results
     assert "| baseline | random | 1 | 3/4 | the mission tree ended with SUCCESS |" in results
-    for name, _ in ev.PLOTS:
+    for name, _ in PLOTS:
         assert (chosen.out / f"results_{name}.png").stat().st_size > 1000
         assert (tmp_path / "docs" / "images" / f"results_{name}.png").is_file()
     assert "](images/results_scores.png)" in (tmp_path / "docs" / "results.md").read_text()
@@ -210,9 +223,9 @@ def test_resume_reruns_an_episode_played_with_other_settings(tmp_path: Path) -> 
 
 def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
     chosen = settings(tmp_path, scenarios=("default", "hard"), speed=2.0)
-    plan = ev.plan_episodes(chosen)
-    default = ev.run_command(next(e for e in plan if e.scenario == "default"), chosen)
-    hard = ev.run_command(next(e for e in plan if e.scenario == "hard" and e.index == 1), chosen)
+    plan = plan_episodes(chosen)
+    default = run_command(next(e for e in plan if e.scenario == "default"), chosen)
+    hard = run_command(next(e for e in plan if e.scenario == "hard" and e.index == 1), chosen)
     assert "--seed" not in default and "--sim-arg=--difficulty" not in default
     assert hard[hard.index("--seed") + 1] == "1"
     assert hard[-2:] == ["--sim-arg=--difficulty", "--sim-arg=hard"]
@@ -221,7 +234,7 @@ def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
 
 
 def test_domains_are_distinct_and_in_range() -> None:
-    domains = ev.domain_ids(8, base=97)
+    domains = domain_ids(8, base=97)
     assert len(set(domains)) == 8
     assert all(1 <= domain <= 101 for domain in domains)
 
@@ -233,7 +246,7 @@ def alive(pid: int) -> bool:
             os.kill(pid, 0)
         except ProcessLookupError:
             return False
-        if ev.start_time(pid) is None:
+        if start_time(pid) is None:
             return False
         status = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
         if status == "Z":  # a zombie is dead; its parent has not reaped it yet
@@ -283,24 +296,24 @@ def evaluate_command(cwd: Path, *arguments: str) -> subprocess.CompletedProcess[
 def test_episodes_an_interrupted_evaluation_did_not_play_are_left_out_of_the_statistics(
         tmp_path: Path) -> None:
     chosen = settings(tmp_path, episodes=3, scenarios=("random",), executives=("bt",))
-    episodes = ev.plan_episodes(chosen)
+    episodes = plan_episodes(chosen)
     for episode in episodes:
         episode.out.mkdir(parents=True)
-    played_ok = dict(ev.episode_row(episodes[0], ev.EpisodeOutcome(0, 1.0), 7),
+    played_ok = dict(episode_row(episodes[0], EpisodeOutcome(0, 1.0), 7),
                      completed=True, score=10.0, sim_time_s=5.0)
-    failed = ev.episode_row(episodes[1], ev.EpisodeOutcome(1, 1.0), 7)
-    not_run = ev.episode_row(episodes[2], ev.EpisodeOutcome(None, 0.0, ev.INTERRUPTED), 7)
+    failed = episode_row(episodes[1], EpisodeOutcome(1, 1.0), 7)
+    not_run = episode_row(episodes[2], EpisodeOutcome(None, 0.0, INTERRUPTED), 7)
     assert not_run["not_run"] and not failed["not_run"]
-    summary = ev.summarise([played_ok, failed, not_run])
+    summary = summarise([played_ok, failed, not_run])
     assert (summary["episodes"], summary["success_rate"], summary["not_run"]) == (2, 0.5, 1)
     assert len(summary["rows"]) == 3, "the unplayed row is kept, not dropped"
-    report = ev.markdown_report(chosen, [played_ok, failed, not_run], ".")
+    report = markdown_report(chosen, [played_ok, failed, not_run], ".")
     assert "not played and are left out of the statistics (bt random: 1)" in report
-    assert ev.INTERRUPTED not in report.split("## Why episodes failed")[1]
+    assert INTERRUPTED not in report.split("## Why episodes failed")[1]
 
 
 def test_settings_that_overload_the_machine_are_warned_about() -> None:
-    from bt_servicesim.evaluate import load_warning
+    from bt_servicesim.evaluation.settings import load_warning
 
     assert load_warning(jobs=3, speed=20.0, cores=2) is None
     warning = load_warning(jobs=4, speed=20.0, cores=2)

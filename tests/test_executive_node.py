@@ -10,7 +10,7 @@ from servicesim_competition.action import NavigateToPose
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 from std_msgs.msg import String
 
-from bt_servicesim.executive_node import ExecutiveNode, shared_action_client, shared_client
+from bt_servicesim.ros.node import ExecutiveNode, shared_action_client, shared_client
 
 
 def test_the_node_runs_on_sim_time_without_parameter_services(ros_context: Any) -> None:

@@ -18,18 +18,18 @@ import py_trees
 import pytest
 from py_trees.blackboard import Blackboard
 
-from bt_servicesim.geometry import Pose2D
-from bt_servicesim.guest_localisation import (
-    GuestApproachGoal,
+from bt_servicesim.behaviours.actions.guest_approach_goal import GuestApproachGoal
+from bt_servicesim.behaviours.actions.guest_steadily_in_range import GuestSteadilyInRange
+from bt_servicesim.behaviours.actions.record_rfid_readings import RecordRfidReadings
+from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.planning.guest_localisation import (
     GuestEstimate,
-    GuestSteadilyInRange,
-    RecordRfidReadings,
     RfidHistory,
     RfidReading,
     approach_goal,
     estimate_guest,
 )
-from bt_servicesim.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from tests.mission_script import ManualClock
 from tests.test_leaf_goals import open_room
 from tests.test_occupancy import cells, fill, grid_message

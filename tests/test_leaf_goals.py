@@ -21,18 +21,18 @@ import pytest
 from py_trees.blackboard import Blackboard
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
-from bt_servicesim.geometry import Box, Pose2D
-from bt_servicesim.goals import (
+from bt_servicesim.behaviours.actions.goals import (
     DropOffGoal,
     DropOffRepositionGoal,
     ExplorationWaypoints,
     GuestSearchWaypoints,
     JitterGoal,
-    NextWaypoint,
     PickupGoal,
     ReturnGoal,
 )
-from bt_servicesim.occupancy import OccupancyGrid2D
+from bt_servicesim.behaviours.actions.next_waypoint import NextWaypoint
+from bt_servicesim.planning.geometry import Box, Pose2D
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from tests.test_occupancy import cells, fill, grid_message
 
 Status = py_trees.common.Status

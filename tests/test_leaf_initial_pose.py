@@ -12,8 +12,10 @@ from py_trees.blackboard import Blackboard
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from bt_servicesim.geometry import Pose2D
-from bt_servicesim.initial_pose import INITIAL_POSE_QOS, PublishInitialPose
+from bt_servicesim.behaviours.actions.publish_initial_pose import PublishInitialPose
+from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.ros.initial_pose import INITIAL_POSE_QOS
+from bt_servicesim.ros.messages import pose_from_msg
 
 Status = py_trees.common.Status
 
@@ -54,7 +56,7 @@ def test_late_joining_subscriber_gets_the_pose(ros_context: object) -> None:
         executor.spin_once(timeout_sec=0.05)
     message = received[0]
     assert message.header.frame_id == "map"
-    pose = Pose2D.from_pose(message.pose.pose)
+    pose = pose_from_msg(message.pose.pose)
     assert (pose.x, pose.y, pose.yaw) == pytest.approx((10.975, 3.75, 3.14))
     covariance = list(message.pose.covariance)
     assert covariance[0] == covariance[7] == pytest.approx(0.0625)

@@ -21,8 +21,9 @@ from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from servicesim_competition.action import NavigateToPose as NavigateToPoseAction
 
-from bt_servicesim.geometry import Pose2D
-from bt_servicesim.navigate import NavigateToPose
+from bt_servicesim.behaviours.actions.navigate_to_pose import NavigateToPose
+from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.ros.messages import pose_from_msg
 
 Status = py_trees.common.Status
 Result = NavigateToPoseAction.Result
@@ -171,7 +172,7 @@ def test_goal_succeeds_with_feedback_on_the_outputs(
     assert Blackboard.get("/remaining") == 0.0
     goal = navigator.goals[0].pose
     assert goal.header.frame_id == "map"
-    sent = Pose2D.from_pose(goal.pose)
+    sent = pose_from_msg(goal.pose)
     assert (sent.x, sent.y, sent.yaw) == pytest.approx((3.0, -1.0, 1.57))
 
 

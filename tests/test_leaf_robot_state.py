@@ -24,17 +24,17 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import ActorNames
 
-import bt_servicesim.initial_pose  # registers PublishInitialPose for the XML test
-import bt_servicesim.navigate  # noqa: F401  (registers NavigateToPose for the XML test)
-from bt_servicesim.geometry import Pose2D
-from bt_servicesim.robot_state import (
+import bt_servicesim.behaviours.actions.navigate_to_pose  # noqa: F401  (registers NavigateToPose for the XML test)
+from bt_servicesim.behaviours.actions.guest_following import GuestFollowing
+from bt_servicesim.behaviours.actions.topic_readers import (
     MAP_QOS,
-    GuestFollowing,
-    GuestInRange,
     MapToBlackboard,
     OdomToBlackboard,
     RfidToBlackboard,
 )
+from bt_servicesim.behaviours.conditions.guest_in_range import GuestInRange
+from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.ros.messages import pose_to_msg
 
 Status = py_trees.common.Status
 GUEST = "human_20843"
@@ -141,7 +141,7 @@ def test_odom_waits_for_the_first_message(world: World) -> None:
     assert odom.status == Status.RUNNING
     assert "waiting for the first message" in odom.feedback_message
     message = Odometry()
-    message.pose.pose = Pose2D(1.0, 2.0, 0.5).to_pose()
+    message.pose.pose = pose_to_msg(Pose2D(1.0, 2.0, 0.5))
     world.spin_until(lambda: odom._message is not None, before=lambda: world.odom.publish(message))
     odom.tick_once()
     assert odom.status == Status.SUCCESS
@@ -164,7 +164,7 @@ def test_map_reaches_a_late_joining_reader(world: World) -> None:
     reader.tick_once()
     assert reader.status == Status.SUCCESS
     assert Blackboard.exists("/occupancy")
-    # OccupancyGrid2D once bt_servicesim.occupancy exists; the message itself until then
+    # OccupancyGrid2D once bt_servicesim.planning.occupancy exists; the message itself until then
     assert type(Blackboard.get("/occupancy")).__name__ in {"OccupancyGrid2D", "OccupancyGrid"}
 
 

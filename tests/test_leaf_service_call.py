@@ -25,17 +25,14 @@ from servicesim_competition.srv import RoomInfo as RoomInfoSrv
 from servicesim_competition.srv import TaskInfo as TaskInfoSrv
 from std_srvs.srv import Empty
 
-import bt_servicesim.sim_time  # noqa: F401  (registers SimTimeout/SimWait for the XML test)
-from bt_servicesim.geometry import Box, Pose2D
-from bt_servicesim.service_call import (
-    ClearCostmaps,
-    DropOffGuest,
-    NewTask,
-    PickUpGuest,
-    RoomInfo,
-    ServiceCall,
-    TaskInfo,
-)
+import bt_servicesim.ros.sim_clock  # noqa: F401  (registers SimTimeout/SimWait for the XML test)
+from bt_servicesim.behaviours.actions.clear_costmaps import ClearCostmaps
+from bt_servicesim.behaviours.actions.guest_services import DropOffGuest, PickUpGuest
+from bt_servicesim.behaviours.actions.room_info import RoomInfo
+from bt_servicesim.behaviours.actions.service_call import ServiceCall
+from bt_servicesim.behaviours.actions.task import NewTask, TaskInfo
+from bt_servicesim.planning.geometry import Box, Pose2D
+from bt_servicesim.ros.messages import pose_to_msg
 
 Status = py_trees.common.Status
 
@@ -71,7 +68,7 @@ class Referee:
         self.task_running = True
         response.pick_up_location, response.drop_off_location = "FrontElevator", "PublicCafe"
         response.guest_name = "human_20843"
-        response.robot_start_pose = Pose2D(10.975, 3.75, 3.14).to_pose()
+        response.robot_start_pose = pose_to_msg(Pose2D(10.975, 3.75, 3.14))
         return response
 
     def room_info(self, request: Any, response: Any) -> Any:

@@ -13,7 +13,9 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from bt_servicesim.sim_time import SimStopwatch, SimTimeout, SimWait
+from bt_servicesim.behaviours.actions.sim_wait import SimWait
+from bt_servicesim.behaviours.decorators.sim_timeout import SimTimeout
+from bt_servicesim.ros.sim_clock import SimStopwatch
 
 Status = py_trees.common.Status
 

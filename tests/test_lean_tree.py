@@ -5,7 +5,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from bt_servicesim.lean_tree import LeanBehaviourTree
+from bt_servicesim.tree.lean_tree import LeanBehaviourTree
 
 
 def mission_like_tree() -> py_trees.behaviour.Behaviour:

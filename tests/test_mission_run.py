@@ -10,8 +10,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_srvs.srv import Empty
 
-from bt_servicesim import mission_run
-from bt_servicesim.mission_run import MissionRun
+from bt_servicesim.mission import run as mission_run
+from bt_servicesim.mission.run import MissionRun
 
 
 def test_the_run_waits_until_every_client_has_its_server(ros_context: Any) -> None:

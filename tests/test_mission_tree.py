@@ -13,7 +13,7 @@ import py_trees
 import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
-from bt_servicesim.mission_tree import DEFAULT_TREE
+from bt_servicesim.tree.loading import DEFAULT_TREE
 from tests.mission_script import ManualClock, Script, matches, scripted_registry
 
 Status = py_trees.common.Status
@@ -328,7 +328,7 @@ def test_the_sim_time_waits_follow_the_clock_not_the_wall() -> None:
 def test_the_phase_is_named_by_the_phase_not_by_its_retry(ros_context: object) -> None:
     from rclpy.node import Node
 
-    from bt_servicesim.executive import MissionExecutive
+    from bt_servicesim.tree.executive import MissionExecutive
 
     script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.RUNNING, 10**6)], **NOT_IN_AREA})
     root = parse_behaviour_tree_xml(

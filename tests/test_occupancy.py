@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from nav_msgs.msg import OccupancyGrid
 
-from bt_servicesim.occupancy import Cell, OccupancyGrid2D
+from bt_servicesim.planning.occupancy import Cell, OccupancyGrid2D
 
 RESOLUTION = 0.05
 

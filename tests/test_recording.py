@@ -31,7 +31,7 @@ from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Sc
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 
-from bt_servicesim.recording import (
+from bt_servicesim.records.mcap import (
     RECORDED_TOPICS,
     TASK_TOPIC,
     TREE_TOPIC,
@@ -41,8 +41,8 @@ from bt_servicesim.recording import (
     complete_definition,
     field_types,
 )
-from bt_servicesim.shared_subscription import shared_subscription
-from bt_servicesim.tree_log import TickRecord
+from bt_servicesim.records.tree_log import TickRecord
+from bt_servicesim.ros.shared_subscription import shared_subscription
 
 SIM_NS = 42_500_000_000
 WAIT_S = 20.0

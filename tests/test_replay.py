@@ -14,9 +14,9 @@ import pytest
 from py_trees.common import Status
 
 from bt_servicesim import replay
-from bt_servicesim.dump import plain, walk
-from bt_servicesim.live_view import HOME, LiveTreeView
-from bt_servicesim.progress import ProgressView
+from bt_servicesim.mission.live_view import HOME, LiveTreeView
+from bt_servicesim.mission.progress import ProgressView
+from bt_servicesim.tree.shape import plain, walk
 from tests.test_tree_log import RecordedRun, clean_blackboard  # noqa: F401 - fixture
 
 

@@ -14,7 +14,7 @@ from rclpy.node import Node
 from servicesim_competition.action import NavigateToPose
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 
-from bt_servicesim.ros_environment import apply_localhost_defaults
+from bt_servicesim.ros.environment import apply_localhost_defaults
 
 
 def spin_until(executor: Executor, done: Callable[[], bool], limit_s: float = 10.0) -> None:

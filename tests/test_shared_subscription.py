@@ -19,7 +19,7 @@ from rclpy.qos import (
 from rclpy.serialization import deserialize_message
 from std_msgs.msg import Int32
 
-from bt_servicesim.shared_subscription import shared_subscription
+from bt_servicesim.ros.shared_subscription import shared_subscription
 
 RELIABLE_50 = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,

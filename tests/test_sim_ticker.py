@@ -15,7 +15,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from bt_servicesim.sim_ticker import SimTicker
+from bt_servicesim.ros.sim_ticker import SimTicker
 
 
 class SimClockGraph:

@@ -28,9 +28,9 @@ from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import ActorStates, RefereeState
 
 from bt_servicesim import trajectory
-from bt_servicesim.geometry import Box
-from bt_servicesim.recording import McapRecorder
-from bt_servicesim.trajectory import (
+from bt_servicesim.planning.geometry import Box
+from bt_servicesim.records.mcap import McapRecorder
+from bt_servicesim.records.trajectory import (
     LATCHED,
     ROBOT_COLOUR,
     TrajectoryRecorder,
@@ -40,7 +40,7 @@ from bt_servicesim.trajectory import (
     render_trajectory,
     trace_from_recording,
 )
-from bt_servicesim.tree_log import TreeLog
+from bt_servicesim.records.tree_log import TreeLog
 
 CHECKPOINTS = ["go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start"]
 WAIT_S = 20.0
@@ -213,7 +213,7 @@ def test_the_picture_shows_the_map_the_areas_and_the_robots_path(
 
 
 def test_an_empty_trace_still_renders_a_picture(tmp_path: Path) -> None:
-    from bt_servicesim.trajectory import RunTrace
+    from bt_servicesim.records.trajectory import RunTrace
 
     path = tmp_path / "trajectory.png"
     render_trajectory(RunTrace(), path=path)

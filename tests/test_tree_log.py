@@ -17,8 +17,9 @@ import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from py_trees.ports import BehaviourWithPorts, PortInformation
 
-from bt_servicesim.dump import NodeState, ShadowTree, TreeShape, tree_text, walk
-from bt_servicesim.tree_log import TreeLog, TreeLogError, read_tree_log
+from bt_servicesim.records.drawing import tree_text
+from bt_servicesim.records.tree_log import TreeLog, TreeLogError, read_tree_log
+from bt_servicesim.tree.shape import NodeState, ShadowTree, TreeShape, walk
 
 Status = py_trees.common.Status
 

@@ -7,8 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bt_servicesim.mission_tree import DEFAULT_TREE
-from bt_servicesim.tree_model import model_for, with_model
+from bt_servicesim.tree.loading import DEFAULT_TREE
+from bt_servicesim.tree.model import model_for, with_model
 
 COMMAND = [sys.executable, "-m", "bt_servicesim.tree_model"]
 

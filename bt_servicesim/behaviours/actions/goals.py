@@ -1,0 +1,224 @@
+"""Actions that compute where the robot goes next.
+
+Thin wrappers over :mod:`bt_servicesim.planning.goals`.
+
+Each reads its input ports, calls one planning function in ``update`` -- pure and
+non-blocking; on the 1200x1200 office map the heaviest, :class:`DropOffGoal` and
+:class:`ExplorationWaypoints`, take about 40 ms, the others a few milliseconds -- and writes its
+one output port: SUCCESS with the result, or FAILURE with a feedback message naming the missing
+input or why no goal exists.
+"""
+
+from __future__ import annotations
+
+import random
+import zlib
+from typing import Any, ClassVar
+
+import py_trees
+from py_trees.ports import NoDataAvailable, PortInformation
+
+from bt_servicesim.behaviours.node import ActionNode, Ports, Status
+from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
+from bt_servicesim.planning.geometry import Box, Pose2D
+from bt_servicesim.planning.goals import (
+    TrailingPlan,
+    drop_off_goal,
+    drop_off_reposition_goal,
+    exploration_waypoints,
+    guest_search_waypoints,
+    jitter_goal,
+    pickup_goal,
+    return_goal,
+)
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
+
+
+class _Computation(ActionNode, register=False):
+    """Read every input port, compute, write the one output port.
+
+    FAILURE with a feedback message if an input is missing or of the wrong type, if a box is
+    empty, or if :meth:`compute` finds nothing (it returns None and sets the message).
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: ClassVar[Ports] = {}
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def update(self) -> Status:
+        inputs = self._read_inputs()
+        if inputs is None:
+            return Status.FAILURE
+        result = self.compute(**inputs)
+        if result is None:
+            return Status.FAILURE
+        (output,) = self.OUTPUT_PORTS
+        self._set_output(output, result)
+        return Status.SUCCESS
+
+    def compute(self, **inputs: Any) -> Any:
+        """The output for the inputs (by port name); None, with a feedback message, if none."""
+        raise NotImplementedError
+
+    def _read_inputs(self) -> dict[str, Any] | None:
+        inputs = {}
+        for port in self.INPUT_PORTS:
+            try:
+                inputs[port] = self.get_input(port)
+            except NoDataAvailable:
+                self.feedback_message = f"no {port} on the blackboard"
+                return None
+            except TypeError:
+                self.feedback_message = f"{port} is not a {self.INPUT_PORTS[port].data_type}"
+                return None
+        if isinstance(inputs.get("box"), Box) and inputs["box"].is_empty:
+            self.feedback_message = f"the box {inputs['box']} is empty"
+            return None
+        return inputs
+
+
+def describe(pose: Pose2D) -> str:
+    return f"({pose.x:.2f}, {pose.y:.2f}, yaw {pose.yaw:.2f})"
+
+
+class PickupGoal(_Computation):
+    """The pick-up goal: inside the box, nearest the guest's spawn area (:func:`pickup_goal`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+
+    def __init__(self, name: str = "PickupGoal", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
+        goal = pickup_goal(box, occupancy, robot_pose)
+        self.feedback_message = (f"pick-up goal {describe(goal)}" if goal is not None
+                                 else "no reachable free spot inside the pick-up box")
+        return goal
+
+
+class DropOffGoal(_Computation):
+    """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+
+    def __init__(self, name: str = "DropOffGoal", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
+        plan = drop_off_goal(box, occupancy, robot_pose)
+        return _report_plan(self, plan, "drop-off goal", "no reachable drop-off goal")
+
+
+class DropOffRepositionGoal(_Computation):
+    """After a refused drop-off, a move that pulls the guest deeper in
+    (:func:`drop_off_reposition_goal`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+
+    def __init__(self, name: str = "DropOffRepositionGoal", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
+        plan = drop_off_reposition_goal(box, occupancy, robot_pose)
+        return _report_plan(self, plan, "reposition goal", "no free way to reposition")
+
+
+def _report_plan(
+    behaviour: py_trees.behaviour.Behaviour, plan: TrailingPlan | None, what: str, none: str
+) -> Pose2D | None:
+    if plan is None:
+        behaviour.feedback_message = none
+        return None
+    spot = plan.guest_spot
+    behaviour.feedback_message = (f"{what} {describe(plan.goal)}, guest to stop at "
+                                  f"({spot[0]:.2f}, {spot[1]:.2f}), margin {plan.margin:.2f} m")
+    return plan.goal
+
+
+class ReturnGoal(_Computation):
+    """The start pose itself, snapped to free space if need be (:func:`return_goal`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "start_pose": PortInformation(data_type=Pose2D, description="from the referee"),
+        "occupancy": OCCUPANCY,
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+
+    def __init__(self, name: str = "ReturnGoal", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, start_pose: Pose2D, occupancy: OccupancyGrid2D) -> Pose2D | None:
+        goal = return_goal(start_pose, occupancy)
+        self.feedback_message = (f"return goal {describe(goal)}" if goal is not None
+                                 else f"no free spot for the robot near {describe(start_pose)}")
+        return goal
+
+
+class JitterGoal(_Computation):
+    """The goal moved by a small random offset onto free space (:func:`jitter_goal`).
+
+    Args:
+        name: the behaviour's name
+        seed: the random seed; by default derived from the name, so runs repeat
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {"goal": PortInformation(data_type=Pose2D),
+                                    "occupancy": OCCUPANCY}
+    OUTPUT_PORTS: ClassVar[Ports] = {"jittered": GOAL_OUT}
+
+    def __init__(self, name: str = "JitterGoal", seed: int | None = None, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.seed = zlib.crc32(name.encode()) if seed is None else int(seed)
+        self.rng = random.Random(self.seed)
+
+    def compute(self, goal: Pose2D, occupancy: OccupancyGrid2D) -> Pose2D:
+        jittered = jitter_goal(goal, occupancy, self.rng)
+        self.feedback_message = (f"jittered goal {describe(jittered)}" if jittered != goal
+                                 else f"no free spot near {describe(goal)}: goal unchanged")
+        return jittered
+
+
+class ExplorationWaypoints(_Computation):
+    """Waypoints covering the box and its surroundings (:func:`exploration_waypoints`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: ClassVar[Ports] = {"waypoints": WAYPOINTS_OUT}
+
+    def __init__(self, name: str = "ExplorationWaypoints", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(
+        self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D
+    ) -> list[Pose2D] | None:
+        waypoints = exploration_waypoints(box, occupancy, robot_pose)
+        self.feedback_message = (f"{len(waypoints)} exploration waypoints" if waypoints
+                                 else "nothing reachable near the box to explore")
+        return waypoints or None
+
+
+class GuestSearchWaypoints(_Computation):
+    """The last-seen spot, then rings around it (:func:`guest_search_waypoints`)."""
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "guest_last_seen": PortInformation(data_type=Pose2D, description="robot pose then"),
+        "occupancy": OCCUPANCY,
+        "robot_pose": ROBOT_POSE,
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {"waypoints": WAYPOINTS_OUT}
+
+    def __init__(self, name: str = "GuestSearchWaypoints", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(
+        self, guest_last_seen: Pose2D, occupancy: OccupancyGrid2D, robot_pose: Pose2D
+    ) -> list[Pose2D] | None:
+        waypoints = guest_search_waypoints(guest_last_seen, occupancy, robot_pose)
+        self.feedback_message = (f"{len(waypoints)} search waypoints around "
+                                 f"{describe(guest_last_seen)}" if waypoints
+                                 else "nothing reachable near where the guest was last seen")
+        return waypoints or None

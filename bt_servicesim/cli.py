@@ -1,0 +1,51 @@
+"""What every command of this project shares: exit codes, one-line errors, argument parsing.
+
+A user who mistypes gets one line on stderr that names the problem, prefixed with the command,
+and exit status 2, whichever command it was; a command that ran reports how through its exit
+status. Every command (``run``, ``evaluate``, ``dump``, ``replay``, ``trajectory``,
+``tree_model``) and every benchmark parses its arguments with :class:`OneLineArgumentParser`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import NoReturn
+
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_COMPLETED",
+    "EXIT_FAILED",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "OneLineArgumentParser",
+    "UsageError",
+    "error_line",
+]
+
+EXIT_OK = EXIT_COMPLETED = 0
+"""The command did what it was asked; for a run, the referee counted all four checkpoints."""
+EXIT_FAILED = 1
+"""The command ran, and what it ran failed: a mission that did not complete, a stale model."""
+EXIT_BAD_INPUT = 2
+"""Bad input: arguments, files or settings; nothing was started."""
+EXIT_INTERRUPTED = 130
+"""Stopped by Ctrl-C (128 + SIGINT), after cleaning up."""
+
+
+class UsageError(ValueError):
+    """Bad command-line input; the message is the one line the user sees."""
+
+
+class OneLineArgumentParser(argparse.ArgumentParser):
+    """argparse, but an error is a single line and exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def error_line(prog: str, error: object) -> int:
+    """Print ``prog: error: ...`` as one line on stderr; return :data:`EXIT_BAD_INPUT`."""
+    text = " ".join(str(error).split()) or type(error).__name__
+    print(f"{prog}: error: {text}", file=sys.stderr)
+    return EXIT_BAD_INPUT

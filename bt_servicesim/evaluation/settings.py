@@ -1,0 +1,76 @@
+"""What an evaluation is asked to do, and the limits it keeps to.
+
+:class:`EvaluationSettings` is the evaluate command's checked input; everything the batch, the
+statistics and the report need comes from it. :func:`load_warning` says when the requested
+load would make the machine, not the mission logic, decide the outcomes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Episodes run at 20x real time by default, not flat out: at speed 0 the simulator runs as
+#: fast as its core allows and never waits for the executive, which needs about as much CPU
+#: per sim second; with a few episodes at once on a small machine the executive then falls
+#: sim seconds behind (a guest "out of range for 20 s" at the first look), and the evaluation
+#: measures the machine's load instead of the mission logic.
+DEFAULT_SPEED = 20.0
+
+
+DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
+
+
+STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
+
+
+EPISODE_CPU_S_PER_SIM_S = 0.027
+"""CPU seconds an episode spends per sim second, simulator and executive together (measured
+with ``benchmarks/sim_rtf.py`` at speed 50: about 13 ms each)."""
+
+
+EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
+
+
+INTERRUPTED = "evaluation interrupted"
+
+
+PENALTY_KEYS = ("failed_pickup", "failed_dropoff", "too_fast", "drifts", "contact",
+                "approximation")
+
+
+@dataclass(frozen=True)
+class EvaluationSettings:
+    episodes: int
+    scenarios: tuple[str, ...]
+    executives: tuple[str, ...]
+    jobs: int
+    seed: int
+    out: Path
+    speed: float
+    episode_timeout_s: float
+    time_limit_s: float
+    docs: Path | None
+    command_line: str
+    resume: bool = False
+
+
+def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
+    """Why these settings will overload the machine, or None.
+
+    An episode at speed X needs about X times :data:`EPISODE_CPU_S_PER_SIM_S` of CPU per wall
+    second (simulator and executive together); past the machine's cores the executives fall
+    behind the worlds they steer (they tick late, then seconds apart), and the results measure
+    the machine rather than the mission logic.
+    """
+    if speed <= 0.0:  # each simulator runs flat out on a core, its executive beside it
+        if 2 * jobs <= cores:
+            return None
+        need_text = f"--jobs {jobs} at --speed 0 keeps {2 * jobs} processes busy"
+    else:
+        needed = jobs * speed * EPISODE_CPU_S_PER_SIM_S
+        if needed <= cores:
+            return None
+        need_text = f"--jobs {jobs} at --speed {speed:g} needs about {needed:.1f} cores"
+    return (f"{need_text}; this machine has {cores}: the executives will lag behind their "
+            f"simulators (use fewer --jobs or a lower --speed)")

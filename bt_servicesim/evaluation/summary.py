@@ -1,0 +1,96 @@
+"""Statistics over episode rows: success, scores, penalties, and paired comparisons.
+
+Plain functions over the rows the episodes wrote (one dict per episode), so they are tested
+without running anything. Paired figures compare two executives on the same seeds only.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Callable
+from typing import Any
+
+from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings
+
+
+def played(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows of episodes that ran to an outcome: not those a Ctrl-C stopped or never ran."""
+    return [row for row in rows if not row.get("not_run")]
+
+
+def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The summary of one executive's rows (see ``docs/evaluation.md`` for the definitions).
+
+    Episodes an interrupted evaluation did not play to an outcome are counted as ``not_run``
+    and left out of every statistic; their rows are kept.
+    """
+    every = rows
+    rows = played(every)
+    completed = [row for row in rows if row["completed"]]
+    scores = [float(row["score"]) for row in completed]
+    return {
+        "episodes": len(rows),
+        "success_rate": len(completed) / len(rows) if rows else 0.0,
+        "mean_score": mean_or_none(scores),
+        "median_score": statistics.median(scores) if scores else None,
+        "mean_sim_time_s": mean_or_none([float(row["sim_time_s"]) for row in completed]),
+        "penalties": mean_penalties(rows),
+        "wall_time_s": round(sum(episode_wall_s(row) for row in rows), 3),
+        "not_run": len(every) - len(rows),
+        "rows": every,
+    }
+
+
+def mean_penalties(rows: list[dict[str, Any]]) -> dict[str, float]:
+    """Each penalty kind per episode, over the episodes the referee reported on."""
+    refereed = [row["penalties"] for row in rows if row.get("penalties")]
+    return {key: (sum(float(p.get(key, 0.0)) for p in refereed) / len(refereed)
+                  if refereed else 0.0) for key in PENALTY_KEYS}
+
+
+def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """``summary.json``: each executive's name to its summary."""
+    return {executive: summarise([row for row in rows if row["executive"] == executive])
+            for executive in settings.executives}
+
+
+def paired_scores(rows: list[dict[str, Any]], scenario: str, first: str,
+                  second: str) -> tuple[list[float], list[float]]:
+    """Scores of ``first`` and ``second`` on the episodes of a set that both completed."""
+    return paired_values(rows, scenario, first, second,
+                         reached=lambda row: bool(row["completed"]),
+                         value=lambda row: float(row["score"]))
+
+
+def paired_drop_off_times(rows: list[dict[str, Any]], scenario: str, first: str,
+                          second: str) -> tuple[list[float], list[float]]:
+    """Task sim time to the drop-off (checkpoints 1–3) on the episodes both got that far."""
+    return paired_values(rows, scenario, first, second, reached=_dropped_off,
+                         value=lambda row: sum(float(checkpoint["sim_time_s"])
+                                               for checkpoint in row["checkpoints"][:3]))
+
+
+def paired_values(rows: list[dict[str, Any]], scenario: str, first: str, second: str, *,
+                  reached: Callable[[dict[str, Any]], bool],
+                  value: Callable[[dict[str, Any]], float]) -> tuple[list[float], list[float]]:
+    """``value`` of ``first``'s and ``second``'s rows, episode by episode, on the episodes of
+    a set where both rows satisfy ``reached``."""
+    by_key = {(row["executive"], row["episode"]): row for row in rows
+              if row["scenario"] == scenario and reached(row)}
+    both = sorted({episode for (_, episode) in by_key
+                   if (first, episode) in by_key and (second, episode) in by_key})
+    return ([value(by_key[(first, n)]) for n in both],
+            [value(by_key[(second, n)]) for n in both])
+
+
+def _dropped_off(row: dict[str, Any]) -> bool:
+    checkpoints = row.get("checkpoints") or []
+    return len(checkpoints) >= 3 and all(bool(c.get("done")) for c in checkpoints[:3])
+
+
+def mean_or_none(values: list[float]) -> float | None:
+    return statistics.fmean(values) if values else None
+
+
+def episode_wall_s(row: dict[str, Any]) -> float:
+    return float(row.get("episode_wall_time_s") or row.get("wall_time_s") or 0.0)

@@ -1,0 +1,91 @@
+"""What the referee says, as opposed to what the executive believes.
+
+The simulator's referee publishes its own account of the task (``RefereeState``: checkpoints,
+penalties, score) on ``/servicesim/referee``, latched. The run command reads it for progress
+lines and for ``report.json``, so a report can never claim a checkpoint the referee did not
+count. No behaviour in the mission tree reads it: the executive decides from the robot's
+sensors and the competition's services only.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from servicesim_competition.msg import RefereeState
+
+from bt_servicesim.ros.shared_subscription import shared_subscription
+
+REFEREE_TOPIC = "/servicesim/referee"
+CHECKPOINT_NAMES = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+
+
+class RefereeMonitor:
+    """Keeps the latest referee state and turns it into the report's fields."""
+
+    def __init__(self, node: Node) -> None:
+        self.latest: RefereeState | None = None
+        self._reader = shared_subscription(node, RefereeState, REFEREE_TOPIC, self._on_state,
+                                           LATCHED)
+
+    def _on_state(self, message: RefereeState) -> None:
+        self.latest = message
+
+    @property
+    def completed(self) -> bool:
+        return bool(self.latest is not None and self.latest.completed)
+
+    def checkpoint(self) -> str:
+        """A short progress word: how many of the four checkpoints are done."""
+        if self.latest is None:
+            return "0/4"
+        return f"{sum(self.latest.checkpoint_done)}/{len(self.latest.checkpoint_done) or 4}"
+
+    def score(self) -> float:
+        return 0.0 if self.latest is None else float(self.latest.score)
+
+    def task_sim_time(self) -> float:
+        return 0.0 if self.latest is None else float(self.latest.task_sim_time)
+
+    def report_fields(self) -> dict[str, Any]:
+        """``completed``, ``score``, ``sim_time_s``, ``checkpoints``, ``penalties``."""
+        state = self.latest
+        if state is None:
+            return {
+                "completed": False, "score": 0.0, "sim_time_s": 0.0,
+                "checkpoints": [
+                    {"name": name, "done": False, "sim_time_s": 0.0} for name in CHECKPOINT_NAMES
+                ],
+                "penalties": _penalties(None),
+            }
+        return {
+            "completed": bool(state.completed),
+            "score": float(state.score),
+            "sim_time_s": float(state.task_sim_time),
+            "checkpoints": [
+                {"name": name, "done": bool(done), "sim_time_s": float(time)}
+                for name, done, time in zip(
+                    state.checkpoint_names, state.checkpoint_done, state.checkpoint_sim_time,
+                    strict=True,
+                )
+            ],
+            "penalties": _penalties(state),
+        }
+
+
+def _penalties(state: RefereeState | None) -> dict[str, float | int]:
+    if state is None:
+        return {"failed_pickup": 0, "failed_dropoff": 0, "too_fast": 0, "drifts": 0,
+                "contact": 0.0, "approximation": 0.0}
+    return {
+        "failed_pickup": int(state.failed_pickups),
+        "failed_dropoff": int(state.failed_dropoffs),
+        "too_fast": int(state.too_fast),
+        "drifts": int(state.drifts),
+        "contact": float(state.contact),
+        "approximation": float(state.approximation),
+    }

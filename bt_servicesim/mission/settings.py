@@ -1,0 +1,36 @@
+"""What one mission run is asked to do, checked before anything starts.
+
+:class:`RunSettings` is the run command's input once every argument has been checked; the
+mission run (:mod:`bt_servicesim.mission.run`) takes nothing else. The constants here are the
+run's own limits, in wall seconds where they guard against a process that never comes up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S", "RunSettings"]
+
+EXECUTIVES = ("bt", "baseline")
+"""The behaviour tree, and the seed's state machine."""
+DEFAULT_TIME_LIMIT_S = 900.0
+"""The mission time limit in sim seconds, unless the run names another."""
+STARTUP_LIMIT_S = 60.0
+"""Wall seconds the simulator gets to come up."""
+REPORT_NAME = "report.json"
+"""The report in the run directory: score, checkpoints and penalties as the referee counted."""
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """One run's checked input."""
+
+    world: Path | None
+    seed: int | None
+    speed: float
+    tree: Path
+    out: Path
+    time_limit_s: float
+    headless: bool
+    executive: str

@@ -1,0 +1,50 @@
+"""Plain geometry values the mission tree passes between behaviours on the blackboard.
+
+The tree's ports carry these small frozen values rather than ROS messages, so that goal
+computation and tree tests need no ROS graph; the behaviours that talk to ROS convert at the
+edge (:mod:`bt_servicesim.ros.messages`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+Point = tuple[float, float]
+"""A point in the map frame: metres."""
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """A planar pose in the map frame: metres and radians."""
+
+    x: float
+    y: float
+    yaw: float = 0.0
+
+    def distance_to(self, other: Pose2D) -> float:
+        return math.hypot(other.x - self.x, other.y - self.y)
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned target area, as the referee's RoomInfo service gives it."""
+
+    min_x: float
+    min_y: float
+    max_x: float
+    max_y: float
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return ((self.min_x + self.max_x) / 2.0, (self.min_y + self.max_y) / 2.0)
+
+    @property
+    def is_empty(self) -> bool:
+        """True for the zero-size box the referee answers for an unknown room."""
+        return self.max_x <= self.min_x or self.max_y <= self.min_y
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """Whether (x, y) lies inside the box shrunk by ``margin`` on every side."""
+        return (self.min_x + margin <= x <= self.max_x - margin
+                and self.min_y + margin <= y <= self.max_y - margin)

@@ -1,0 +1,98 @@
+"""Draw a behaviour tree as ascii, unicode, dot, svg or png.
+
+Every drawing goes through py_trees' own :mod:`py_trees.display`, with one change: a node is
+labelled with its *short* name (:func:`~bt_servicesim.tree.shape.short_label`); the indentation
+(text) or the edges (graphs) already show where a node sits. Text written to a file or a pipe
+carries no terminal escape codes.
+
+The dot source is deterministic for a given tree file (py_trees' ASCII symbols are pinned,
+whatever the terminal's encoding: ``M`` marks memory), so a committed drawing can be checked
+against its tree file. ``svg`` and ``png`` need Graphviz's ``dot`` program
+(:class:`GraphvizError` when it is missing).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import py_trees
+
+from bt_servicesim.tree.shape import ShadowTree, TreeShape, short_label, walk
+
+TEXT_FORMATS = ("ascii", "unicode", "dot", "svg")
+
+
+FORMATS = ("ascii", "unicode", "dot", "svg", "png")
+
+
+
+
+class GraphvizError(RuntimeError):
+    """Graphviz's ``dot`` is missing or failed; the message is one line saying what to do."""
+
+
+
+
+def tree_text(root: py_trees.behaviour.Behaviour, *, symbols: str = "unicode",
+              show_status: bool = True, running_only: bool = False,
+              colour: bool = False) -> str:
+    """A live tree drawn as text, with short names (see :meth:`ShadowTree.text`)."""
+    shadow = ShadowTree(TreeShape.of(root))
+    shadow.copy_from(walk(root))
+    return shadow.text(symbols=symbols, show_status=show_status, running_only=running_only,
+                       colour=colour)
+
+
+@contextmanager
+def _ascii_symbols() -> Iterator[None]:
+    """py_trees picks dot's symbols from stdout's encoding at import; pin its ASCII ones.
+
+    The unicode memory symbol (a circled M) is missing from the fonts Graphviz finds on many
+    machines and renders as a box; ``M`` renders everywhere and keeps the source deterministic.
+    """
+    original = py_trees.console.has_unicode
+    py_trees.console.has_unicode = lambda *_args, **_kwargs: False
+    try:
+        yield
+    finally:
+        py_trees.console.has_unicode = original
+
+
+def dot_source(root: py_trees.behaviour.Behaviour) -> str:
+    """py_trees' dot graph of the tree, nodes labelled with short names; deterministic."""
+    with _ascii_symbols():
+        graph = py_trees.display.dot_tree(root)
+    graph.set_name(py_trees.utilities.get_valid_filename(short_label(root.name)) or "tree")
+    for node in graph.get_nodes():
+        name, label = node.get_name().strip('"'), node.get("label")
+        if label is not None and name:
+            node.set("label", label.replace(name, short_label(name), 1))
+    return graph.to_string()
+
+
+def render_graph(dot_text: str, *, image_format: str) -> bytes:
+    """Run Graphviz's ``dot`` on ``dot_text``; ``image_format`` is ``svg`` or ``png``."""
+    program = shutil.which("dot")
+    if program is None:
+        raise GraphvizError(
+            f"Graphviz is not installed: --format {image_format} needs its 'dot' program "
+            "(Debian/Ubuntu: apt-get install graphviz; or run make setup)")
+    result = subprocess.run([program, f"-T{image_format}"], input=dot_text.encode(),
+                            capture_output=True, check=False)
+    if result.returncode != 0:
+        message = " ".join(result.stderr.decode(errors="replace").split())
+        raise GraphvizError(f"Graphviz failed ({message or result.returncode})")
+    return result.stdout
+
+
+def drawing(root: py_trees.behaviour.Behaviour, *, output_format: str) -> bytes:
+    """The whole drawing in ``output_format`` (one of :data:`FORMATS`)."""
+    if output_format in ("ascii", "unicode"):
+        return tree_text(root, symbols=output_format, show_status=False).encode()
+    source = dot_source(root)
+    if output_format == "dot":
+        return source.encode()
+    return render_graph(source, image_format=output_format)

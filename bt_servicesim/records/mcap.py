@@ -1,0 +1,344 @@
+"""Record a run's ROS traffic as MCAP (``run.mcap``), readable by Foxglove and rosbag2 tools.
+
+:class:`McapRecorder` subscribes to the run's topics on the executive's node and writes every
+message as it arrived, serialised (CDR, exactly the bytes DDS delivered; nothing is decoded and
+encoded again), with the log time and publish time set to the node's clock — *sim* time in a
+run. The file follows MCAP's ``ros2`` profile the way rosbag2's MCAP storage writes it:
+
+* one schema per message type, encoding ``ros2msg``, named ``pkg/msg/Type``; its data is the
+  type's ``.msg`` text followed by every type it uses, each after a line of 80 ``=`` and a
+  ``MSG: pkg/msg/Type`` line. The text comes from the interface packages' installed share
+  directories (``AMENT_PREFIX_PATH`` and the venv), the servicesim_competition ones included;
+* channels in ``cdr`` encoding, each with the ``offered_qos_profiles`` metadata rosbag2 reads
+  back (in rosbag2's current YAML form) so a latched topic is replayed latched.
+
+Besides the simulator's topics the run publishes two of its own, both ``std_msgs/String`` JSON:
+``/bt_servicesim/task`` (latched; the task as the referee's ``task_info`` service states it,
+published by :class:`TaskTopic` once the referee reports a running task) and
+``/bt_servicesim/tree`` (:class:`TreeTopic`; a self-contained tree snapshot on every change the
+snapshot log records: tick, sim time, root status, tip, and the status and feedback of every node
+that is not INVALID).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+from collections.abc import Callable, Collection, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import yaml
+from mcap.writer import CompressionType, Writer
+from nav_msgs.msg import OccupancyGrid, Odometry
+from py_trees.common import Status
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+from rclpy.task import Future
+from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
+from servicesim_competition.srv import TaskInfo
+from std_msgs.msg import String
+
+from bt_servicesim.records.tree_log import TickRecord, TreeState
+from bt_servicesim.ros.messages import pose_from_msg
+from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
+
+MCAP_NAME = "run.mcap"
+TASK_TOPIC = "/bt_servicesim/task"
+TREE_TOPIC = "/bt_servicesim/tree"
+SNAPSHOT_PERIOD_S = 0.5  # sim s between tree snapshots while the tip stays put
+DEFINITION_SEPARATOR = "=" * 80
+PRIMITIVE_TYPES = frozenset({
+    "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+    "uint32", "int64", "uint64", "string", "wstring",
+})
+_ARRAY_OR_BOUND = re.compile(r"(\[[^\]]*\]|<=\d+)")
+
+
+class MessageDefinitionError(LookupError):
+    """An interface's ``.msg`` file could not be found; names the type and where it looked."""
+
+
+@dataclass(frozen=True)
+class RecordedTopic:
+    """A topic the recorder subscribes to, and how it is published."""
+
+    name: str
+    message_type: type
+    latched: bool = False
+
+    @property
+    def qos(self) -> QoSProfile:
+        if self.latched:
+            return QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        return QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+
+
+RECORDED_TOPICS = (
+    RecordedTopic("/servicebot/odom", Odometry),
+    RecordedTopic("/servicebot/rfid", ActorNames),
+    RecordedTopic("/servicesim/score", Score),
+    RecordedTopic("/servicesim/referee", RefereeState, latched=True),
+    RecordedTopic("/servicesim/actors", ActorStates),
+    RecordedTopic("/servicebot/map", OccupancyGrid, latched=True),
+    RecordedTopic(TASK_TOPIC, String, latched=True),
+    RecordedTopic(TREE_TOPIC, String),
+)
+
+
+# ------------------------------------------------------------------------ message definitions
+def type_name(message_type: type) -> str:
+    """``nav_msgs/msg/Odometry`` for the generated Python class of that message."""
+    package = message_type.__module__.split(".")[0]
+    return f"{package}/msg/{message_type.__name__}"
+
+
+def share_directories() -> list[Path]:
+    """Where installed interface packages keep their ``.msg`` files."""
+    prefixes = [p for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    return [Path(prefix) / "share" for prefix in [*prefixes, sys.prefix]]
+
+
+def msg_text(name: str, *, search: Iterable[Path] | None = None) -> str:
+    """The ``.msg`` text of ``pkg/msg/Type``."""
+    package, _, message = name.split("/")
+    places = list(search if search is not None else share_directories())
+    for share in places:
+        candidate = share / package / "msg" / f"{message}.msg"
+        if candidate.is_file():
+            return candidate.read_text(encoding="utf-8")
+    raise MessageDefinitionError(
+        f"no definition for {name}: {package}/msg/{message}.msg is in none of "
+        f"{', '.join(str(place) for place in places)}")
+
+
+def field_types(text: str, *, package: str) -> list[str]:
+    """The message types (``pkg/msg/Type``) that the fields of a ``.msg`` text use, in order."""
+    used: list[str] = []
+    for line in text.splitlines():
+        words = line.split()
+        if not words or words[0].startswith("#"):
+            continue
+        base = _ARRAY_OR_BOUND.sub("", words[0])
+        if base in PRIMITIVE_TYPES:
+            continue
+        parts = base.split("/")
+        name = f"{parts[0]}/msg/{parts[-1]}" if len(parts) > 1 else f"{package}/msg/{base}"
+        if name not in used:
+            used.append(name)
+    return used
+
+
+def complete_definition(name: str, *, search: Iterable[Path] | None = None) -> str:
+    """``name``'s ``.msg`` text with every type it uses after it, as rosbag2 stores them."""
+    places = list(search if search is not None else share_directories())
+    texts = {name: msg_text(name, search=places)}
+    order = [name]
+    pending = [name]
+    while pending:
+        current = pending.pop(0)
+        for used in field_types(texts[current], package=current.split("/")[0]):
+            if used not in texts:
+                texts[used] = msg_text(used, search=places)
+                order.append(used)
+                pending.append(used)
+    parts = [texts[name].rstrip("\n")]
+    parts += [f"{DEFINITION_SEPARATOR}\nMSG: {used}\n{texts[used].rstrip(chr(10))}"
+              for used in order[1:]]
+    return "\n".join(parts) + "\n"
+
+
+def offered_qos_yaml(qos: QoSProfile) -> str:
+    """The channel metadata rosbag2 reads to re-create a topic's publisher on playback."""
+    def unspecified() -> dict[str, int]:  # a fresh dict each time: YAML without anchors
+        return {"sec": 0, "nsec": 0}
+
+    profile = {
+        "history": "keep_all" if qos.history == HistoryPolicy.KEEP_ALL else "keep_last",
+        "depth": int(qos.depth),
+        "reliability": "reliable" if qos.reliability == ReliabilityPolicy.RELIABLE
+        else "best_effort",
+        "durability": "transient_local" if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+        else "volatile",
+        "deadline": unspecified(), "lifespan": unspecified(), "liveliness": "automatic",
+        "liveliness_lease_duration": unspecified(), "avoid_ros_namespace_conventions": False,
+    }
+    return yaml.safe_dump([profile], sort_keys=False)
+
+
+# ----------------------------------------------------------------------------------- recorder
+class McapRecorder:
+    """Writes every message on ``topics`` to an MCAP file until :meth:`close`.
+
+    Args:
+        node: the node to subscribe on; its clock stamps the messages (sim time in a run)
+        path: the MCAP file to write (truncated)
+        topics: what to record
+        own_topics: those of ``topics`` this process publishes itself: recorded through
+            :meth:`record` as they are published, not by a subscription (which would wake the
+            process once more for each of its own messages)
+    """
+
+    def __init__(self, *, node: Node, path: Path,
+                 topics: Iterable[RecordedTopic] = RECORDED_TOPICS,
+                 own_topics: Collection[str] = ()) -> None:
+        self.node = node
+        self.path = path
+        self.counts: dict[str, int] = {}
+        self._own: dict[str, Callable[[bytes], None]] = {}
+        self._stream: BinaryIO | None = path.open("wb")
+        self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
+        self._writer.start(profile="ros2", library="bt_servicesim")
+        schemas: dict[str, int] = {}
+        self._readers: list[Reader] = []
+        for topic in topics:
+            name = type_name(topic.message_type)
+            if name not in schemas:
+                schemas[name] = self._writer.register_schema(
+                    name=name, encoding="ros2msg", data=complete_definition(name).encode())
+            channel = self._writer.register_channel(
+                topic=topic.name, message_encoding="cdr", schema_id=schemas[name],
+                metadata={"offered_qos_profiles": offered_qos_yaml(topic.qos)})
+            self.counts[topic.name] = 0
+            write = self._writes_to(topic.name, channel)
+            if topic.name in own_topics:
+                self._own[topic.name] = write
+                continue
+            self._readers.append(shared_subscription(
+                node, topic.message_type, topic.name, write, topic.qos, raw=True))
+
+    def records_own(self, topic: str) -> bool:
+        """Whether ``topic`` is recorded through :meth:`record` (one of ``own_topics``)."""
+        return topic in self._own
+
+    def record(self, topic: str, message: Any) -> None:
+        """Write a message this process publishes on one of its ``own_topics``."""
+        write = self._own.get(topic)
+        if write is None:
+            raise ValueError(f"{topic} is not recorded as one of this process's own topics")
+        write(serialize_message(message))
+
+    def _writes_to(self, topic: str, channel: int) -> Callable[[bytes], None]:
+        """The callback for one topic: writes the message.
+
+        The topic is read through the node's shared subscription
+        (:mod:`bt_servicesim.ros.shared_subscription`), which takes a burst of messages (the 50 Hz
+        score arrives five at a time) in one wake-up.
+        """
+        def write(data: bytes) -> None:
+            if self._stream is None:
+                return
+            now = self.node.get_clock().now().nanoseconds
+            self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
+                                     data=data, sequence=self.counts[topic])
+            self.counts[topic] += 1
+
+        return write
+
+    def close(self) -> None:
+        """Stop recording and finish the file (summary and index); idempotent."""
+        if self._stream is None:
+            return
+        for reader in self._readers:
+            reader.cancel()
+        self._readers.clear()
+        self._writer.finish()
+        self._stream.close()
+        self._stream = None
+
+
+# ------------------------------------------------------------------------ the run's own topics
+class TaskTopic:
+    """Publishes the task (``task_info``) on ``/bt_servicesim/task`` once a task is running."""
+
+    def __init__(self, *, node: Node, recorder: McapRecorder | None = None) -> None:
+        """Reads the referee's state through the node's shared subscription, and writes the
+        task to ``recorder`` when it records the task topic as its own."""
+        self.node = node
+        self.task: dict[str, Any] | None = None
+        self.recorder = recorder
+        latched = RecordedTopic(TASK_TOPIC, String, latched=True).qos
+        self.publisher = node.create_publisher(String, TASK_TOPIC, latched)
+        self.client = node.create_client(TaskInfo, "/servicesim/task_info")
+        self._pending: Future | None = None
+        self._referee = shared_subscription(
+            node, RefereeState, "/servicesim/referee", self._on_referee,
+            RecordedTopic("/servicesim/referee", RefereeState, latched=True).qos)
+
+    def _on_referee(self, state: RefereeState) -> None:
+        if self.task is not None or self._pending is not None or not state.task_running:
+            return
+        if self.client.service_is_ready():
+            self._pending = self.client.call_async(TaskInfo.Request())
+            self._pending.add_done_callback(self._on_task)
+
+    def _on_task(self, future: Future) -> None:
+        self._pending = None
+        response = future.result()
+        if response is None or not response.guest_name:
+            return  # refused: asked again on the referee's next state
+        start = pose_from_msg(response.robot_start_pose)
+        self.task = {
+            "pick_up_location": response.pick_up_location,
+            "drop_off_location": response.drop_off_location,
+            "guest_name": response.guest_name,
+            "robot_start_pose": {"x": start.x, "y": start.y, "yaw": start.yaw},
+        }
+        message = String(data=json.dumps(self.task))
+        self.publisher.publish(message)
+        if self.recorder is not None and self.recorder.records_own(TASK_TOPIC):
+            self.recorder.record(TASK_TOPIC, message)
+
+
+class TreeTopic:
+    """Publishes a self-contained tree snapshot on ``/bt_servicesim/tree`` as the tree runs.
+
+    Register :meth:`publish` as a :class:`~bt_servicesim.records.tree_log.TreeLog` listener. A
+    snapshot goes out when the tip or the root's status changes, else at most every ``period_s`` sim
+    seconds: a viewer needs no more, and encoding the whole tree as JSON every tick is work the
+    executive does between ticks (``tree_log.jsonl`` keeps every tick). :meth:`flush` sends
+    the latest state if it has not gone out.
+    """
+
+    def __init__(self, *, node: Node, recorder: McapRecorder | None = None,
+                 period_s: float = SNAPSHOT_PERIOD_S) -> None:
+        """Writes each snapshot to ``recorder`` too, when given (see its ``own_topics``)."""
+        self.publisher = node.create_publisher(
+            String, TREE_TOPIC, RecordedTopic(TREE_TOPIC, String).qos)
+        self.recorder = recorder
+        self.period_s = period_s
+        self._state = TreeState()
+        self._sent: TreeState | None = None
+
+    def publish(self, record: TickRecord) -> None:
+        previous, self._state = self._state, self._state.apply(record)
+        if (self._sent is None or (record.tip, record.root) != (previous.tip, previous.root)
+                or record.sim_time_s >= self._sent.sim_time_s + self.period_s):
+            self._send()
+
+    def flush(self) -> None:
+        if self._state.tick and self._sent is not self._state:
+            self._send()
+
+    def _send(self) -> None:
+        message = String(data=json.dumps(snapshot_json(self._state)))
+        self.publisher.publish(message)
+        if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
+            self.recorder.record(TREE_TOPIC, message)
+        self._sent = self._state
+
+
+def snapshot_json(state: TreeState) -> dict[str, Any]:
+    """The tree at one tick: every node that is not INVALID, with its status and feedback."""
+    return {
+        "tick": state.tick, "sim_time_s": round(state.sim_time_s, 3), "root": state.root.name,
+        "tip": state.tip,
+        "nodes": {key: {"status": status.name, "feedback": feedback}
+                  for key, (status, feedback) in state.nodes.items()
+                  if status != Status.INVALID},
+    }

@@ -1,0 +1,400 @@
+"""Where everyone went: the run's trajectory picture, ``trajectory.png``.
+
+:class:`TrajectoryRecorder` listens, during a run, to the map (``/servicebot/map``), the
+robot's odometry, the people's ground truth (``/servicesim/actors``) and the referee's state
+(``/servicesim/referee``). These are records, never inputs to the mission: the executive
+decides from its own sensors. From them it keeps the robot's path, the guest's path, every
+other person's path, and the moments worth marking, each where it happened:
+
+* the referee's checkpoints as they are reached (pick-up and drop-off among them), and the
+  task being sent back from drop-off to pick-up (the guest drifted or fell behind);
+* drifts, from the referee's drift counter, at the guest's position;
+* re-acquiring the guest: the guest following again after being lost or drifting;
+* the mission tree's phase changes (BeginTask, Pickup, DropOff, ReturnToStart), at the robot.
+
+:func:`render_trajectory` draws it all over the map with matplotlib (no display needed), with
+the pick-up and drop-off areas the executive computed (``pick_up_box`` and ``drop_off_box`` on
+the blackboard, see :func:`boxes_from_blackboard`).
+
+A recorded run can be drawn again later: ``python -m bt_servicesim.records.trajectory DIR`` rebuilds
+the trace from ``DIR/run.mcap`` (the same messages, in the order they arrived; the phases from
+the tree snapshots) and the areas from the last blackboard in ``DIR/tree_log.jsonl``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections import Counter, deque
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+from mcap.reader import make_reader
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+from servicesim_competition.msg import ActorStates, RefereeState
+from std_msgs.msg import String
+
+from bt_servicesim.planning.geometry import Box
+from bt_servicesim.records.mcap import RECORDED_TOPICS, TREE_TOPIC
+from bt_servicesim.records.tree_log import read_tree_log
+from bt_servicesim.tree.executive import MISSION_SEQUENCE
+
+TRAJECTORY_NAME = "trajectory.png"
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+ROBOT_COLOUR, GUEST_COLOUR, PEOPLE_COLOUR = "#d62728", "#1f77b4", "#9a9a9a"
+BOX_COLOURS = {"pick_up_box": "#2ca02c", "drop_off_box": "#9467bd"}
+EVENT_STYLE = {  # kind: (marker, colour)
+    "checkpoint": ("*", "#ff7f0e"),
+    "back to pick-up": ("X", "#000000"),
+    "drift": ("v", "#8c564b"),
+    "re-acquired": ("P", "#17becf"),
+    "phase": ("o", ROBOT_COLOUR),
+}
+CHECKPOINT_LABELS = {"go_to_pick_up": "at pick-up", "pick_up_guest": "pick-up",
+                     "drop_off_guest": "drop-off", "return_to_start": "back at start"}
+Point2D = tuple[float, float]
+MAX_LISTED_EVENTS = 30
+
+
+@dataclass(frozen=True)
+class RunEvent:
+    """Something worth marking on the picture: what, when (sim s) and where (map frame)."""
+
+    kind: str
+    label: str
+    sim_time_s: float
+    x: float
+    y: float
+
+
+@dataclass
+class MapImage:
+    """An occupancy grid as an image: cells row 0 at the bottom, and where it lies."""
+
+    cells: np.ndarray
+    origin: Point2D
+    resolution: float
+
+    @classmethod
+    def from_message(cls, message: OccupancyGrid) -> MapImage:
+        info = message.info
+        cells = np.asarray(message.data, dtype=np.int8).reshape(info.height, info.width)
+        return cls(cells=cells, resolution=float(info.resolution),
+                   origin=(float(info.origin.position.x), float(info.origin.position.y)))
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        height, width = self.cells.shape
+        x0, y0 = self.origin
+        return (x0, x0 + width * self.resolution, y0, y0 + height * self.resolution)
+
+    def known_bounds(self) -> tuple[float, float, float, float] | None:
+        """(min x, max x, min y, max y) of the cells that are not unknown."""
+        rows, columns = np.nonzero(self.cells >= 0)
+        if rows.size == 0:
+            return None
+        x0, y0 = self.origin
+        return (x0 + columns.min() * self.resolution, x0 + (columns.max() + 1) * self.resolution,
+                y0 + rows.min() * self.resolution, y0 + (rows.max() + 1) * self.resolution)
+
+    def shades(self) -> np.ndarray:
+        """Grey levels: free white, occupied black, unknown light grey."""
+        shade = np.full(self.cells.shape, 0.85)
+        shade[(self.cells >= 0) & (self.cells < 50)] = 1.0
+        shade[self.cells >= 50] = 0.0
+        return shade
+
+
+@dataclass
+class RunTrace:
+    """Everything the picture shows, collected during the run."""
+
+    map_image: MapImage | None = None
+    robot: list[Point2D] = field(default_factory=list)
+    guest: list[Point2D] = field(default_factory=list)
+    people: dict[str, list[Point2D]] = field(default_factory=dict)
+    events: list[RunEvent] = field(default_factory=list)
+    start: Point2D | None = None
+
+
+class TraceBuilder:
+    """Builds a :class:`RunTrace` from the run's messages, handed to its ``on_*`` methods.
+
+    Args:
+        now_s: the sim time now, in seconds (stamps the events)
+        min_step_m: a path point closer than this to the previous one is left out
+    """
+
+    def __init__(self, *, now_s: Callable[[], float], min_step_m: float = 0.05) -> None:
+        self.trace = RunTrace()
+        self.received: Counter[str] = Counter()  # messages per topic
+        self.min_step_m = min_step_m
+        self._now_s = now_s
+        self._phase = "-"
+        self._unplaced: list[tuple[str, str, float]] = []  # events before the robot's position
+        self._referee: RefereeState | None = None
+        self._guest_state = ""
+
+    def on_map(self, message: OccupancyGrid) -> None:
+        self.received["/servicebot/map"] += 1
+        self.trace.map_image = MapImage.from_message(message)
+
+    def on_odom(self, message: Odometry) -> None:
+        self.received["/servicebot/odom"] += 1
+        position = message.pose.pose.position
+        _append_moved(self.trace.robot, (position.x, position.y), self.min_step_m)
+        if self.trace.start is None:
+            self.trace.start = (position.x, position.y)
+            for kind, label, sim_time_s in self._unplaced:
+                self.trace.events.append(RunEvent(kind=kind, label=label, sim_time_s=sim_time_s,
+                                                  x=position.x, y=position.y))
+            self._unplaced.clear()
+
+    def on_actors(self, message: ActorStates) -> None:
+        self.received["/servicesim/actors"] += 1
+        guest: Point2D | None = None
+        for name, role, position in zip(message.names, message.roles, message.positions,
+                                        strict=False):
+            point = (position.x, position.y)
+            if role == "guest":
+                guest = point
+                _append_moved(self.trace.guest, point, self.min_step_m)
+            else:
+                _append_moved(self.trace.people.setdefault(name, []), point, self.min_step_m)
+        self._note_guest_state(message.guest_state, guest)
+
+    def _note_guest_state(self, state: str, guest: Point2D | None) -> None:
+        was, self._guest_state = self._guest_state, state
+        if state == "following" and was in ("lost", "drifted") and guest is not None:
+            self._mark("re-acquired", "re-acquired", guest)
+
+    def on_referee(self, state: RefereeState) -> None:
+        self.received["/servicesim/referee"] += 1
+        last, self._referee = self._referee, state
+        before = list(last.checkpoint_done) if last is not None else []
+        for index, (name, done) in enumerate(zip(state.checkpoint_names, state.checkpoint_done,
+                                                 strict=False)):
+            was = index < len(before) and before[index]
+            if done and not was:
+                where = self._guest_or_robot() if name == "drop_off_guest" else self._robot()
+                self._mark("checkpoint", CHECKPOINT_LABELS.get(name, name), where)
+            elif was and not done and name == "pick_up_guest":
+                self._mark("back to pick-up", "back to pick-up", self._guest_or_robot())
+        drifts_before = last.drifts if last is not None else 0
+        for _ in range(max(0, state.drifts - drifts_before)):
+            self._mark("drift", "drift", self._guest_or_robot())
+
+    def note_phase(self, phase: str) -> None:
+        """The mission's phase now (the executive's ``phase()``); marks each change."""
+        if phase != self._phase and phase != "-":
+            self._mark("phase", phase, self._robot())
+        self._phase = phase
+
+    def _robot(self) -> Point2D | None:
+        return self.trace.robot[-1] if self.trace.robot else None
+
+    def _guest_or_robot(self) -> Point2D | None:
+        return self.trace.guest[-1] if self.trace.guest else self._robot()
+
+    def _mark(self, kind: str, label: str, where: Point2D | None) -> None:
+        """Note an event; one before the robot's first position is placed at that position."""
+        if where is None:
+            self._unplaced.append((kind, label, self._now_s()))
+            return
+        self.trace.events.append(RunEvent(kind=kind, label=label, sim_time_s=self._now_s(),
+                                          x=where[0], y=where[1]))
+
+
+
+class TrajectoryRecorder(TraceBuilder):
+    """A :class:`TraceBuilder` fed by subscriptions on ``node``, stamped by its (sim) clock."""
+
+    def __init__(self, *, node: Node, min_step_m: float = 0.05) -> None:
+        super().__init__(now_s=lambda: node.get_clock().now().nanoseconds / 1e9,
+                         min_step_m=min_step_m)
+        self.node = node
+        self._subscriptions = [
+            node.create_subscription(OccupancyGrid, "/servicebot/map", self.on_map, LATCHED),
+            node.create_subscription(Odometry, "/servicebot/odom", self.on_odom, 50),
+            node.create_subscription(ActorStates, "/servicesim/actors", self.on_actors, 10),
+            node.create_subscription(RefereeState, "/servicesim/referee", self.on_referee,
+                                     LATCHED),
+        ]
+
+    def close(self) -> None:
+        for subscription in self._subscriptions:
+            self.node.destroy_subscription(subscription)
+        self._subscriptions.clear()
+
+
+def _append_moved(path: list[Point2D], point: Point2D, min_step_m: float) -> None:
+    """Append ``point`` unless it is within ``min_step_m`` of the last one (keeps paths small)."""
+    if not path or np.hypot(point[0] - path[-1][0], point[1] - path[-1][1]) >= min_step_m:
+        path.append(point)
+
+
+# --------------------------------------------------------------------------------- rendering
+def boxes_from_blackboard(storage: Mapping[str, Any]) -> dict[str, Box]:
+    """The ``pick_up_box`` and ``drop_off_box`` the executive wrote, wherever they are keyed."""
+    boxes = {}
+    for key, value in storage.items():
+        name = key.rsplit("/", 1)[-1]
+        if name in BOX_COLOURS and isinstance(value, Box) and not value.is_empty:
+            boxes[name] = value
+    return boxes
+
+
+def render_trajectory(trace: RunTrace, *, path: Path, boxes: Mapping[str, Box] | None = None,
+                      title: str = "") -> None:
+    """Draw ``trace`` (and the target ``boxes``) to a PNG at ``path``."""
+    figure = Figure(figsize=(14, 7.5), dpi=100)
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    if trace.map_image is not None:
+        axes.imshow(trace.map_image.shades(), cmap="gray", vmin=0.0, vmax=1.0, origin="lower",
+                    extent=trace.map_image.extent, interpolation="nearest")
+    _draw_boxes(axes, boxes or {})
+    _draw_paths(axes, trace)
+    _draw_events(axes, trace.events)
+    _frame(axes, trace, boxes or {})
+    axes.set_title(title or "Run trajectory")
+    axes.set_xlabel("x (m)")
+    axes.set_ylabel("y (m)")
+    if axes.get_legend_handles_labels()[0]:
+        axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
+    figure.tight_layout()
+    figure.savefig(path, format="png")
+
+
+def _draw_boxes(axes: Any, boxes: Mapping[str, Box]) -> None:
+    for name, box in boxes.items():
+        colour = BOX_COLOURS.get(name, "#7f7f7f")
+        axes.add_patch(Rectangle((box.min_x, box.min_y), box.max_x - box.min_x,
+                                 box.max_y - box.min_y, facecolor=colour, alpha=0.25,
+                                 edgecolor=colour, linewidth=1.5,
+                                 label=name.replace("_box", "").replace("_", "-") + " area"))
+
+
+def _draw_paths(axes: Any, trace: RunTrace) -> None:
+    for index, points in enumerate(trace.people.values()):
+        if len(points) > 1:
+            xs, ys = zip(*points, strict=True)
+            axes.plot(xs, ys, color=PEOPLE_COLOUR, linewidth=0.6, alpha=0.6,
+                      label="other people" if index == 0 else None)
+        if points:
+            axes.plot(*points[-1], "o", color=PEOPLE_COLOUR, markersize=3)
+    # the guest follows the robot's trail: drawn on top, dashed, so both stay visible
+    for points, colour, label, style in ((trace.robot, ROBOT_COLOUR, "robot", "-"),
+                                         (trace.guest, GUEST_COLOUR, "guest", "--")):
+        if points:
+            xs, ys = zip(*points, strict=True)
+            axes.plot(xs, ys, style, color=colour, linewidth=2.2 if style == "-" else 1.4,
+                      label=label)
+    if trace.start is not None:
+        axes.plot(*trace.start, "s", color=ROBOT_COLOUR, markersize=8, label="robot start")
+
+
+def _draw_events(axes: Any, events: list[RunEvent]) -> None:
+    """A numbered marker per event, and the numbered list beside the legend."""
+    labelled: set[str] = set()
+    lines = []
+    for number, event in enumerate(events, start=1):
+        marker, colour = EVENT_STYLE.get(event.kind, ("o", "#000000"))
+        legend = None if event.kind in labelled else event.kind
+        labelled.add(event.kind)
+        axes.plot(event.x, event.y, marker, color=colour, markersize=11 if marker == "*" else 8,
+                  markeredgecolor="black", markeredgewidth=0.6, label=legend)
+        axes.annotate(str(number), (event.x, event.y), xytext=(4, 4),
+                      textcoords="offset points", fontsize=7, fontweight="bold")
+        lines.append(f"{number:>2} {event.sim_time_s:6.1f} s  {event.label}")
+    if len(lines) > MAX_LISTED_EVENTS:
+        lines = [*lines[:MAX_LISTED_EVENTS - 1], f"... {len(lines) - MAX_LISTED_EVENTS + 1} more"]
+    if lines:
+        axes.text(1.02, 0.52, "\n".join(["   sim time  event", *lines]), transform=axes.transAxes,
+                  va="top", ha="left", family="monospace", fontsize=7.5)
+
+
+def _frame(axes: Any, trace: RunTrace, boxes: Mapping[str, Box]) -> None:
+    """Zoom to the known map, the paths and the boxes, with a margin."""
+    xs: list[float] = [x for points in (trace.robot, trace.guest) for x, _ in points]
+    ys: list[float] = [y for points in (trace.robot, trace.guest) for _, y in points]
+    for box in boxes.values():
+        xs += [box.min_x, box.max_x]
+        ys += [box.min_y, box.max_y]
+    bounds = trace.map_image.known_bounds() if trace.map_image is not None else None
+    if bounds is not None:
+        xs += [bounds[0], bounds[1]]
+        ys += [bounds[2], bounds[3]]
+    if xs and ys:
+        axes.set_xlim(min(xs) - 1.0, max(xs) + 1.0)
+        axes.set_ylim(min(ys) - 1.0, max(ys) + 1.0)
+    axes.set_aspect("equal")
+
+
+# ---------------------------------------------------------------------- from a recorded run
+_NUMBER = r"(-?[0-9.]+(?:e[-+]?[0-9]+)?)"
+_BOX_REPR = re.compile(
+    rf"Box\(min_x={_NUMBER}, min_y={_NUMBER}, max_x={_NUMBER}, max_y={_NUMBER}\)")
+
+
+def phase_of_tip(tip: str | None) -> str:
+    """The mission phase a tip key lies in: the node under ``Mission`` (as the executive says)."""
+    parts = (tip or "").split(".")
+    if MISSION_SEQUENCE in parts[:-1]:
+        return parts[parts.index(MISSION_SEQUENCE) + 1].split("~")[0]
+    return "-"
+
+
+def trace_from_recording(mcap_path: Path,
+                         phases: Sequence[tuple[float, str]] | None = None) -> RunTrace:
+    """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived.
+
+    The mission's phases come from ``phases`` ((sim time, phase) in time order, as the run
+    noted them) when given, else from the recorded tree snapshots.
+    """
+    types = {topic.name: topic.message_type for topic in RECORDED_TOPICS}
+    now_ns = [0]
+    builder = TraceBuilder(now_s=lambda: now_ns[0] / 1e9)
+    noted = deque(phases or ())
+    handlers: dict[str, Callable[[Any], None]] = {
+        "/servicebot/map": builder.on_map, "/servicebot/odom": builder.on_odom,
+        "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
+    }
+    with mcap_path.open("rb") as stream:
+        for _schema, channel, message in make_reader(stream).iter_messages():
+            while noted and noted[0][0] * 1e9 < message.log_time:  # ties: message first
+                when, phase = noted.popleft()
+                now_ns[0] = round(when * 1e9)
+                builder.note_phase(phase)
+            now_ns[0] = message.log_time
+            if channel.topic in handlers:
+                handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
+            elif channel.topic == TREE_TOPIC and phases is None:
+                snapshot = json.loads(deserialize_message(message.data, String).data)
+                builder.note_phase(phase_of_tip(snapshot.get("tip")))
+    for when, phase in noted:  # noted after the last message
+        now_ns[0] = round(when * 1e9)
+        builder.note_phase(phase)
+    return builder.trace
+
+
+def boxes_from_tree_log(path: Path) -> dict[str, Box]:
+    """The target areas as the snapshot log last saw them on the blackboard."""
+    history = read_tree_log(path)
+    values = history.states[-1].blackboard if history.states else {}
+    boxes = {}
+    for key, text in values.items():
+        found = _BOX_REPR.fullmatch(text)
+        if found is not None:
+            boxes[key] = Box(*(float(number) for number in found.groups()))
+    return boxes_from_blackboard(boxes)

@@ -1,0 +1,306 @@
+"""A run's tree, tick by tick: the snapshot log (``tree_log.jsonl``), written and read back.
+
+:class:`TreeLog` is a post-tick handler. After every tick it compares each node's status and
+feedback message, the tip and the blackboard with what it last wrote, and appends one JSON line
+when anything changed. The file stays small and every line is cheap: a line holds only what
+changed, so a mission of thousands of ticks is a few megabytes, and the full state at any tick is
+the sum of the lines up to it (:class:`TreeHistory` does that sum).
+
+Format, one JSON object per line:
+
+* first line, the tree: ``{"kind": "tree", "version": 1, "tree_file": ..., "nodes": [...]}``
+  with the :class:`~bt_servicesim.dump.TreeShape` (key, label, kind, memory, parent per node);
+* then one line per change: ``{"kind": "tick", "tick": N, "sim_time_s": T, "root": STATUS,
+  "tip": KEY or null, "nodes": {KEY: [STATUS, FEEDBACK], ...}, "blackboard": {KEY: REPR, ...}}``.
+  ``N`` counts ticks from 1. The first tick line lists every node; later ones only the nodes
+  whose status or feedback changed.
+  Blackboard values are short reprs; ``null`` means the key was unset.
+
+A blackboard value counts as changed when a different object with a different repr is stored
+under its key (ports write new values; a value mutated in place is not noticed). Listeners (the
+MCAP recorder's tree topic) are called with each :class:`TickRecord` as it is written.
+"""
+
+from __future__ import annotations
+
+import bisect
+import json
+import reprlib
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+import py_trees
+from py_trees.common import Status
+
+from bt_servicesim.tree.shape import NodeState, TreeShape, walk
+
+LOG_NAME = "tree_log.jsonl"
+FORMAT_VERSION = 1
+_SHORT = reprlib.Repr()
+_SHORT.maxstring = _SHORT.maxother = 120
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 6
+
+
+class TreeLogError(ValueError):
+    """A snapshot log that cannot be read; the message is one line naming file and problem."""
+
+
+@dataclass(frozen=True)
+class TickRecord:
+    """What changed at one tick (see the module docstring for the JSON form)."""
+
+    tick: int
+    sim_time_s: float
+    root: Status
+    tip: str | None
+    nodes: dict[str, NodeState]
+    blackboard: dict[str, str | None]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "kind": "tick", "tick": self.tick, "sim_time_s": round(self.sim_time_s, 3),
+            "root": self.root.name, "tip": self.tip,
+            "nodes": {key: [status.name, feedback]
+                      for key, (status, feedback) in self.nodes.items()},
+            "blackboard": self.blackboard,
+        }
+
+    @classmethod
+    def from_json(cls, line: dict[str, Any]) -> TickRecord:
+        return cls(
+            tick=int(line["tick"]), sim_time_s=float(line["sim_time_s"]),
+            root=Status[line["root"]], tip=line["tip"],
+            nodes={key: (Status[status], str(feedback))
+                   for key, (status, feedback) in line["nodes"].items()},
+            blackboard=dict(line.get("blackboard", {})),
+        )
+
+
+def short_repr(value: Any) -> str:
+    """A blackboard value as one short line."""
+    return " ".join(_SHORT.repr(value).split())
+
+
+def blackboard_values() -> dict[str, Any]:
+    return dict(py_trees.blackboard.Blackboard.storage)
+
+
+class TreeLog:
+    """Post-tick handler that appends a line to ``path`` whenever the tree changed.
+
+    Args:
+        tree: the tree being ticked; register with ``tree.add_post_tick_handler(log)``
+        path: the ``tree_log.jsonl`` to write (truncated)
+        sim_time_s: reads the sim time, in seconds, at the end of a tick
+        tree_file: the tree file the run loaded, noted in the header
+        blackboard: reads the blackboard's current values (default: py_trees' global storage)
+    """
+
+    def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
+                 sim_time_s: Callable[[], float], tree_file: str | None = None,
+                 blackboard: Callable[[], dict[str, Any]] = blackboard_values) -> None:
+        self.tree = tree
+        self.shape = TreeShape.of(tree.root)
+        self.path = path
+        self.listeners: list[Callable[[TickRecord], None]] = []
+        self._sim_time_s = sim_time_s
+        self._blackboard = blackboard
+        self._behaviours = walk(tree.root)
+        self._keys = self.shape.keys
+        self._key_of = {id(behaviour): key
+                        for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
+        self._last_states: list[NodeState | None] = [None] * len(self._behaviours)
+        self._last_nodes: dict[str, NodeState] = {}
+        self._last_tip: str | None = None
+        self._last_values: dict[str, tuple[Any, str]] = {}
+        self._records = 0
+        self._stream: TextIO | None = path.open("w", encoding="utf-8")
+        header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,
+                  "nodes": self.shape.to_json()}
+        self._write(header)
+
+    @property
+    def records(self) -> int:
+        """How many tick lines were written."""
+        return self._records
+
+    @property
+    def latest(self) -> tuple[dict[str, NodeState], str | None]:
+        """Every node's state and the tip as of the last record (an interrupt does not count)."""
+        return dict(self._last_nodes), self._last_tip
+
+    def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
+        """The post-tick handler: log this tick if anything changed."""
+        record = self.capture(tick=tree.count + 1)  # py_trees counts after the handlers
+        if record is None:
+            return
+        self._write(record.to_json())
+        self._records += 1
+        for listener in self.listeners:
+            listener(record)
+
+    def capture(self, *, tick: int) -> TickRecord | None:
+        """What changed since the last record, or ``None`` when nothing did.
+
+        Runs after every tick, so it compares node by node against the states last written
+        without building a dictionary of the whole tree each time.
+        """
+        last = self._last_states
+        changed_at: list[tuple[int, NodeState]] = []
+        for index, behaviour in enumerate(self._behaviours):
+            state = (behaviour.status, behaviour.feedback_message)
+            if last[index] != state:
+                changed_at.append((index, state))
+        tip = self._tip_key()
+        values = self._blackboard_changes()
+        if not changed_at and not values and tip == self._last_tip:
+            return None
+        changed: dict[str, NodeState] = {}
+        for index, state in changed_at:
+            key = self._keys[index]
+            last[index] = self._last_nodes[key] = changed[key] = state
+        self._last_tip = tip
+        return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
+                          tip=tip, nodes=changed, blackboard=values)
+
+    def _tip_key(self) -> str | None:
+        tip = self.tree.root.tip()
+        return None if tip is None else self._key_of.get(id(tip))
+
+    def _blackboard_changes(self) -> dict[str, str | None]:
+        current = self._blackboard()
+        changes: dict[str, str | None] = {}
+        for key, value in current.items():
+            last = self._last_values.get(key)
+            if last is not None and last[0] is value:
+                continue
+            text = short_repr(value)
+            self._last_values[key] = (value, text)
+            if last is None or last[1] != text:
+                changes[key] = text
+        for key in [key for key in self._last_values if key not in current]:
+            del self._last_values[key]
+            changes[key] = None
+        return changes
+
+    def _write(self, line: dict[str, Any]) -> None:
+        if self._stream is not None:
+            self._stream.write(json.dumps(line, ensure_ascii=False) + "\n")
+            self._stream.flush()
+
+    def close(self) -> None:
+        if self._stream is not None:
+            self._stream.close()
+            self._stream = None
+
+
+# ------------------------------------------------------------------------------------ reading
+@dataclass
+class TreeState:
+    """The whole tree as logged at one tick: every node's status and feedback, the tip."""
+
+    tick: int = 0
+    sim_time_s: float = 0.0
+    root: Status = Status.INVALID
+    tip: str | None = None
+    nodes: dict[str, NodeState] = field(default_factory=dict)
+    blackboard: dict[str, str] = field(default_factory=dict)
+
+    def apply(self, record: TickRecord) -> TreeState:
+        """The state after ``record`` (a new object; this one is unchanged)."""
+        blackboard = dict(self.blackboard)
+        for key, text in record.blackboard.items():
+            if text is None:
+                blackboard.pop(key, None)
+            else:
+                blackboard[key] = text
+        return TreeState(tick=record.tick, sim_time_s=record.sim_time_s, root=record.root,
+                         tip=record.tip, nodes={**self.nodes, **record.nodes},
+                         blackboard=blackboard)
+
+
+@dataclass(frozen=True)
+class TreeHistory:
+    """A snapshot log read back: the tree's shape and its state after every logged change."""
+
+    shape: TreeShape
+    tree_file: str | None
+    states: tuple[TreeState, ...]
+
+    def at_tick(self, tick: int) -> TreeState:
+        """The state as it was at ``tick`` (the last change at or before it)."""
+        return self.states[self.index_at_tick(tick)]
+
+    def at_time(self, sim_time_s: float) -> TreeState:
+        """The state as it was at ``sim_time_s`` sim seconds."""
+        return self.states[self.index_at_time(sim_time_s)]
+
+    def index_at_tick(self, tick: int) -> int:
+        ticks = [state.tick for state in self.states]
+        return self._checked(bisect.bisect_right(ticks, tick) - 1, f"tick {tick}")
+
+    def index_at_time(self, sim_time_s: float) -> int:
+        times = [state.sim_time_s for state in self.states]
+        return self._checked(bisect.bisect_right(times, sim_time_s) - 1,
+                             f"sim time {sim_time_s:g} s")
+
+    def _checked(self, position: int, when: str) -> int:
+        if not self.states:
+            raise TreeLogError("the log has no ticks: the tree never ticked")
+        if position < 0:
+            first = self.states[0]
+            raise TreeLogError(f"nothing logged at {when}: the first record is tick "
+                               f"{first.tick} at {first.sim_time_s:.1f} s sim")
+        return position
+
+
+def read_tree_log(path: Path) -> TreeHistory:
+    """Read ``tree_log.jsonl``; every problem is a :class:`TreeLogError` naming the file."""
+    try:
+        with path.open(encoding="utf-8") as stream:
+            return _read(stream)
+    except OSError as error:
+        raise TreeLogError(f"{path}: {error.strerror or error}") from error
+    except (ValueError, KeyError, TypeError) as error:
+        raise TreeLogError(f"{path}: {error}") from error
+
+
+def _read(stream: TextIO) -> TreeHistory:
+    lines = _json_lines(stream)
+    _, header = next(lines, (0, None))
+    if header is None or header.get("kind") != "tree":
+        raise ValueError("not a tree snapshot log (the first line must describe the tree)")
+    if header.get("version") != FORMAT_VERSION:
+        raise ValueError(f"log format version {header.get('version')}, "
+                         f"this reader knows {FORMAT_VERSION}")
+    shape = TreeShape.from_json(header["nodes"])
+    states: list[TreeState] = []
+    state = TreeState()
+    for number, line in lines:
+        try:
+            state = state.apply(TickRecord.from_json(line))
+        except (KeyError, TypeError, ValueError) as error:
+            raise ValueError(f"line {number}: malformed tick record ({error!r})") from error
+        states.append(state)
+    return TreeHistory(shape=shape, tree_file=header.get("tree_file"), states=tuple(states))
+
+
+def _json_lines(stream: TextIO) -> Iterator[tuple[int, dict[str, Any]]]:
+    for number, text in enumerate(stream, start=1):
+        if not text.strip():
+            continue
+        try:
+            line = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"line {number}: not JSON ({error.msg})") from error
+        if not isinstance(line, dict):
+            raise ValueError(f"line {number}: not a JSON object")
+        yield number, line
+
+
+def behaviour_tree_of(executive: object) -> py_trees.trees.BehaviourTree | None:
+    """The executive's py_trees tree, or ``None`` for an executive that is not a tree."""
+    tree = getattr(executive, "tree", None)
+    return tree if isinstance(tree, py_trees.trees.BehaviourTree) else None

@@ -1,0 +1,33 @@
+"""Between ROS messages and the plain values the tree passes around: the only place they meet.
+
+The planning code and the blackboard work with :class:`~bt_servicesim.planning.geometry.Pose2D`
+and :class:`~bt_servicesim.planning.geometry.Box`, which know nothing of ROS; behaviours that
+talk to ROS convert at the edge with these functions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from geometry_msgs.msg import Pose
+
+from bt_servicesim.planning.geometry import Pose2D
+
+__all__ = ["pose_from_msg", "pose_to_msg"]
+
+
+def pose_from_msg(pose: Any) -> Pose2D:
+    """The planar pose of a ``geometry_msgs/Pose``: x, y and the yaw of its quaternion."""
+    q = pose.orientation
+    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return Pose2D(x=pose.position.x, y=pose.position.y, yaw=yaw)
+
+
+def pose_to_msg(pose: Pose2D) -> Pose:
+    """A ``geometry_msgs/Pose`` on the ground plane with ``pose``'s position and yaw."""
+    message = Pose()
+    message.position.x, message.position.y = float(pose.x), float(pose.y)
+    message.orientation.z = math.sin(pose.yaw / 2.0)
+    message.orientation.w = math.cos(pose.yaw / 2.0)
+    return message

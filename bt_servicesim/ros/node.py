@@ -1,0 +1,82 @@
+"""The executive's ROS node: on sim time, and cheap to spin.
+
+A run spins one node for everything on the executive's side: the tree's behaviours, the
+referee monitor and the run's records. Every entity of that node is one more DDS endpoint and
+one more thing the executor looks after -- rclpy's Python executors rebuild their wait set
+from all of them each time they wait, which is thousands of times a wall second when the
+simulator runs 50 times faster than real time (the run itself uses the ``EventsExecutor``,
+:mod:`bt_servicesim.mission.run`). So the node leaves out what nobody uses on it:
+
+* the parameter and type-description services (the executive's one parameter,
+  ``use_sim_time``, is set here and never changed from outside);
+* the default QoS-event handlers rclpy gives each subscription and publisher (two waitables
+  each, about forty on the mission tree's node); mismatched QoS still shows in
+  ``ros2 topic info --verbose``, and an explicit ``event_callbacks`` argument is kept;
+* duplicate clients: behaviours that call the same service or the same action share one
+  client per node (:func:`shared_client`, :func:`shared_action_client`). A client serves any
+  number of requests or goals at once, each with its own future, so sharing changes nothing
+  for a behaviour but the number of DDS endpoints and wait-set entries.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rclpy.action import ActionClient
+from rclpy.client import Client
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+__all__ = ["ExecutiveNode", "shared_action_client", "shared_client"]
+
+_CLIENTS_ATTRIBUTE = "_bt_servicesim_shared_clients"
+
+
+class ExecutiveNode(Node):
+    """A node on sim time without parameter services or default QoS-event handlers."""
+
+    def __init__(self, name: str = "bt_servicesim_executive", *, use_sim_time: bool = True,
+                 **kwargs: Any) -> None:
+        overrides = [
+            Parameter("use_sim_time", Parameter.Type.BOOL, use_sim_time),
+            Parameter("start_type_description_service", Parameter.Type.BOOL, False),
+        ]
+        super().__init__(name, start_parameter_services=False,
+                         parameter_overrides=overrides, **kwargs)
+
+    def create_subscription(self, *args: Any, **kwargs: Any) -> Any:
+        kwargs.setdefault("event_callbacks",
+                          SubscriptionEventCallbacks(use_default_callbacks=False))
+        return super().create_subscription(*args, **kwargs)
+
+    def create_publisher(self, *args: Any, **kwargs: Any) -> Any:
+        kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))
+        return super().create_publisher(*args, **kwargs)
+
+
+def shared_client(node: Node, service_type: type, service: str) -> Client:
+    """The node's one client for ``service``, created on first use."""
+    clients = _clients_of(node)
+    key = (service_type, service)
+    if key not in clients:
+        clients[key] = node.create_client(service_type, service)
+    return clients[key]
+
+
+def shared_action_client(node: Node, action_type: type, action: str) -> ActionClient:
+    """The node's one action client for ``action``, created on first use."""
+    clients = _clients_of(node)
+    key = (action_type, action)
+    if key not in clients:
+        clients[key] = ActionClient(node, action_type, action)
+    return clients[key]
+
+
+def _clients_of(node: Node) -> dict[tuple[type, str], Any]:
+    """The node's shared clients, kept on the node so they live and die with it."""
+    clients = getattr(node, _CLIENTS_ATTRIBUTE, None)
+    if clients is None:
+        clients = {}
+        setattr(node, _CLIENTS_ATTRIBUTE, clients)
+    return clients

@@ -1,0 +1,98 @@
+"""A periodic callback on sim time that needs no ROS timer.
+
+Both executives run on sim time: the tree ticks every 0.1 sim s and the baseline polls its
+state machine. rclpy's timers on ROS time work with its Python executors but not with its C++
+``EventsExecutor`` (Kilted: a 0.1 sim s timer fired about every 0.6 sim s), which the run
+spins because it takes a message for a quarter of the CPU (:mod:`bt_servicesim.mission.run`).
+So :class:`SimTicker` keeps the period from the node's clock itself: a jump handler on the
+clock sees every ``/clock`` update once the clock has taken it, and when a period is due the
+callback is scheduled as a task on the node's executor, never run inside the clock's own
+callback.
+
+Design intent:
+
+* due times lie on a fixed grid from the start (start + k·period), as rclpy's timers do;
+  periods missed while the process was busy are skipped, not made up (a tree ticked twice in
+  a row would see no time pass between the two);
+* a clock update within a tenth of a period of a due time counts as reaching it: sim stamps
+  are floats rounded to nanoseconds, and a stamp a nanosecond short of the due time would
+  otherwise put every tick off to the next update, halving the rate;
+* :meth:`SimTicker.cancel` unregisters the handler, and a tick already scheduled then does
+  nothing.
+
+On a node without sim time (its clock never jumps) the ticker falls back to a plain timer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rclpy.clock import JumpThreshold, ROSClock
+from rclpy.duration import Duration
+from rclpy.node import Node
+
+__all__ = ["SimTicker"]
+
+DUE_TOLERANCE = 0.1
+"""How early, as a share of the period, a clock update may be and still count as due."""
+
+
+class SimTicker:
+    """Calls ``callback`` every ``period_s`` of the node's sim time (see module docstring)."""
+
+    def __init__(self, node: Node, period_s: float, callback: Callable[[], None]) -> None:
+        if not period_s > 0.0:
+            raise ValueError(f"tick period {period_s}: must be more than 0")
+        self.node = node
+        self.callback = callback
+        self._period_ns = round(period_s * 1e9)
+        self._tolerance_ns = round(self._period_ns * DUE_TOLERANCE)
+        self._clock = node.get_clock()
+        self._start_ns = self._clock.now().nanoseconds
+        self._due_ns = self._start_ns + self._period_ns  # the first call a period on, as a timer
+        self._scheduled = False
+        self._cancelled = False
+        self._timer = None
+        self._jump_handle = None
+        if isinstance(self._clock, ROSClock) and self._clock.ros_time_is_active:
+            if node.executor is None:
+                raise RuntimeError(f"{node.get_name()}: add the node to an executor before "
+                                   "ticking on its sim clock")
+            threshold = JumpThreshold(min_forward=Duration(nanoseconds=1), min_backward=None,
+                                      on_clock_change=False)
+            self._jump_handle = self._clock.create_jump_callback(
+                threshold, post_callback=self._on_clock)
+        else:
+            self._timer = node.create_timer(period_s, self._tick)
+
+    def cancel(self) -> None:
+        """No more calls; idempotent."""
+        self._cancelled = True
+        if self._jump_handle is not None:
+            self._jump_handle.unregister()
+            self._jump_handle = None
+        if self._timer is not None:
+            self.node.destroy_timer(self._timer)
+            self._timer = None
+
+    def _on_clock(self, _jump: object) -> None:
+        if self._scheduled or self._cancelled:
+            return
+        if self._clock.now().nanoseconds + self._tolerance_ns >= self._due_ns:
+            self._scheduled = True
+            self.node.executor.create_task(self._fire)
+
+    def _fire(self) -> None:
+        self._scheduled = False
+        if self._cancelled:
+            return
+        reached = self._clock.now().nanoseconds + self._tolerance_ns
+        if reached < self._due_ns:  # time went back after it was scheduled
+            return
+        periods = (reached - self._start_ns) // self._period_ns + 1
+        self._due_ns = self._start_ns + periods * self._period_ns
+        self._tick()
+
+    def _tick(self) -> None:
+        if not self._cancelled:
+            self.callback()

@@ -1,0 +1,124 @@
+"""Tick a mission tree on a ROS node, in simulation time.
+
+The executive owns no mission logic: it sets the tree up with the node (every behaviour creates
+its ROS handles in ``setup``), ticks it every 0.1 s of the node's clock — which follows
+``/clock`` when the node runs with ``use_sim_time`` (:mod:`bt_servicesim.ros.sim_ticker`) — and
+remembers how the mission ended.
+Interrupting it stops the tree, so behaviours cancel whatever they have in flight.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+import py_trees
+from rclpy.node import Node
+
+from bt_servicesim.ros.sim_ticker import SimTicker
+from bt_servicesim.tree.lean_tree import LeanBehaviourTree
+
+Status = py_trees.common.Status
+TickHandler = Callable[[py_trees.trees.BehaviourTree], None]
+MISSION_SEQUENCE = "Mission"
+
+
+def short_name(behaviour: py_trees.behaviour.Behaviour) -> str:
+    """The XML parser prefixes names with their ancestors' (``A.B.Leaf``); this is ``Leaf``."""
+    return behaviour.name.rsplit(".", 1)[-1]
+
+
+class Executive(Protocol):
+    """What the run command needs of an executive: the behaviour tree, or the seed's baseline."""
+
+    outcome: py_trees.common.Status | None
+
+    def setup(self, *, timeout_s: float = 15.0) -> None: ...
+    def start(self) -> None: ...
+    @property
+    def finished(self) -> bool: ...
+    def interrupt(self) -> None: ...
+    def phase(self) -> str: ...
+    def activity(self) -> str: ...
+
+
+class MissionExecutive:
+    """Runs one mission tree to SUCCESS or FAILURE."""
+
+    def __init__(
+        self,
+        *,
+        node: Node,
+        root: py_trees.behaviour.Behaviour,
+        tick_period_s: float = 0.1,
+    ) -> None:
+        self.node = node
+        self.tree = LeanBehaviourTree(root=root)
+        self.tick_period_s = tick_period_s
+        self.outcome: Status | None = None
+        self.ticks = 0
+        self._ticker: SimTicker | None = None
+        self._phase: tuple[int, str] = (-1, "-")
+
+    def setup(self, *, timeout_s: float = 15.0) -> None:
+        """Create every behaviour's ROS handles (publishers, clients, subscriptions)."""
+        self.tree.setup(timeout=timeout_s, node=self.node)
+
+    def add_post_tick_handler(self, handler: TickHandler) -> None:
+        self.tree.add_post_tick_handler(handler)
+
+    def start(self) -> None:
+        """Tick every ``tick_period_s`` of the node's clock (sim time under ``use_sim_time``)."""
+        self._ticker = SimTicker(self.node, self.tick_period_s, self.tick)
+
+    @property
+    def finished(self) -> bool:
+        return self.outcome is not None
+
+    def tick(self) -> None:
+        if self.finished:
+            return
+        self.tree.tick()
+        self.ticks += 1
+        if self.tree.root.status in (Status.SUCCESS, Status.FAILURE):
+            self.outcome = self.tree.root.status
+            self.stop_ticking()
+
+    def stop_ticking(self) -> None:
+        if self._ticker is not None:
+            self._ticker.cancel()
+            self._ticker = None
+
+    def interrupt(self) -> None:
+        """Stop the tree: running behaviours are terminated and cancel what is in flight."""
+        self.stop_ticking()
+        self.tree.root.stop(Status.INVALID)
+
+    def phase(self) -> str:
+        """The running child of the ``Mission`` sequence (BeginTask, Pickup, ...), else "-".
+
+        The run asks after every callback it spins; the answer changes only with a tick.
+        """
+        if self._phase[0] != self.ticks:
+            self._phase = (self.ticks, self._find_phase())
+        return self._phase[1]
+
+    def _find_phase(self) -> str:
+        """The Mission sequence's running child, or the first node below it that is not a
+        decorator (a phase wrapped in a retry is named by the phase)."""
+        node, phase = self.tree.root.tip(), None
+        while node is not None and node.parent is not None:
+            if not isinstance(node, py_trees.decorators.Decorator):
+                phase = node
+            if short_name(node.parent) == MISSION_SEQUENCE:
+                return short_name(phase or node)
+            node = node.parent
+        return "-"
+
+    def activity(self) -> str:
+        """The running leaf and its feedback, for a progress line."""
+        tip = self.tree.root.tip()
+        if tip is None:
+            return ""
+        leaf = short_name(tip)
+        return f"{leaf}: {tip.feedback_message}" if tip.feedback_message else leaf

@@ -1,0 +1,60 @@
+"""Load a mission tree file: BehaviorTree.CPP v4 XML, parsed by py_trees' XML parser.
+
+The tree file is the mission. This module hands the parser the registry of this project's nodes
+(:mod:`bt_servicesim.behaviours` registers them all on import), turns the run's settings into the
+top-level tree's port values (``time_limit``), and turns every way a tree file can be wrong into
+one :class:`MissionTreeError` line that names the file and the problem.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+
+import py_trees
+from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+from bt_servicesim.behaviours import node_registry
+
+DEFAULT_TREE = Path(__file__).resolve().parents[2] / "trees" / "servicesim_mission.xml"
+
+class MissionTreeError(ValueError):
+    """A tree file that cannot be loaded; the message is one line naming the file and problem."""
+
+
+def load_mission_tree(
+    path: str | Path = DEFAULT_TREE,
+    *,
+    time_limit_s: float | None = None,
+    main_tree_id: str | None = None,
+) -> py_trees.behaviour.Behaviour:
+    """Parse ``path`` into a py_trees root; ``time_limit_s`` overrides the tree's own default."""
+    tree_file = Path(path)
+    if not tree_file.is_file():
+        raise MissionTreeError(f"{tree_file}: no such tree file")
+    _check_xml(tree_file)
+    registry = node_registry()
+    overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
+    try:
+        return parse_behaviour_tree_xml(
+            str(tree_file), main_tree_id=main_tree_id, node_registry=registry,
+            input_mappings=overrides,
+        )
+    except Exception as error:  # the parser raises many kinds; the user needs one line
+        raise MissionTreeError(f"{tree_file}: {_one_line(error)}") from error
+
+
+def _check_xml(tree_file: Path) -> None:
+    try:
+        root = ElementTree.parse(tree_file).getroot()
+    except ElementTree.ParseError as error:
+        raise MissionTreeError(f"{tree_file}: not well-formed XML ({error})") from error
+    if root.tag != "root":
+        raise MissionTreeError(f"{tree_file}: the top element is <{root.tag}>, expected <root>")
+    if root.find("BehaviorTree") is None:
+        raise MissionTreeError(f"{tree_file}: no <BehaviorTree> element")
+
+
+def _one_line(error: BaseException) -> str:
+    text = " ".join(str(error).split()) or type(error).__name__
+    return text if len(text) <= 300 else text[:297] + "..."
