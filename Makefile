@@ -35,10 +35,12 @@ run: setup
 	$(PY) -m bt_servicesim.run $(ARGS)
 
 test: setup
+	$(VENV)/bin/lint-imports --no-cache
 	$(PY) -m pytest -n $(JOBS) $(TESTS)
 
 lint: setup
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/lint-imports --no-cache
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

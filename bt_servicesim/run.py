@@ -21,7 +21,12 @@ from typing import TYPE_CHECKING
 from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
 from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, EXECUTIVES, RunSettings
 from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.loading import DEFAULT_TREE, MissionTreeError, load_mission_tree
+from bt_servicesim.tree.loading import (
+    DEFAULT_TREE,
+    MissionTreeError,
+    load_mission_tree,
+    phases_of,
+)
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -107,11 +112,12 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
 
         return make_baseline
     root = load_mission_tree(settings.tree, time_limit_s=settings.time_limit_s)
+    phases = phases_of(settings.tree)
 
     def make_tree(node: Node) -> Executive:
         from bt_servicesim.tree.executive import MissionExecutive
 
-        return MissionExecutive(node=node, root=root)
+        return MissionExecutive(node=node, root=root, phases=phases)
 
     return make_tree
 

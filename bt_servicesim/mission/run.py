@@ -260,7 +260,7 @@ class RunRecords:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
                                     sim_time_s=lambda: _sim_seconds(node),
                                     tree_file=str(tree_file))
-            self.tree_topic = TreeTopic(node=node, recorder=self.mcap)
+            self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
             self.tree_log.listeners.append(self.tree_topic.publish)
             self.tree.add_post_tick_handler(self.tree_log)
 

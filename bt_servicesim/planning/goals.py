@@ -1,12 +1,12 @@
 """Where the robot should go next: goal and waypoint computation from the map and the boxes.
 
 The seed aimed at "area centre − 1 m in x", which can leave the area (checkpoint 1 or 4 never
-fires) and ignores where the guest will stand. The behaviours here compute goals from what the
+fires) and ignores where the guest will stand. The functions here compute goals from what the
 executive knows — the :class:`~bt_servicesim.planning.occupancy.OccupancyGrid2D` from
 ``/servicebot/map``, the referee's RoomInfo boxes, the start pose and odometry — and never from the
 simulator. Every goal lies on a free cell with room for the robot (:data:`ROBOT_CLEARANCE`) that is
 connected to the robot's position, and every figure that shapes them is a named constant below
-taken from the competition's rules (README of the reference).
+or derived from the competition's rules (:mod:`bt_servicesim.planning.rules`).
 
 Each behaviour reads its input ports, computes in ``update`` — pure and non-blocking; on the
 1200x1200 office map the heaviest, :class:`DropOffGoal` and :class:`ExplorationWaypoints`,
@@ -27,6 +27,13 @@ from scipy import ndimage
 
 from bt_servicesim.planning.geometry import Box, Point, Pose2D
 from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree, Window
+from bt_servicesim.planning.rules import (
+    FOLLOW_GAP,
+    GOAL_TOLERANCE,
+    GUEST_SPAWN_PADDING,
+    PICKUP_REACH,
+    RFID_RANGE,
+)
 
 __all__ = [
     "TrailingPlan",
@@ -44,19 +51,13 @@ ROBOT_CLEARANCE = 0.35
 """Metres of free space a goal needs around it (footprint 0.4 x 0.5 m: half-diagonal 0.32)."""
 SIGHT_CLEARANCE = ROBOT_CLEARANCE - 0.1
 """Clearance along a straight leg the robot drives (a lattice step less than a goal's)."""
-GOAL_TOLERANCE = 0.3
-"""Navigation succeeds within this distance of the goal."""
-GUEST_TRAIL = 1.2
-"""The following guest stops this far behind the robot, along the robot's trail."""
 TRAIL_ALONG_ERROR = 0.45
 """Where the guest stops, along the trail: the goal tolerance plus the guest's own spread."""
 TRAIL_ACROSS_ERROR = 0.25
 """Where the guest stops, across the trail."""
-SPAWN_PADDING = 1.0
-"""The guest spawns at a random point of the pick-up box shrunk by this on every side."""
-RFID_RANGE = 2.0
-PICKUP_REACH = 1.7  # m: the referee's 2.0 m pick-up range, less the goal tolerance
-SOCIAL_DISTANCE = 1.1  # m from a person: the referee penalises a robot within 0.75 m of one
+SOCIAL_DISTANCE = 1.1
+"""Metres a pick-up goal keeps from where the guest may stand: the referee books approximation
+within :data:`~bt_servicesim.planning.rules.PERSON_APPROXIMATION_RADIUS` of the robot's base."""
 EXPLORATION_REACH = 6.0
 """How far around the pick-up box a search for the guest reaches."""
 WAYPOINT_SPACING = 2.4
@@ -98,8 +99,8 @@ def shrunk(box: Box, margin_x: float, margin_y: float) -> Box:
 
 
 def guest_spawn_area(box: Box) -> Box:
-    """Where the guest may spawn: the box less :data:`SPAWN_PADDING` (a centre line if thin)."""
-    return shrunk(box, SPAWN_PADDING, SPAWN_PADDING)
+    """Where the guest may spawn: the box less :data:`GUEST_SPAWN_PADDING` (centre line if thin)."""
+    return shrunk(box, GUEST_SPAWN_PADDING, GUEST_SPAWN_PADDING)
 
 
 def farthest_corner(area: Box, xs: Any, ys: Any) -> Any:
@@ -197,7 +198,7 @@ class TrailingPlan(NamedTuple):
     goal: Pose2D
     """The robot's goal; its yaw is the heading the robot arrives with."""
     guest_spot: Point
-    """Where the guest stops: :data:`GUEST_TRAIL` behind the goal along the arrival heading."""
+    """Where the guest stops: :data:`FOLLOW_GAP` behind the goal along the arrival heading."""
     margin: float
     """:func:`trailing_margin` of the guest spot: the guest's depth in the box despite errors."""
     travel: float
@@ -208,7 +209,7 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPla
     """A robot goal that leaves the FOLLOWING GUEST inside the drop-off ``box``.
 
     Checkpoint 3 checks the guest's origin, not the robot's, and the guest walks along the
-    robot's trail and stops about :data:`GUEST_TRAIL` (1.2 m) behind it. So the goal is chosen
+    robot's trail and stops about :data:`FOLLOW_GAP` (1.2 m) behind it. So the goal is chosen
     for a *guest spot* T in the box: the robot must pass straight through T and stop 1.2 m
     beyond it, G = T + 1.2·u, where u is the direction in which the robot's route arrives at T.
 
@@ -250,9 +251,9 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPla
 
 
 def _staying_plan(box: Box, robot: Pose2D) -> TrailingPlan:
-    """Stay put: the guest is taken to trail GUEST_TRAIL behind along the robot's heading."""
+    """Stay put: the guest is taken to trail FOLLOW_GAP behind along the robot's heading."""
     heading = _heading(robot)
-    spot = (robot.x - GUEST_TRAIL * heading[0], robot.y - GUEST_TRAIL * heading[1])
+    spot = (robot.x - FOLLOW_GAP * heading[0], robot.y - FOLLOW_GAP * heading[1])
     return TrailingPlan(robot, spot, trailing_margin(box, *spot, heading), 0.0)
 
 
@@ -285,16 +286,16 @@ def _trailing_plans(
 def _plan_through(
     box: Box, grid: OccupancyGrid2D, routes: RouteTree, robot: Pose2D, spot: Point
 ) -> TrailingPlan | None:
-    """The goal GUEST_TRAIL beyond ``spot`` along the route's arrival there, if it works."""
+    """The goal FOLLOW_GAP beyond ``spot`` along the route's arrival there, if it works."""
     to_spot = routes.distance_to(*spot)
     if not math.isfinite(to_spot):
         return None
     heading = _arrival_direction(grid, routes, robot, spot) or _heading(robot)
-    gx, gy = spot[0] + GUEST_TRAIL * heading[0], spot[1] + GUEST_TRAIL * heading[1]
+    gx, gy = spot[0] + FOLLOW_GAP * heading[0], spot[1] + FOLLOW_GAP * heading[1]
     travel = routes.distance_to(gx, gy)
     if not (grid.is_free(gx, gy, ROBOT_CLEARANCE) and math.isfinite(travel)):
         return None
-    if travel < to_spot + 0.9 * GUEST_TRAIL:  # reached more directly than through the spot
+    if travel < to_spot + 0.9 * FOLLOW_GAP:  # reached more directly than through the spot
         return None
     if not grid.clear_lines(spot[0], spot[1], [gx], [gy], SIGHT_CLEARANCE)[0]:
         return None
@@ -344,7 +345,7 @@ def _inside_fallback(
     if goal is None:
         return None
     heading = _heading(goal)
-    spot = (goal.x - GUEST_TRAIL * heading[0], goal.y - GUEST_TRAIL * heading[1])
+    spot = (goal.x - FOLLOW_GAP * heading[0], goal.y - FOLLOW_GAP * heading[1])
     return TrailingPlan(goal, spot, trailing_margin(box, *spot, heading),
                         routes.distance_to(goal.x, goal.y))
 
@@ -354,7 +355,7 @@ def drop_off_reposition_goal(
 ) -> TrailingPlan | None:
     """After a refused drop-off: a different goal that pulls the trailing guest deeper in.
 
-    The guest is taken to stand :data:`GUEST_TRAIL` behind the robot along its heading (it
+    The guest is taken to stand :data:`FOLLOW_GAP` behind the robot along its heading (it
     trailed the last leg). Two kinds of move are weighed by the guest's new
     :func:`trailing_margin`:
 
@@ -410,7 +411,7 @@ def _forward_pulls(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> list[Trail
     for reach, x, y, ok in zip(reaches, xs, ys, clear, strict=True):
         if not (ok and grid.is_free(float(x), float(y), ROBOT_CLEARANCE)):
             break
-        spot = (float(x) - GUEST_TRAIL * ux, float(y) - GUEST_TRAIL * uy)
+        spot = (float(x) - FOLLOW_GAP * ux, float(y) - FOLLOW_GAP * uy)
         plans.append(TrailingPlan(Pose2D(float(x), float(y), robot.yaw), spot,
                                   trailing_margin(box, *spot, (ux, uy)), float(reach)))
     return plans
@@ -589,7 +590,7 @@ def guest_search_waypoints(
 
     ``last_seen`` is where the robot stood, heading on, when the guest last answered on RFID;
     a guest who stopped (a drift) or fell behind stands behind that pose, on the trail the robot
-    drove, about :data:`GUEST_TRAIL` back. So the first waypoint lies that far back along the
+    drove, about :data:`FOLLOW_GAP` back. So the first waypoint lies that far back along the
     pose's heading (when the robot can reach it). Rings of :data:`SEARCH_RINGS` radii with
     points about :data:`WAYPOINT_SPACING` apart, each
     ring starting on the robot's side and going round; every point is moved to the nearest cell
@@ -601,8 +602,8 @@ def guest_search_waypoints(
                                max_radius=RFID_RANGE, within=reachable)
     if centre is None:
         return []
-    behind = grid.nearest_free(last_seen.x - GUEST_TRAIL * math.cos(last_seen.yaw),
-                               last_seen.y - GUEST_TRAIL * math.sin(last_seen.yaw),
+    behind = grid.nearest_free(last_seen.x - FOLLOW_GAP * math.cos(last_seen.yaw),
+                               last_seen.y - FOLLOW_GAP * math.sin(last_seen.yaw),
                                clearance=ROBOT_CLEARANCE, max_radius=0.5, within=reachable)
     points = [behind, centre] if behind is not None else [centre]
     towards_robot = math.atan2(robot.y - centre[1], robot.x - centre[0])
@@ -614,7 +615,7 @@ def guest_search_waypoints(
                                      centre[1] + radius * math.sin(angle),
                                      clearance=ROBOT_CLEARANCE, max_radius=SNAP_RADIUS,
                                      within=reachable)
-            if spot is not None and all(math.dist(spot, p) >= GUEST_TRAIL for p in points):
+            if spot is not None and all(math.dist(spot, p) >= FOLLOW_GAP for p in points):
                 points.append(spot)
     return _headed((robot.x, robot.y), points)
 

@@ -42,8 +42,9 @@ import numpy as np
 from scipy import ndimage
 
 from bt_servicesim.planning.geometry import Point, Pose2D
-from bt_servicesim.planning.goals import PERSON_CLEARANCE, RFID_RANGE, ROBOT_CLEARANCE
+from bt_servicesim.planning.goals import PERSON_CLEARANCE, ROBOT_CLEARANCE
 from bt_servicesim.planning.occupancy import OccupancyGrid2D, Window
+from bt_servicesim.planning.rules import PICKUP_REACH, RFID_PERIOD, RFID_RANGE
 
 __all__ = [
     "GuestEstimate",
@@ -59,7 +60,7 @@ HISTORY_LENGTH = 1200
 SILENCE = 0.35
 """Sim seconds without an RFID message after which nobody is taken to be in range (the sensor
 is silent then; three lost messages in a row are rarer than one in a hundred)."""
-READING_PERIOD = 0.1
+READING_PERIOD = RFID_PERIOD
 """The sensor's period: silence is recorded as an empty reading at most this often."""
 MEMORY = 60.0
 """Sim seconds of readings without the guest that still constrain where they are."""
@@ -77,8 +78,6 @@ APPROACH_DISTANCE = 1.4
 """Metres from the estimate an approach goal prefers: between :data:`TOO_CLOSE` and reach."""
 APPROACH_RADIUS = 1.8
 """How far from the estimate an approach goal may lie."""
-PICKUP_REACH = 1.8
-"""A possible spot counts as within reach of a goal this close (2.0 m less the goal tolerance)."""
 TOO_CLOSE = 1.1
 """A possible spot this close to a goal puts the robot in the guest's personal space (the
 referee's 0.75 m from the body's edge is 1.0 m from the robot's centre)."""

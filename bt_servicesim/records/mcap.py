@@ -306,8 +306,11 @@ class TreeTopic:
     """
 
     def __init__(self, *, node: Node, recorder: McapRecorder | None = None,
-                 period_s: float = SNAPSHOT_PERIOD_S) -> None:
-        """Writes each snapshot to ``recorder`` too, when given (see its ``own_topics``)."""
+                 period_s: float = SNAPSHOT_PERIOD_S,
+                 phase: Callable[[], str] | None = None) -> None:
+        """Writes each snapshot to ``recorder`` too, when given (see its ``own_topics``); each
+        snapshot names the mission's phase as ``phase`` (the executive's) says."""
+        self.phase = phase
         self.publisher = node.create_publisher(
             String, TREE_TOPIC, RecordedTopic(TREE_TOPIC, String).qos)
         self.recorder = recorder
@@ -326,7 +329,10 @@ class TreeTopic:
             self._send()
 
     def _send(self) -> None:
-        message = String(data=json.dumps(snapshot_json(self._state)))
+        snapshot = snapshot_json(self._state)
+        if self.phase is not None:
+            snapshot["phase"] = self.phase()
+        message = String(data=json.dumps(snapshot))
         self.publisher.publish(message)
         if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
             self.recorder.record(TREE_TOPIC, message)

@@ -13,12 +13,13 @@ other person's path, and the moments worth marking, each where it happened:
 * the mission tree's phase changes (BeginTask, Pickup, DropOff, ReturnToStart), at the robot.
 
 :func:`render_trajectory` draws it all over the map with matplotlib (no display needed), with
-the pick-up and drop-off areas the executive computed (``pick_up_box`` and ``drop_off_box`` on
-the blackboard, see :func:`boxes_from_blackboard`).
+the target areas the executive looked up: every box on the blackboard, labelled with its key
+(:func:`boxes_from_blackboard`), so a tree that names its keys otherwise is drawn the same.
 
-A recorded run can be drawn again later: ``python -m bt_servicesim.records.trajectory DIR`` rebuilds
-the trace from ``DIR/run.mcap`` (the same messages, in the order they arrived; the phases from
-the tree snapshots) and the areas from the last blackboard in ``DIR/tree_log.jsonl``.
+A recorded run can be drawn again later: ``python -m bt_servicesim.trajectory DIR`` rebuilds the
+trace from ``DIR/run.mcap`` (the same messages, in the order they arrived; the phases from the
+tree snapshots, which carry the executive's phase) and the areas from the last blackboard in
+``DIR/tree_log.jsonl``.
 """
 
 from __future__ import annotations
@@ -46,13 +47,13 @@ from std_msgs.msg import String
 from bt_servicesim.planning.geometry import Box
 from bt_servicesim.records.mcap import RECORDED_TOPICS, TREE_TOPIC
 from bt_servicesim.records.tree_log import read_tree_log
-from bt_servicesim.tree.executive import MISSION_SEQUENCE
 
 TRAJECTORY_NAME = "trajectory.png"
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 ROBOT_COLOUR, GUEST_COLOUR, PEOPLE_COLOUR = "#d62728", "#1f77b4", "#9a9a9a"
-BOX_COLOURS = {"pick_up_box": "#2ca02c", "drop_off_box": "#9467bd"}
+BOX_COLOURS = ("#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#bcbd22")
+"""Target areas' colours, in the order the executive first wrote them (pick-up first)."""
 EVENT_STYLE = {  # kind: (marker, colour)
     "checkpoint": ("*", "#ff7f0e"),
     "back to pick-up": ("X", "#000000"),
@@ -245,12 +246,14 @@ def _append_moved(path: list[Point2D], point: Point2D, min_step_m: float) -> Non
 
 # --------------------------------------------------------------------------------- rendering
 def boxes_from_blackboard(storage: Mapping[str, Any]) -> dict[str, Box]:
-    """The ``pick_up_box`` and ``drop_off_box`` the executive wrote, wherever they are keyed."""
-    boxes = {}
+    """Every target area on the blackboard, by the last part of its key, in the order written.
+
+    A box kept under two keys (a subtree's remapped copy) is drawn once, under its first key.
+    """
+    boxes: dict[str, Box] = {}
     for key, value in storage.items():
-        name = key.rsplit("/", 1)[-1]
-        if name in BOX_COLOURS and isinstance(value, Box) and not value.is_empty:
-            boxes[name] = value
+        if isinstance(value, Box) and not value.is_empty and value not in boxes.values():
+            boxes.setdefault(key.rsplit("/", 1)[-1], value)
     return boxes
 
 
@@ -277,8 +280,8 @@ def render_trajectory(trace: RunTrace, *, path: Path, boxes: Mapping[str, Box] |
 
 
 def _draw_boxes(axes: Any, boxes: Mapping[str, Box]) -> None:
-    for name, box in boxes.items():
-        colour = BOX_COLOURS.get(name, "#7f7f7f")
+    for index, (name, box) in enumerate(boxes.items()):
+        colour = BOX_COLOURS[index % len(BOX_COLOURS)]
         axes.add_patch(Rectangle((box.min_x, box.min_y), box.max_x - box.min_x,
                                  box.max_y - box.min_y, facecolor=colour, alpha=0.25,
                                  edgecolor=colour, linewidth=1.5,
@@ -347,14 +350,6 @@ _BOX_REPR = re.compile(
     rf"Box\(min_x={_NUMBER}, min_y={_NUMBER}, max_x={_NUMBER}, max_y={_NUMBER}\)")
 
 
-def phase_of_tip(tip: str | None) -> str:
-    """The mission phase a tip key lies in: the node under ``Mission`` (as the executive says)."""
-    parts = (tip or "").split(".")
-    if MISSION_SEQUENCE in parts[:-1]:
-        return parts[parts.index(MISSION_SEQUENCE) + 1].split("~")[0]
-    return "-"
-
-
 def trace_from_recording(mcap_path: Path,
                          phases: Sequence[tuple[float, str]] | None = None) -> RunTrace:
     """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived.
@@ -381,7 +376,7 @@ def trace_from_recording(mcap_path: Path,
                 handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
             elif channel.topic == TREE_TOPIC and phases is None:
                 snapshot = json.loads(deserialize_message(message.data, String).data)
-                builder.note_phase(phase_of_tip(snapshot.get("tip")))
+                builder.note_phase(str(snapshot.get("phase", "-")))
     for when, phase in noted:  # noted after the last message
         now_ns[0] = round(when * 1e9)
         builder.note_phase(phase)

@@ -1,16 +1,15 @@
-"""Localisation input: tell the simulator (or AMCL) where the robot starts.
+"""Localisation input: the message that tells the simulator (or AMCL) where the robot starts.
 
-:class:`PublishInitialPose` publishes the pose on its ``pose`` port once per round of activity
-as a ``geometry_msgs/PoseWithCovarianceStamped`` in the map frame. The publisher is reliable
-and transient-local (latched), so a simulator or localiser that joins after the executive
-still receives the last initial pose. Publishing is fire-and-forget: SUCCESS right after.
+A ``geometry_msgs/PoseWithCovarianceStamped`` in the map frame, published reliable and
+transient-local (latched), so a simulator or localiser that joins later still receives the last
+one. Both executives send it: the tree's
+:class:`~bt_servicesim.behaviours.actions.publish_initial_pose.PublishInitialPose` and the
+seed's state machine.
 """
 
 from typing import Any
 
-import py_trees
 from geometry_msgs.msg import PoseWithCovarianceStamped
-from py_trees.ports import PortInformation
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from bt_servicesim.planning.geometry import Pose2D
@@ -21,9 +20,6 @@ __all__ = [
     "initial_pose_message",
 ]
 
-Status = py_trees.common.Status
-Ports = dict[str, PortInformation]
-"""A port declaration: port name to its information."""
 
 INITIAL_POSE_QOS = QoSProfile(
     depth=1,

@@ -1,4 +1,4 @@
-"""Simulation time for behaviours: a stopwatch on the node's clock, a wait and a timeout.
+"""Simulation time for behaviours: the node's clock, read in sim seconds, and a stopwatch on it.
 
 Every duration in the executive is measured in SIM seconds. The node runs with
 ``use_sim_time``, so its clock follows ``/clock``; py_trees' own
@@ -10,14 +10,14 @@ is not advancing*: a :class:`SimStopwatch` reads zero elapsed seconds until the 
 then starts counting from the first non-zero reading. A clock that jumps backwards (the
 simulator restarted) restarts the stopwatch rather than producing negative durations.
 
-Besides the stopwatch this module holds the two time behaviours, :class:`SimWait` and the
-decorator :class:`SimTimeout`, and :func:`node_from_setup_kwargs`, the check every ROS-facing
-behaviour in this package makes in ``setup(node=...)``.
+Besides the stopwatch this module holds :func:`node_from_setup_kwargs`, the check every
+ROS-facing behaviour makes in ``setup(node=...)``. The time behaviours built on it are
+:class:`~bt_servicesim.behaviours.actions.sim_wait.SimWait` and the decorator
+:class:`~bt_servicesim.behaviours.decorators.sim_timeout.SimTimeout`.
 """
 
 from typing import Any
 
-from py_trees.ports import PortInformation
 from rclpy.clock import Clock
 from rclpy.node import Node
 
@@ -30,8 +30,6 @@ __all__ = [
 
 _NS_PER_S = 1e9
 
-Ports = dict[str, PortInformation]
-"""A port declaration: port name to its information."""
 
 
 def node_from_setup_kwargs(behaviour_name: str, kwargs: dict[str, Any]) -> Node:

@@ -17,15 +17,11 @@ from rclpy.node import Node
 
 from bt_servicesim.ros.sim_ticker import SimTicker
 from bt_servicesim.tree.lean_tree import LeanBehaviourTree
+from bt_servicesim.tree.loading import DEFAULT_PHASES
+from bt_servicesim.tree.shape import short_label
 
 Status = py_trees.common.Status
 TickHandler = Callable[[py_trees.trees.BehaviourTree], None]
-MISSION_SEQUENCE = "Mission"
-
-
-def short_name(behaviour: py_trees.behaviour.Behaviour) -> str:
-    """The XML parser prefixes names with their ancestors' (``A.B.Leaf``); this is ``Leaf``."""
-    return behaviour.name.rsplit(".", 1)[-1]
 
 
 class Executive(Protocol):
@@ -51,8 +47,12 @@ class MissionExecutive:
         node: Node,
         root: py_trees.behaviour.Behaviour,
         tick_period_s: float = 0.1,
+        phases: str = DEFAULT_PHASES,
     ) -> None:
+        """``phases`` names the composite whose children are the mission's phases
+        (:func:`~bt_servicesim.tree.loading.phases_of` reads it from the tree file)."""
         self.node = node
+        self.phases = phases
         self.tree = LeanBehaviourTree(root=root)
         self.tick_period_s = tick_period_s
         self.outcome: Status | None = None
@@ -95,7 +95,7 @@ class MissionExecutive:
         self.tree.root.stop(Status.INVALID)
 
     def phase(self) -> str:
-        """The running child of the ``Mission`` sequence (BeginTask, Pickup, ...), else "-".
+        """The running child of the phases' composite (BeginTask, Pickup, ...), else "-".
 
         The run asks after every callback it spins; the answer changes only with a tick.
         """
@@ -104,14 +104,14 @@ class MissionExecutive:
         return self._phase[1]
 
     def _find_phase(self) -> str:
-        """The Mission sequence's running child, or the first node below it that is not a
+        """The phases' composite's running child, or the first node below it that is not a
         decorator (a phase wrapped in a retry is named by the phase)."""
         node, phase = self.tree.root.tip(), None
         while node is not None and node.parent is not None:
             if not isinstance(node, py_trees.decorators.Decorator):
                 phase = node
-            if short_name(node.parent) == MISSION_SEQUENCE:
-                return short_name(phase or node)
+            if short_label(node.parent.name) == self.phases:
+                return short_label((phase or node).name)
             node = node.parent
         return "-"
 
@@ -120,5 +120,5 @@ class MissionExecutive:
         tip = self.tree.root.tip()
         if tip is None:
             return ""
-        leaf = short_name(tip)
+        leaf = short_label(tip.name)
         return f"{leaf}: {tip.feedback_message}" if tip.feedback_message else leaf

@@ -4,6 +4,13 @@ The tree file is the mission. This module hands the parser the registry of this 
 (:mod:`bt_servicesim.behaviours` registers them all on import), turns the run's settings into the
 top-level tree's port values (``time_limit``), and turns every way a tree file can be wrong into
 one :class:`MissionTreeError` line that names the file and the problem.
+
+The Python reads no name that only the tree file defines. What the tools around the tree need
+to know of it is declared on the main ``<BehaviorTree>`` as an attribute, beside its ports:
+``phases`` names the composite whose children are the mission's phases (BeginTask, Pickup, ...),
+which the progress view and the trajectory picture show. A tree that leaves it out gets
+:data:`DEFAULT_PHASES`, the shipped tree's; a tree that names a composite it does not have is
+refused when it loads, rather than showing no phases later.
 """
 
 from __future__ import annotations
@@ -15,8 +22,14 @@ import py_trees
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.behaviours import node_registry
+from bt_servicesim.tree.shape import short_label
 
 DEFAULT_TREE = Path(__file__).resolve().parents[2] / "trees" / "servicesim_mission.xml"
+PHASES_ATTRIBUTE = "phases"
+"""The main tree's attribute naming the composite whose children are the mission's phases."""
+DEFAULT_PHASES = "Mission"
+"""The phases' composite when the tree does not say: the shipped tree's."""
+
 
 class MissionTreeError(ValueError):
     """A tree file that cannot be loaded; the message is one line naming the file and problem."""
@@ -36,12 +49,38 @@ def load_mission_tree(
     registry = node_registry()
     overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
     try:
-        return parse_behaviour_tree_xml(
+        root = parse_behaviour_tree_xml(
             str(tree_file), main_tree_id=main_tree_id, node_registry=registry,
             input_mappings=overrides,
         )
     except Exception as error:  # the parser raises many kinds; the user needs one line
         raise MissionTreeError(f"{tree_file}: {_one_line(error)}") from error
+    _check_phases(tree_file, root, main_tree_id)
+    return root
+
+
+def phases_of(path: str | Path = DEFAULT_TREE, *, main_tree_id: str | None = None) -> str:
+    """The name of the composite whose children are the mission's phases, as the tree says."""
+    root = ElementTree.parse(path).getroot()
+    main = main_tree_id or root.get("main_tree_to_execute")
+    for tree in root.findall("BehaviorTree"):
+        if main is None or tree.get("ID") == main:
+            return tree.get(PHASES_ATTRIBUTE, DEFAULT_PHASES)
+    return DEFAULT_PHASES
+
+
+def _check_phases(tree_file: Path, root: py_trees.behaviour.Behaviour,
+                  main_tree_id: str | None) -> None:
+    declared = ElementTree.parse(tree_file).getroot().find(
+        f"BehaviorTree[@{PHASES_ATTRIBUTE}]")
+    if declared is None:
+        return
+    phases = phases_of(tree_file, main_tree_id=main_tree_id)
+    if not any(short_label(node.name) == phases and isinstance(node, py_trees.composites.Composite)
+               for node in root.iterate()):
+        raise MissionTreeError(
+            f'{tree_file}: {PHASES_ATTRIBUTE}="{phases}" names no composite of the main tree')
+
 
 
 def _check_xml(tree_file: Path) -> None:
