@@ -1,0 +1,1 @@
+"""What a run leaves behind: the tree log, the MCAP recording, drawings and the picture."""

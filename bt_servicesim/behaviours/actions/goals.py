@@ -20,13 +20,12 @@ from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
+from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.goals import (
     TrailingPlan,
     drop_off_goal,
     drop_off_reposition_goal,
-    exploration_waypoints,
-    guest_search_waypoints,
     jitter_goal,
     pickup_goal,
     return_goal,

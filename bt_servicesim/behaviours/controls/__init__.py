@@ -1,0 +1,1 @@
+"""The mission tree's own control nodes, beside py_trees' Sequence, Fallback and Parallel."""
