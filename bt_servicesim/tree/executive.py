@@ -104,14 +104,20 @@ class MissionExecutive:
         return self._phase[1]
 
     def _find_phase(self) -> str:
-        """The phases' composite's running child, or the first node below it that is not a
-        decorator (a phase wrapped in a retry is named by the phase)."""
+        """The phases' composite's running child, named as the tree file places it.
+
+        A phase wrapped in decorators (a retry) is named by what they wrap; a phase that is a
+        subtree by its ``<SubTree name=...>``, which the parser puts in the qualified name
+        between the subtree's parent and its root (``Mission.PickupPhaseRetry.Pickup.FetchGuest``:
+        ``Pickup``); any other phase by its own name.
+        """
         node, phase = self.tree.root.tip(), None
         while node is not None and node.parent is not None:
             if not isinstance(node, py_trees.decorators.Decorator):
                 phase = node
             if short_label(node.parent.name) == self.phases:
-                return short_label((phase or node).name)
+                named = phase or node
+                return named.name[len(named.parent.name) + 1:].split(".", 1)[0]
             node = node.parent
         return "-"
 
