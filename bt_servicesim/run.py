@@ -11,15 +11,24 @@ Exit status: 0 when the referee counted all four checkpoints, 1 when the mission
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
+import uuid
 from collections.abc import Callable, Sequence
 from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
-from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, EXECUTIVES, RunSettings
+from bt_servicesim.mission.settings import (
+    DEFAULT_SPEED,
+    DEFAULT_TIME_LIMIT_S,
+    EXECUTIVES,
+    REPORT_NAME,
+    RunSettings,
+)
+from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
 from bt_servicesim.tree.loading import (
     DEFAULT_TREE,
@@ -46,10 +55,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--world", type=Path, help="world file (default: the ServiceSim office)")
     parser.add_argument("--seed", type=int, help="randomise the task with this seed "
                         "(default: the world's shipped task)")
-    parser.add_argument("--speed", type=float, default=10.0,
+    parser.add_argument("--speed", type=float,
                         help="sim speed: 1 = real time, 0 = as fast as possible (default 10)")
     parser.add_argument("--tree", type=Path, default=DEFAULT_TREE, help="mission tree XML")
-    parser.add_argument("--out", type=Path, help="run directory (default runs/<timestamp>/)")
+    parser.add_argument("--out", type=Path, help="run directory (default runs/<timestamp>/); "
+                        "an earlier run's is kept unless --overwrite")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="let --out name a directory that holds an earlier run's report")
     parser.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT_S,
                         help="mission time limit in sim seconds (default 900)")
     parser.add_argument("--headless", action="store_true",
@@ -59,26 +71,70 @@ def build_parser() -> argparse.ArgumentParser:
                         "the seed's state machine (baseline)")
     parser.add_argument("--sim-arg", action="append", default=[], metavar="ARG",
                         help="extra argument passed to the simulator (repeatable)")
+    parser.add_argument("--attach", action="store_true",
+                        help="start no simulator: run against the backend already on this "
+                        "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
+    parser.add_argument("--run-id", default=None,
+                        help="an id the report carries, for tools that start runs "
+                        "(default: a random one)")
     return parser
+
+
+#: Simulator options the run sets itself; --sim-arg may not set them behind its back.
+RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world")
+MAX_TIME_LIMIT_S = 1e6
+"""The longest mission time limit, in sim seconds (eleven days): longer is a typo."""
 
 
 def settings_from(args: argparse.Namespace) -> RunSettings:
     """Check every argument before anything starts."""
-    if args.world is not None and not args.world.is_file():
-        raise UsageError(f"--world {args.world}: no such file")
+    _check_backend(args)
     if args.seed is not None and args.seed < 0:
         raise UsageError(f"--seed {args.seed}: must be 0 or more")
-    if not args.speed >= 0.0:
-        raise UsageError(f"--speed {args.speed}: must be 0 or more")
-    if not args.time_limit > 0.0:
-        raise UsageError(f"--time-limit {args.time_limit}: must be more than 0")
-    out = args.out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+    speed = DEFAULT_SPEED if args.speed is None else args.speed
+    if not (math.isfinite(speed) and speed >= 0.0):
+        raise UsageError(f"--speed {speed}: must be a finite number, 0 or more")
+    if not (math.isfinite(args.time_limit) and 0.0 < args.time_limit <= MAX_TIME_LIMIT_S):
+        raise UsageError(f"--time-limit {args.time_limit}: must be more than 0 and at most "
+                         f"{MAX_TIME_LIMIT_S:.0f} sim seconds")
+    return RunSettings(
+        world=args.world, seed=args.seed, speed=speed, tree=args.tree,
+        out=_run_directory(args.out, overwrite=args.overwrite),
+        time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
+        run_id=args.run_id or uuid.uuid4().hex, attach=args.attach,
+    )
+
+
+def _check_backend(args: argparse.Namespace) -> None:
+    """The simulator's options: a world that exists, none of them with --attach."""
+    if args.world is not None and not args.world.is_file():
+        raise UsageError(f"--world {args.world}: no such file")
+    for arg in args.sim_arg:
+        option = arg.split("=", 1)[0]
+        if option in RUN_OWNED_SIM_OPTIONS:
+            raise UsageError(f"--sim-arg {arg}: the run sets {option} itself; use run's "
+                             f"{option}")
+    if args.attach:
+        given = [flag for flag, value in (("--world", args.world), ("--seed", args.seed),
+                                          ("--speed", args.speed), ("--sim-arg", args.sim_arg))
+                 if value not in (None, [])]
+        if given:
+            raise UsageError(f"--attach starts no simulator: {', '.join(given)} would not "
+                             "reach the backend")
+
+
+def _run_directory(out: Path | None, *, overwrite: bool) -> Path:
+    """``--out`` checked, or a new timestamped directory under runs/."""
+    if out is None:
+        return Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+    if not str(out).strip():
+        raise UsageError("--out: an empty path; name a run directory")
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
-    return RunSettings(
-        world=args.world, seed=args.seed, speed=args.speed, tree=args.tree, out=out,
-        time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
-    )
+    if (out / REPORT_NAME).exists() and not overwrite:
+        raise UsageError(f"--out {out}: holds an earlier run (its {REPORT_NAME}); "
+                         "choose another directory or add --overwrite")
+    return out
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -90,12 +146,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (UsageError, MissionTreeError, OSError) as error:
         return error_line(PROG, error)
     apply_localhost_defaults()
-    os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 101))
+    claim = None
+    if not settings.attach:  # a domain of its own: it only ever talks to its own simulator
+        try:
+            claim = claim_domain(avoid=_users_domain())
+        except NoFreeDomainError as error:
+            return error_line(PROG, error)
+        os.environ["ROS_DOMAIN_ID"] = str(claim.domain_id)
     from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
 
-    return MissionRun(
-        settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
-    ).execute()
+    try:
+        return MissionRun(
+            settings=settings, make_executive=make_executive,
+            extra_sim_args=tuple(args.sim_arg),
+        ).execute()
+    finally:
+        if claim is not None:
+            claim.release()
+
+
+def _users_domain() -> int | None:
+    """The shell's ROS_DOMAIN_ID, which is the user's own graph, if it is a number."""
+    value = os.environ.get("ROS_DOMAIN_ID", "")
+    return int(value) if value.isdigit() else None
 
 
 def executive_factory(settings: RunSettings) -> ExecutiveFactory:

@@ -29,11 +29,18 @@ class RefereeMonitor:
 
     def __init__(self, node: Node) -> None:
         self.latest: RefereeState | None = None
+        self.frozen = False
         self._reader = shared_subscription(node, RefereeState, REFEREE_TOPIC, self._on_state,
                                            LATCHED)
 
     def _on_state(self, message: RefereeState) -> None:
-        self.latest = message
+        if not self.frozen:
+            self.latest = message
+
+    def freeze(self) -> None:
+        """Keep the referee's books as they are now: the mission has ended, whatever the
+        simulator goes on counting while the run shuts down."""
+        self.frozen = True
 
     @property
     def completed(self) -> bool:

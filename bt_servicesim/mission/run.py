@@ -23,15 +23,14 @@ context down, so the run puts Python's handlers back: Ctrl-C must reach the run 
 
 from __future__ import annotations
 
-import json
+import os
 import signal
 import sys
 import time
+import traceback
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-import py_trees
 import rclpy
 from rclpy.action import ActionClient
 from rclpy.executors import Executor
@@ -40,32 +39,24 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from servicesim_competition.srv import NewTask
 
-from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_COMPLETED, EXIT_FAILED, EXIT_INTERRUPTED
+from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_COMPLETED, EXIT_FAILED
 from bt_servicesim.mission.progress import ProgressView
 from bt_servicesim.mission.referee_monitor import RefereeMonitor
+from bt_servicesim.mission.report import write_report
+from bt_servicesim.mission.run_records import RunRecords
 from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.simulator_process import SimulatorProcess
-from bt_servicesim.records.mcap import (
-    MCAP_NAME,
-    TASK_TOPIC,
-    TREE_TOPIC,
-    McapRecorder,
-    TaskTopic,
-    TreeTopic,
+from bt_servicesim.mission.stopping import (
+    Terminated,
+    exit_code_for,
+    hold_stop_signals,
+    stop_signals_raise,
 )
-from bt_servicesim.records.trajectory import (
-    TRAJECTORY_NAME,
-    boxes_from_blackboard,
-    render_trajectory,
-    trace_from_recording,
-)
-from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 from bt_servicesim.ros.node import ExecutiveNode
+from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
-from bt_servicesim.tree.shape import ShadowTree
 
-FINAL_TREE_NAME = "final_tree.txt"
-
+TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
 DISCOVERY_SETTLE_S = 2.0  # wall seconds for the simulator to discover the clients set up
 SERVER_WAIT_LIMIT_S = 30.0  # wall seconds the run waits for every server its executive calls
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
@@ -85,17 +76,36 @@ class MissionRun:
     ) -> None:
         self.settings = settings
         self.make_executive = make_executive
-        self.simulator = SimulatorProcess(
+        self.simulator = None if settings.attach else SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
             log_path=settings.out / "sim.log", extra_args=extra_sim_args,
         )
         self.started_wall = time.monotonic()
         self.failure: str | None = None
+        self.traceback: str | None = None
 
     def execute(self) -> int:
-        self.simulator.start()
-        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-        node = ExecutiveNode("bt_servicesim_executive")
+        """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
+        stop_signals_raise()
+        write_report(self.settings.out / REPORT_NAME, self._header("running"))
+        try:
+            if self.simulator is not None:
+                self.simulator.start()
+            rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+            return self._execute_on(ExecutiveNode("bt_servicesim_executive"))
+        except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
+            hold_stop_signals()
+            self.failure = f"stopped by {_signal_name(stop)} while starting"
+            write_report(self.settings.out / REPORT_NAME,
+                         {**self._header("interrupted"), "failure": self.failure})
+            return exit_code_for(stop)
+        finally:
+            hold_stop_signals()
+            if self.simulator is not None:
+                self.simulator.stop()
+            rclpy.try_shutdown()
+
+    def _execute_on(self, node: ExecutiveNode) -> int:
         executor = events_executor()
         executor.add_node(node)
         monitor = RefereeMonitor(node)
@@ -104,21 +114,29 @@ class MissionRun:
                              tree_file=self.settings.tree)
         try:
             code = self._run(node, executor, monitor, executive, records)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, Terminated) as stop:
+            hold_stop_signals()
+            monitor.freeze()
             executive.interrupt()
             self._spin_for(executor, 0.5)
-            self.failure = "interrupted (Ctrl-C)"
-            code = EXIT_INTERRUPTED
-        finally:
+            self.failure = f"interrupted ({_signal_name(stop)})"
+            code = exit_code_for(stop)
+        except Exception as error:  # a bug of the run's own: still stop cleanly and report
+            hold_stop_signals()
+            monitor.freeze()
+            self.failure = f"the run failed: {type(error).__name__}: {error}"
+            self.traceback = "".join(traceback.format_exception(error))
+            code = EXIT_FAILED
+        hold_stop_signals()
+        if self.simulator is not None:
             self.simulator.stop()
         records.finish(title=self._title(monitor))
         self._finish(monitor, code, executive)
         executor.shutdown()
         node.destroy_node()
-        rclpy.try_shutdown()
         return code
 
-    def _run(self, node: Node, executor: Executor, monitor: RefereeMonitor,
+    def _run(self, node: ExecutiveNode, executor: Executor, monitor: RefereeMonitor,
              executive: Executive, records: RunRecords) -> int:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
@@ -136,35 +154,52 @@ class MissionRun:
             now_ns = node.get_clock().now().nanoseconds
             records.note_phase(executive.phase())
             view.update(executive=executive, monitor=monitor, sim_time_s=now_ns / 1e9)
+            if node.callback_error is not None and not executive.finished:
+                return self._fail(f"a callback raised {node.callback_error}", executive, node)
             if time.monotonic() >= next_exit_check:  # a system call: ten times a wall second
                 next_exit_check = time.monotonic() + SIMULATOR_CHECK_PERIOD_S
-                if self.simulator.exit_code() is not None:
-                    self.failure = f"the simulator exited: {self.simulator.last_error()}"
-                    executive.interrupt()
-                    return EXIT_FAILED
+                if self.simulator is not None and self.simulator.exit_code() is not None:
+                    return self._fail(self.simulator.describe_exit(), executive, node)
             if now_ns > limit_ns:
-                self.failure = "the mission tree outlived its time limit"
-                executive.interrupt()
-                return EXIT_FAILED
-        self._spin_until(executor, lambda: monitor.completed, FINAL_STATE_WAIT_S)
-        view.close(executive=executive, monitor=monitor, sim_time_s=_sim_seconds(node))
+                return self._fail("the mission tree outlived its time limit", executive, node)
+        if _succeeded(executive):  # the referee books checkpoint 4 a moment after the tree
+            self._spin_until(executor, lambda: monitor.completed, FINAL_STATE_WAIT_S)
+        monitor.freeze()  # the report is the referee's books when the mission ended
+        view.close(executive=executive, monitor=monitor, sim_time_s=sim_now_s(node.get_clock()))
         if not monitor.completed:
-            self.failure = f"the mission tree ended with {executive.outcome.name}" if (
-                executive.outcome) else "the mission did not end"
+            self.failure = self._ending(executive, node)
         return EXIT_COMPLETED if monitor.completed else EXIT_FAILED
+
+    def _fail(self, failure: str, executive: Executive, node: ExecutiveNode) -> int:
+        """End the mission now, for ``failure``; the traceback of a callback's error is kept."""
+        self.failure = failure
+        self.traceback = self.traceback or node.callback_traceback
+        executive.interrupt()
+        return EXIT_FAILED
+
+    def _ending(self, executive: Executive, node: ExecutiveNode) -> str:
+        """Why a mission that ended did not complete."""
+        error = getattr(executive, "error", None)
+        if error:
+            self.traceback = node.callback_traceback
+            return f"the mission tree raised {error}"
+        if executive.outcome is not None:
+            return f"the mission tree ended with {executive.outcome.name}"
+        return "the mission did not end"
 
     def _wait_for_simulator(self, node: Node, executor: Executor) -> int | None:
         """Until /clock runs and the referee answers; an exit code if the simulator refused."""
         client = node.create_client(NewTask, "/servicesim/new_task")
         deadline = time.monotonic() + STARTUP_LIMIT_S
         while not (client.service_is_ready() and node.get_clock().now().nanoseconds > 0):
-            code = self.simulator.exit_code()
+            code = None if self.simulator is None else self.simulator.exit_code()
             if code is not None:
-                self.failure = f"simulator: {self.simulator.last_error()}"
+                self.failure = self.simulator.describe_exit()
                 print(f"python -m bt_servicesim.run: error: {self.failure}", file=sys.stderr)
                 return EXIT_BAD_INPUT if code == EXIT_BAD_INPUT else EXIT_FAILED
             if time.monotonic() > deadline:
-                self.failure = f"the simulator did not come up within {STARTUP_LIMIT_S:.0f} s"
+                backend = "the simulator" if self.simulator else "no backend (--attach)"
+                self.failure = f"{backend} did not come up within {STARTUP_LIMIT_S:.0f} s"
                 return EXIT_FAILED
             executor.spin_once(timeout_sec=0.1)
         node.destroy_client(client)
@@ -198,20 +233,36 @@ class MissionRun:
                 f"{done}/4 checkpoints, score {fields['score']:.1f}, "
                 f"{fields['sim_time_s']:.0f} s sim")
 
-    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
-        report: dict[str, Any] = {
-            **monitor.report_fields(),
-            "wall_time_s": round(time.monotonic() - self.started_wall, 3),
+    def _header(self, status: str) -> dict[str, Any]:
+        """What the report says of the run itself, from its start."""
+        return {
+            "status": status,
+            "run_id": self.settings.run_id,
             "seed": self.settings.seed,
             "world": str(self.settings.world) if self.settings.world else "default",
             "executive": self.settings.executive,
+            "ros_domain_id": int(os.environ.get("ROS_DOMAIN_ID", "0") or 0),
+            "attached": self.settings.attach,
+        }
+
+    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
+        fields = monitor.report_fields()
+        status = ("completed" if fields["completed"] else
+                  "interrupted" if code >= 128 else "failed")
+        if self.traceback:
+            (self.settings.out / TRACEBACK_NAME).write_text(self.traceback)
+        report: dict[str, Any] = {
+            **self._header(status),
+            **fields,
+            "wall_time_s": round(time.monotonic() - self.started_wall, 3),
             "exit_code": code,
             "failure": self.failure,
             # where a failed run stood: the phase and the running behaviour with its feedback
             "last_activity": (f"{executive.phase()}: {executive.activity()}"
                               if self.failure else None),
+            "traceback": TRACEBACK_NAME if self.traceback else None,
         }
-        (self.settings.out / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n")
+        write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"
         print(f"mission {verdict}: score {report['score']:.1f}, "
               f"{report['sim_time_s']:.1f} s sim, {report['wall_time_s']:.1f} s wall; "
@@ -237,67 +288,9 @@ def events_executor() -> Executor:
     return executor
 
 
-def _sim_seconds(node: Node) -> float:
-    return node.get_clock().now().nanoseconds / 1e9
+def _succeeded(executive: Executive) -> bool:
+    return executive.outcome is not None and executive.outcome.name == "SUCCESS"
 
 
-class RunRecords:
-    """The run's records in its directory (see the module docstring), made on ``node``."""
-
-    def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path) -> None:
-        self.out = out
-        self.tree = behaviour_tree_of(executive)
-        self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
-                                 own_topics=(TASK_TOPIC, TREE_TOPIC))
-        self.task = TaskTopic(node=node, recorder=self.mcap)
-        # the picture is drawn from the recording after the run: decoding the people's
-        # positions as they come would cost the executive a tenth of its time
-        self.phases: list[tuple[float, str]] = []
-        self._node = node
-        self.tree_log: TreeLog | None = None
-        self.tree_topic: TreeTopic | None = None
-        if self.tree is not None:
-            self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
-                                    sim_time_s=lambda: _sim_seconds(node),
-                                    tree_file=str(tree_file))
-            self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
-            self.tree_log.listeners.append(self.tree_topic.publish)
-            self.tree.add_post_tick_handler(self.tree_log)
-
-    def note_phase(self, phase: str) -> None:
-        """The mission's phase now (the executive's ``phase()``), kept for the picture."""
-        if not self.phases or self.phases[-1][1] != phase:
-            self.phases.append((_sim_seconds(self._node), phase))
-
-    def finish(self, *, title: str) -> None:
-        """Write what is written at the end and close the rest; a failure is a warning."""
-        steps: list[tuple[str, Callable[[], None]]] = [
-            (MCAP_NAME, self._close_recording),  # the picture is drawn from the finished recording
-            (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
-        ]
-        if self.tree_log is not None:
-            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
-        for name, step in steps:
-            try:
-                step()
-            except Exception as error:  # a record is not worth losing the report for
-                print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
-
-    def _close_recording(self) -> None:
-        if self.tree_topic is not None:
-            self.tree_topic.flush()  # the last state, if the period held it back
-        self.mcap.close()
-
-    def _render_trajectory(self, title: str) -> None:
-        boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
-        trace = trace_from_recording(self.out / MCAP_NAME, phases=self.phases)
-        render_trajectory(trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
-                          title=title)
-
-    def _write_final_tree(self) -> None:
-        """The last *ticked* state: after Ctrl-C the live tree has been stopped (all INVALID)."""
-        assert self.tree_log is not None
-        shadow = ShadowTree(self.tree_log.shape)
-        nodes, tip = self.tree_log.latest
-        shadow.show(nodes, tip=tip)
-        (self.out / FINAL_TREE_NAME).write_text(shadow.text(), encoding="utf-8")
+def _signal_name(stop: BaseException) -> str:
+    return "SIGINT" if isinstance(stop, KeyboardInterrupt) else str(stop)

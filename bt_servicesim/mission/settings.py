@@ -10,10 +10,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S", "RunSettings"]
+__all__ = [
+    "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S",
+    "RunSettings",
+]
 
 EXECUTIVES = ("bt", "baseline")
 """The behaviour tree, and the seed's state machine."""
+DEFAULT_SPEED = 10.0
+"""Sim seconds per wall second unless the run names another speed."""
 DEFAULT_TIME_LIMIT_S = 900.0
 """The mission time limit in sim seconds, unless the run names another."""
 STARTUP_LIMIT_S = 60.0
@@ -34,3 +39,7 @@ class RunSettings:
     time_limit_s: float
     headless: bool
     executive: str
+    run_id: str = ""
+    """Carried by the report, so that whoever started the run can tell the report is its own."""
+    attach: bool = False
+    """Start no simulator: run against the backend already on the environment's ROS domain."""

@@ -3,11 +3,16 @@
 The executive never imports the simulator: the run command starts it as its own process
 (``python -m servicesim_sim``), so it can be swapped for Gazebo + Nav2 by starting something
 else. Its output goes to a log file in the run directory; when it refuses its input (a broken
-world file, say) its last error line is what the user sees.
+world file, say) its last error line is what the user sees, and when it dies the run says how.
+
+The simulator never outlives the run. The run stops it on every way out it sees; for the one
+it cannot see, a SIGKILL of the run, the simulator is started with Linux's parent-death signal
+(``PR_SET_PDEATHSIG``): the kernel sends it SIGTERM the moment the run is gone.
 """
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import subprocess
@@ -15,6 +20,7 @@ import sys
 from pathlib import Path
 
 SIMULATOR_MODULE = "servicesim_sim"
+PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
 
 
 class SimulatorProcess:
@@ -39,11 +45,27 @@ class SimulatorProcess:
         self._process: subprocess.Popen[bytes] | None = None
 
     def start(self) -> None:
+        parent = os.getpid()
         with self.log_path.open("wb") as log:
             self._process = subprocess.Popen(
                 self.command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                 env=os.environ.copy(), start_new_session=True,
+                preexec_fn=lambda: _die_with(parent),
             )
+
+    @property
+    def pid(self) -> int | None:
+        return None if self._process is None else self._process.pid
+
+    def describe_exit(self) -> str:
+        """How the simulator ended, for the report: the signal that killed it, or its code and
+        last line."""
+        code = self.exit_code()
+        if code is None:
+            return "the simulator is still running"
+        if code < 0:
+            return f"the simulator was killed by {signal.Signals(-code).name}"
+        return f"the simulator exited with code {code}: {self.last_error()}"
 
     def exit_code(self) -> int | None:
         """None while it runs."""
@@ -67,3 +89,12 @@ class SimulatorProcess:
         except subprocess.TimeoutExpired:
             self._process.kill()
             self._process.wait()
+
+
+def _die_with(parent: int) -> None:
+    """In the child, before it runs the simulator: SIGTERM when ``parent`` dies."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
+    if os.getppid() != parent:  # the run died before the request took effect
+        os.kill(os.getpid(), signal.SIGTERM)

@@ -16,10 +16,21 @@ simulator runs 50 times faster than real time (the run itself uses the ``EventsE
   client per node (:func:`shared_client`, :func:`shared_action_client`). A client serves any
   number of requests or goals at once, each with its own future, so sharing changes nothing
   for a behaviour but the number of DDS endpoints and wait-set entries.
+
+The ``EventsExecutor`` has two known crashes in the Kilted wheels, and the node keeps clear of
+both. A callback that raises takes the whole process down with a segmentation fault
+(ros2/rclpy#1641, fixed upstream later): so every subscription and timer callback made on this
+node runs guarded (:meth:`ExecutiveNode.guarded`); what it raised is kept in
+:attr:`ExecutiveNode.callback_error` for the run to fail the mission with, and the process goes
+on. Destroying publishers or subscriptions that carry QoS-event callbacks while discovery
+churns crashes it too (ros2/rclpy#1644): this node gives none of its entities event callbacks
+unless asked to.
 """
 
 from __future__ import annotations
 
+import traceback
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionClient
@@ -44,11 +55,39 @@ class ExecutiveNode(Node):
         ]
         super().__init__(name, start_parameter_services=False,
                          parameter_overrides=overrides, **kwargs)
+        self.callback_error: str | None = None
+        """The first exception a guarded callback raised, as one line; None while none did."""
+        self.callback_traceback: str | None = None
 
-    def create_subscription(self, *args: Any, **kwargs: Any) -> Any:
+    def guarded(self, callback: Callable[..., Any]) -> Callable[..., Any]:
+        """``callback``, but an exception it raises is kept (the first) instead of escaping."""
+        def call(*args: Any) -> Any:
+            try:
+                return callback(*args)
+            except Exception as error:  # anything escaping kills the process: keep it instead
+                self.note_error(error, where=getattr(callback, "__qualname__", repr(callback)))
+                return None
+
+        return call
+
+    def note_error(self, error: BaseException, *, where: str) -> None:
+        """Keep the first error a callback or a tick raised, with its traceback."""
+        if self.callback_error is None:
+            text = " ".join(str(error).split())
+            self.callback_error = f"{type(error).__name__} in {where}: {text}"
+            self.callback_traceback = "".join(traceback.format_exception(error))
+
+    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., Any],
+                            qos_profile: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks",
                           SubscriptionEventCallbacks(use_default_callbacks=False))
-        return super().create_subscription(*args, **kwargs)
+        return super().create_subscription(msg_type, topic, self.guarded(callback),
+                                           qos_profile, **kwargs)
+
+    def create_timer(self, timer_period_sec: float, callback: Callable[..., Any] | None,
+                     *args: Any, **kwargs: Any) -> Any:
+        guarded = None if callback is None else self.guarded(callback)
+        return super().create_timer(timer_period_sec, guarded, *args, **kwargs)
 
     def create_publisher(self, *args: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))

@@ -54,6 +54,8 @@ class SimTicker:
         self._cancelled = False
         self._timer = None
         self._jump_handle = None
+        self.error: Exception | None = None
+        """What the callback raised, if it did: the ticker stops then."""
         if isinstance(self._clock, ROSClock) and self._clock.ros_time_is_active:
             if node.executor is None:
                 raise RuntimeError(f"{node.get_name()}: add the node to an executor before "
@@ -94,5 +96,15 @@ class SimTicker:
         self._tick()
 
     def _tick(self) -> None:
-        if not self._cancelled:
+        if self._cancelled:
+            return
+        try:
             self.callback()
+        except Exception as error:  # escaping an executor's callback kills the process
+            self.cancel()
+            self.error = error
+            note = getattr(self.node, "note_error", None)
+            if note is not None:
+                note(error, where="a tick")
+            else:
+                self.node.get_logger().error(f"tick raised {type(error).__name__}: {error}")

@@ -56,6 +56,8 @@ class MissionExecutive:
         self.tree = LeanBehaviourTree(root=root)
         self.tick_period_s = tick_period_s
         self.outcome: Status | None = None
+        self.error: str | None = None
+        """What a tick raised, as one line, when the mission failed because of it."""
         self.ticks = 0
         self._ticker: SimTicker | None = None
         self._phase: tuple[int, str] = (-1, "-")
@@ -78,11 +80,29 @@ class MissionExecutive:
     def tick(self) -> None:
         if self.finished:
             return
-        self.tree.tick()
+        try:
+            self.tree.tick()
+        except Exception as error:  # a behaviour's bug ends the mission, not the process
+            self._fail(error)
+            return
         self.ticks += 1
         if self.tree.root.status in (Status.SUCCESS, Status.FAILURE):
             self.outcome = self.tree.root.status
             self.stop_ticking()
+
+    def _fail(self, error: Exception) -> None:
+        """A tick raised: the mission fails with what it raised, and nothing stays in flight."""
+        self.outcome = Status.FAILURE
+        self.stop_ticking()
+        where = short_label(tip.name) if (tip := self.tree.root.tip()) is not None else "the tree"
+        self.error = f"{type(error).__name__} in {where}: {' '.join(str(error).split())}"
+        note = getattr(self.node, "note_error", None)
+        if note is not None:
+            note(error, where=where)
+        try:
+            self.tree.root.stop(Status.INVALID)
+        except Exception as stop_error:  # stopping a broken tree may raise again: keep the first
+            self.node.get_logger().warning(f"stopping the tree raised {stop_error!r}")
 
     def stop_ticking(self) -> None:
         if self._ticker is not None:

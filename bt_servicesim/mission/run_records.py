@@ -1,0 +1,99 @@
+"""The records a run keeps in its directory, made on the executive's node.
+
+The tree's snapshot log (``tree_log.jsonl``) and its final tick (``final_tree.txt``) when the
+executive is a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS traffic
+(``run.mcap``). They are written on every way out, a signal included; a record that cannot be
+written costs a warning line, never the report.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import py_trees
+from rclpy.node import Node
+
+from bt_servicesim.records.mcap import (
+    MCAP_NAME,
+    TASK_TOPIC,
+    TREE_TOPIC,
+    McapRecorder,
+    TaskTopic,
+    TreeTopic,
+)
+from bt_servicesim.records.trajectory import (
+    TRAJECTORY_NAME,
+    boxes_from_blackboard,
+    render_trajectory,
+    trace_from_recording,
+)
+from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
+from bt_servicesim.ros.sim_clock import sim_now_s
+from bt_servicesim.tree.executive import Executive
+from bt_servicesim.tree.shape import ShadowTree
+
+FINAL_TREE_NAME = "final_tree.txt"
+
+
+class RunRecords:
+    """The run's records in its directory (see the module docstring), made on ``node``."""
+
+    def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path) -> None:
+        self.out = out
+        self.tree = behaviour_tree_of(executive)
+        self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
+                                 own_topics=(TASK_TOPIC, TREE_TOPIC))
+        self.task = TaskTopic(node=node, recorder=self.mcap)
+        # the picture is drawn from the recording after the run: decoding the people's
+        # positions as they come would cost the executive a tenth of its time
+        self.phases: list[tuple[float, str]] = []
+        self._node = node
+        self.tree_log: TreeLog | None = None
+        self.tree_topic: TreeTopic | None = None
+        if self.tree is not None:
+            self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
+                                    sim_time_s=lambda: sim_now_s(node.get_clock()),
+                                    tree_file=str(tree_file))
+            self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
+            self.tree_log.listeners.append(self.tree_topic.publish)
+            self.tree.add_post_tick_handler(self.tree_log)
+
+    def note_phase(self, phase: str) -> None:
+        """The mission's phase now (the executive's ``phase()``), kept for the picture."""
+        if not self.phases or self.phases[-1][1] != phase:
+            self.phases.append((sim_now_s(self._node.get_clock()), phase))
+
+    def finish(self, *, title: str) -> None:
+        """Write what is written at the end and close the rest; a failure is a warning."""
+        steps: list[tuple[str, Callable[[], None]]] = [
+            (MCAP_NAME, self._close_recording),  # the picture is drawn from the finished recording
+            (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
+        ]
+        if self.tree_log is not None:
+            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
+        for name, step in steps:
+            try:
+                step()
+            except Exception as error:  # a record is not worth losing the report for
+                print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
+
+    def _close_recording(self) -> None:
+        if self.tree_topic is not None:
+            self.tree_topic.flush()  # the last state, if the period held it back
+        self.mcap.close()
+
+    def _render_trajectory(self, title: str) -> None:
+        boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
+        trace = trace_from_recording(self.out / MCAP_NAME, phases=self.phases)
+        render_trajectory(trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
+                          title=title)
+
+    def _write_final_tree(self) -> None:
+        """The last *ticked* state: after Ctrl-C the live tree has been stopped (all INVALID)."""
+        assert self.tree_log is not None
+        shadow = ShadowTree(self.tree_log.shape)
+        nodes, tip = self.tree_log.latest
+        shadow.show(nodes, tip=tip)
+        (self.out / FINAL_TREE_NAME).write_text(shadow.text(), encoding="utf-8")
