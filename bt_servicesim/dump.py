@@ -121,6 +121,11 @@ def _check_output(args: argparse.Namespace) -> None:
         raise ValueError(f"--out {args.out}: is a directory; give a file name")
     if not args.out.parent.is_dir():
         raise ValueError(f"--out {args.out}: directory {args.out.parent} does not exist")
+    suffix = args.out.suffix.lower().lstrip(".")
+    if suffix in FORMATS and suffix != args.output_format:
+        raise ValueError(f"--out {args.out}: a .{suffix} name for --format "
+                         f"{args.output_format}; name the file .{args.output_format} or pass "
+                         f"--format {suffix}")
 
 
 def _write(prog: str, args: argparse.Namespace, root: py_trees.behaviour.Behaviour,

@@ -14,6 +14,7 @@ the first record.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -104,6 +105,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise TreeLogError(f"{args.run}: no {LOG_NAME} here (was the run given --out?)")
         if args.tick is not None and args.tick < 0:
             raise TreeLogError(f"--tick {args.tick}: must be 0 or more")
+        if args.time is not None and not math.isfinite(args.time):
+            raise TreeLogError(f"--time {args.time}: must be a finite number of sim seconds")
         history = read_tree_log(path)
         start = state_index(history, tick=args.tick, time=args.time)
     except TreeLogError as error:

@@ -23,6 +23,7 @@ from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.behaviours import node_registry
 from bt_servicesim.tree.shape import short_label
+from bt_servicesim.tree.validation import tree_file_problems
 
 DEFAULT_TREE = Path(__file__).resolve().parents[2] / "trees" / "servicesim_mission.xml"
 PHASES_ATTRIBUTE = "phases"
@@ -47,6 +48,8 @@ def load_mission_tree(
         raise MissionTreeError(f"{tree_file}: no such tree file")
     _check_xml(tree_file)
     registry = node_registry()
+    for problem in tree_file_problems(ElementTree.parse(tree_file).getroot(), registry):
+        raise MissionTreeError(f"{tree_file}: {problem}")
     overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
     try:
         root = parse_behaviour_tree_xml(
