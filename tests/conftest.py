@@ -1,19 +1,27 @@
-"""Test-wide ROS 2 isolation.
+"""Test-wide fixtures: ROS 2 isolation, a clean blackboard, sim-time graphs.
 
 Every test process talks DDS on loopback only, in a ROS domain of its own: the pytest-xdist
 worker index and the id of the pytest run pick the domain, so parallel workers and two test
 runs at the same time never see each other's nodes. This runs at import, before any test
 calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
+
+Every test starts and ends with an empty py_trees blackboard. The fakes these fixtures build are
+in ``fakes.py``.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import pytest
+from py_trees.blackboard import Blackboard
 
 from bt_servicesim.ros.environment import apply_localhost_defaults
+
+if TYPE_CHECKING:
+    from tests.fakes import SensorWorld, SimTimeGraph
 
 DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
 
@@ -41,3 +49,31 @@ def ros_context() -> Iterator[object]:
         yield context
     finally:
         context.try_shutdown()
+
+
+@pytest.fixture(autouse=True)
+def clean_blackboard() -> Iterator[None]:
+    """An empty blackboard before and after every test."""
+    Blackboard.clear()
+    yield
+    Blackboard.clear()
+
+
+@pytest.fixture
+def sim_clock(ros_context: object) -> Iterator[SimTimeGraph]:
+    """A node on sim time ("executive") and a simulator publishing /clock, spun by the test."""
+    from tests.fakes import SimTimeGraph
+
+    graph = SimTimeGraph(ros_context)
+    yield graph
+    graph.shutdown()
+
+
+@pytest.fixture
+def world(ros_context: object) -> Iterator[SensorWorld]:
+    """:func:`sim_clock` whose simulator also publishes the robot's RFID and odometry."""
+    from tests.fakes import SensorWorld
+
+    graph = SensorWorld(ros_context)
+    yield graph
+    graph.shutdown()

@@ -137,12 +137,22 @@ def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None)
 
 
 def leaf_ports(tree_file: Path) -> dict[str, set[str]]:
-    """Every leaf tag the file uses, with the attributes it gives it (minus ``name``)."""
+    """Every leaf tag the file uses, with the attributes it gives it (minus ``name``).
+
+    py_trees' composites and decorators, and this project's own controls and decorators
+    (a ``RecoveryNode``), are structure, not leaves: the script never stands in for them.
+    """
+    from bt_servicesim.behaviours import node_registry
+    from bt_servicesim.behaviours.node import kind_of
+
+    structure = {tag for tag, cls in node_registry().items()
+                 if kind_of(cls) in ("Control", "Decorator")}
     ports: dict[str, set[str]] = defaultdict(set)
     decorators = {name.lower() for name in dir(py_trees.decorators)}
     for tree in ElementTree.parse(tree_file).getroot().findall("BehaviorTree"):
         for element in tree.iter():
-            if element.tag in NOT_LEAVES or element.tag.lower() in decorators:
+            if (element.tag in NOT_LEAVES or element.tag.lower() in decorators
+                    or element.tag in structure):
                 continue
             ports[element.tag].update(key for key in element.attrib if key != "name")
     return ports
@@ -150,9 +160,12 @@ def leaf_ports(tree_file: Path) -> dict[str, set[str]]:
 
 def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[..., Any]]:
     from bt_servicesim.behaviours import node_registry
+    from bt_servicesim.behaviours.node import kind_of
 
     real = node_registry()
-    registry: dict[str, Callable[..., Any]] = {tag: real[tag] for tag in KEEP_REAL}
+    structure = {tag: cls for tag, cls in real.items() if kind_of(cls) in ("Control", "Decorator")}
+    registry: dict[str, Callable[..., Any]] = {
+        **structure, **{tag: real[tag] for tag in KEEP_REAL}}
     for tag, ports in leaf_ports(tree_file).items():
         if tag not in KEEP_REAL:
             registry[tag] = _scripted_leaf(tag, ports, script, real.get(tag))

@@ -1,0 +1,60 @@
+"""Bad input to ``python -m bt_servicesim.run`` is one line on stderr and exit status 2."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from tests.fakes import run_module
+
+
+def run(*arguments: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return run_module("bt_servicesim.run", "--headless", *arguments, cwd=cwd)
+
+
+@pytest.mark.parametrize(
+    ("arguments", "named"),
+    [
+        (["--world", "no/such/world.yaml"], "no/such/world.yaml"),
+        (["--seed", "-3"], "--seed"),
+        (["--seed", "seven"], "--seed"),
+        (["--speed", "-1"], "--speed"),
+        (["--time-limit", "0"], "--time-limit"),
+        (["--tree", "no_such_tree.xml"], "no_such_tree.xml"),
+        (["--executive", "magic"], "--executive"),
+        (["--frobnicate"], "--frobnicate"),
+    ],
+)
+def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[str],
+                                               named: str) -> None:
+    result = run(*arguments, cwd=tmp_path)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert named in lines[0]
+    assert not (tmp_path / "runs").exists(), "nothing is started or written on bad input"
+
+
+@pytest.mark.parametrize(
+    ("content", "problem"),
+    [
+        ("<root><BehaviorTree ID='M'>", "not well-formed"),
+        ("<tree/>", "expected <root>"),
+        ("<root main_tree_to_execute='M'/>", "no <BehaviorTree>"),
+        ("<root main_tree_to_execute='M'><BehaviorTree ID='M'><Teleport name='T'/>"
+         "</BehaviorTree></root>", "Teleport"),
+        ("<root main_tree_to_execute='Other'><BehaviorTree ID='M'><Sequence name='S'/>"
+         "</BehaviorTree></root>", "Other"),
+    ],
+)
+def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content: str,
+                                                        problem: str) -> None:
+    tree = tmp_path / "broken.xml"
+    tree.write_text(content)
+    result = run("--tree", str(tree), cwd=tmp_path)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "broken.xml" in lines[0] and problem in lines[0]

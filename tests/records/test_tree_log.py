@@ -1,0 +1,112 @@
+"""The snapshot log: what a run writes tick by tick, and what reading it back reconstructs.
+
+A small XML tree (a sequence, a subtree with a fallback, a decorator) of scripted leaves
+(``tests.fakes.RecordedRun``) runs to its end with the log attached as a post-tick handler; the
+live tree's statuses are captured at every tick and compared with what the log says about that
+tick.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import py_trees
+import pytest
+
+from bt_servicesim.records.drawing import tree_text
+from bt_servicesim.records.tree_log import TreeLog, TreeLogError, read_tree_log
+from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
+from tests.fakes import RecordedRun, errand_tree
+
+Status = py_trees.common.Status
+
+def test_reading_the_log_gives_back_every_nodes_status_and_feedback_at_every_tick(
+        tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    history = read_tree_log(run.path)
+    assert history.tree_file == "errand.xml"
+    assert history.shape == TreeShape.of(run.tree.root)
+    for tick, truth in run.truth.items():
+        assert history.at_tick(tick).nodes == truth, f"tick {tick}"
+    assert history.states[-1].root == Status.SUCCESS
+
+
+def test_the_log_holds_the_blackboard_values_as_they_changed(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    history = read_tree_log(run.path)
+    for tick, values in run.blackboard.items():
+        logged = history.at_tick(tick).blackboard
+        assert logged == {key: repr(value) for key, value in values.items()}, f"tick {tick}"
+    progress = [state.blackboard.get("/progress") for state in history.states]
+    assert "'Detour step 3'" in progress
+
+
+def test_a_line_is_written_only_when_something_changed(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    lines = [json.loads(line) for line in run.path.read_text().splitlines()]
+    assert lines[0]["kind"] == "tree"
+    ticks = lines[1:]
+    assert len(ticks) == run.log.records
+    assert ticks[0]["tick"] == 1 and len(ticks[0]["nodes"]) == len(lines[0]["nodes"])
+    assert all(0 < len(line["nodes"]) < len(lines[0]["nodes"]) for line in ticks[1:])
+    # ticking a finished tree again changes nothing, so nothing more is written
+    before = run.log.records
+    run.log(run.tree)
+    assert run.log.records == before
+
+
+def test_sim_time_and_tip_are_logged_with_each_change(tmp_path: Path) -> None:
+    run = RecordedRun(tmp_path)
+    history = read_tree_log(run.path)
+    first = history.at_tick(1)
+    assert first.sim_time_s == pytest.approx(100.0)
+    assert first.tip == "Errand.Approach"
+    assert history.at_time(100.25).tick == 3
+    assert history.at_tick(5).tip == "Errand.Deliver.Deliver.Detour"
+    assert history.at_tick(6).tip == "Errand.Linger"
+
+
+def test_asking_for_a_moment_before_the_first_record_is_an_error(tmp_path: Path) -> None:
+    history = read_tree_log(RecordedRun(tmp_path).path)
+    with pytest.raises(TreeLogError, match="first record is tick 1"):
+        history.at_tick(0)
+    with pytest.raises(TreeLogError, match="first record"):
+        history.at_time(3.0)
+
+
+@pytest.mark.parametrize(("content", "problem"), [
+    ("", "not a tree snapshot log"),
+    ('{"kind": "tick"}\n', "not a tree snapshot log"),
+    ('{"kind": "tree", "version": 99, "nodes": []}\n', "version 99"),
+    ('{"kind": "tree", "version": 1, "nodes": [{"key": "A"}]}\n', "malformed tree shape"),
+    ('{"kind": "tree", "version": 1, "nodes": [{"key": "A", "label": "A", "kind": "behaviour",'
+     ' "memory": false, "parent": null}]}\nnot json\n', "line 2: not JSON"),
+    ('{"kind": "tree", "version": 1, "nodes": [{"key": "A", "label": "A", "kind": "behaviour",'
+     ' "memory": false, "parent": null}]}\n{"kind": "tick", "tick": 1}\n', "line 2: malformed"),
+])
+def test_a_broken_log_is_one_clear_error_naming_the_file(tmp_path: Path, content: str,
+                                                         problem: str) -> None:
+    path = tmp_path / "tree_log.jsonl"
+    path.write_text(content)
+    with pytest.raises(TreeLogError, match=problem) as raised:
+        read_tree_log(path)
+    assert str(path) in str(raised.value) and "\n" not in str(raised.value)
+
+
+def test_the_latest_state_survives_an_interrupt(tmp_path: Path) -> None:
+    """After Ctrl-C the live tree is stopped (all INVALID); the log still knows the last tick."""
+    tree = errand_tree(tmp_path)
+    log = TreeLog(tree=tree, path=tmp_path / "tree_log.jsonl", sim_time_s=lambda: 7.0)
+    tree.add_post_tick_handler(log)
+    for _ in range(4):
+        tree.tick()
+    drawn = tree_text(tree.root)
+    tree.root.stop(Status.INVALID)  # what stopping a running tree does to it
+    assert all(behaviour.status == Status.INVALID for behaviour in walk(tree.root))
+    nodes, tip = log.latest
+    shadow = ShadowTree(log.shape)
+    shadow.show(nodes, tip=tip)
+    assert shadow.text() == drawn
+    assert tip == "Errand.Deliver.Deliver.Detour"
+    log.close()

@@ -1,0 +1,142 @@
+"""Shared subscriptions: one per topic and node while the QoS allows, every waiting message to
+every reader in one wake-up, bytes or decoded, and gone with the last reader."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import (
+    DurabilityPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_profile_sensor_data,
+)
+from rclpy.serialization import deserialize_message
+from std_msgs.msg import Int32
+
+from bt_servicesim.ros.shared_subscription import shared_subscription
+from tests.fakes import spin_until, wait_for_subscription
+
+RELIABLE_50 = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+@pytest.fixture
+def nodes(ros_context: Context) -> Iterator[tuple[Node, Node, SingleThreadedExecutor]]:
+    reader = Node("shared_reader", context=ros_context)
+    writer = Node("shared_writer", context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(reader)
+    yield reader, writer, executor
+    executor.shutdown()
+    reader.destroy_node()
+    writer.destroy_node()
+
+
+def subscription_count(node: Node) -> int:
+    return len(list(node.subscriptions))
+
+
+def burst_then_one_wake_up(writer: Node, executor: SingleThreadedExecutor, *,
+                           count: int) -> None:
+    """Publish 0..count-1 on /shared/a, let them all arrive, then spin the reader once."""
+    publisher = writer.create_publisher(Int32, "/shared/a", RELIABLE_50)
+    wait_for_subscription(publisher)
+    for value in range(count):
+        publisher.publish(Int32(data=value))
+    time.sleep(0.3)  # all of them delivered to the reader's queue
+    executor.spin_once(timeout_sec=5.0)
+
+
+def test_readers_asking_no_more_than_the_first_share_its_subscription(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, _, _ = nodes
+    shared_subscription(node, Int32, "/shared/a", print, RELIABLE_50, raw=True)
+    shared_subscription(node, Int32, "/shared/a", print, qos_profile_sensor_data)
+    shared_subscription(node, Int32, "/shared/a", print, 10)
+    assert subscription_count(node) == 1
+    shared_subscription(node, Int32, "/shared/a", print, LATCHED)  # asks for transient local
+    shared_subscription(node, Int32, "/shared/a", print, 100)  # asks for a deeper history
+    shared_subscription(node, Int32, "/shared/b", print, 10)  # another topic
+    assert subscription_count(node) == 4
+
+
+def test_a_best_effort_subscription_is_not_shared_with_a_reader_wanting_reliable(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, _, _ = nodes
+    shared_subscription(node, Int32, "/shared/a", print, qos_profile_sensor_data)
+    shared_subscription(node, Int32, "/shared/a", print, 5)  # reliable, depth 5
+    assert subscription_count(node) == 2
+
+
+def test_one_wake_up_hands_every_waiting_message_to_every_reader(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, writer, executor = nodes
+    raw: list[bytes] = []
+    decoded: list[Int32] = []
+    also_decoded: list[Int32] = []
+    shared_subscription(node, Int32, "/shared/a", raw.append, RELIABLE_50, raw=True)
+    shared_subscription(node, Int32, "/shared/a", decoded.append, 10)
+    shared_subscription(node, Int32, "/shared/a", also_decoded.append, 10)
+    burst_then_one_wake_up(writer, executor, count=4)
+    assert [deserialize_message(data, Int32).data for data in raw] == [0, 1, 2, 3]
+    assert [message.data for message in decoded] == [0, 1, 2, 3]
+    assert all(a is b for a, b in zip(decoded, also_decoded, strict=True))  # decoded once
+
+
+def test_the_subscription_goes_with_its_last_reader(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, _, _ = nodes
+    first = shared_subscription(node, Int32, "/shared/a", print, 10)
+    second = shared_subscription(node, Int32, "/shared/a", print, 10)
+    first.cancel()
+    assert subscription_count(node) == 1
+    second.cancel()
+    assert subscription_count(node) == 0
+    shared_subscription(node, Int32, "/shared/a", print, 10)  # a new reader: a new one
+    assert subscription_count(node) == 1
+
+
+def test_a_latched_message_reaches_a_reader_that_joins_after_it_arrived(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, writer, executor = nodes
+    first: list[bytes] = []
+    shared_subscription(node, Int32, "/shared/latched", first.append, LATCHED, raw=True)
+    publisher = writer.create_publisher(Int32, "/shared/latched", LATCHED)
+    publisher.publish(Int32(data=1))
+    publisher.publish(Int32(data=7))
+    spin_until(executor, lambda: bool(first), "the latched message", limit_s=10.0, step_s=0.1)
+    late: list[Int32] = []
+    shared_subscription(node, Int32, "/shared/latched", late.append, LATCHED)
+    assert subscription_count(node) == 1
+    assert [message.data for message in late] == [7]  # the history DDS keeps: the last one
+
+
+def test_a_latest_only_reader_gets_the_newest_of_a_burst(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, writer, executor = nodes
+    every: list[int] = []
+    newest: list[int] = []
+    shared_subscription(node, Int32, "/shared/a", lambda m: every.append(m.data), RELIABLE_50)
+    shared_subscription(node, Int32, "/shared/a", lambda m: newest.append(m.data), 10,
+                        latest_only=True)
+    burst_then_one_wake_up(writer, executor, count=4)
+    assert every == [0, 1, 2, 3] and newest == [3]
+
+
+def test_a_volatile_reader_joining_a_latched_subscription_gets_no_old_message(
+        nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
+    node, writer, executor = nodes
+    first: list[bytes] = []
+    shared_subscription(node, Int32, "/shared/latched", first.append, LATCHED, raw=True)
+    writer.create_publisher(Int32, "/shared/latched", LATCHED).publish(Int32(data=7))
+    spin_until(executor, lambda: bool(first), "the latched message", limit_s=10.0, step_s=0.1)
+    late: list[Int32] = []
+    shared_subscription(node, Int32, "/shared/latched", late.append, 1)  # volatile
+    assert subscription_count(node) == 1 and late == []

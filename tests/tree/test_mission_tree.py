@@ -1,0 +1,381 @@
+"""The mission tree's structure, with scripted leaves: retries, exploration, re-acquiring, limits.
+
+The real tree file is parsed; every ROS-facing leaf is replaced by a scripted stand-in with the
+same ports (tests/mission_script.py), while the sim-time decorators are the real ones on a manual
+clock. Each test scripts what the world does and checks what the mission does about it.
+"""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+from bt_servicesim.tree.loading import DEFAULT_TREE
+from tests.mission_script import ManualClock, Script, matches, scripted_registry
+
+Status = py_trees.common.Status
+TICK_S = 0.1
+#: The robot never stands inside the pick-up area with the guest in range before navigation ends.
+NOT_IN_AREA = {"RobotInPickUpArea": [Status.FAILURE] * 100_000}
+
+
+def run_mission(script: Script, *, time_limit_s: float = 900.0,
+                max_ticks: int = 5000) -> tuple[Status, ManualClock]:
+    root = parse_behaviour_tree_xml(
+        str(DEFAULT_TREE), node_registry=scripted_registry(DEFAULT_TREE, script),
+        input_mappings={"time_limit": repr(time_limit_s)},
+    )
+    tree = py_trees.trees.BehaviourTree(root)
+    clock = ManualClock()
+    tree.setup(node=clock)
+    for _ in range(max_ticks):
+        tree.tick()
+        clock.advance(TICK_S)
+        if root.status in (Status.SUCCESS, Status.FAILURE):
+            return root.status, clock
+    raise AssertionError(f"mission still running after {max_ticks} ticks: {script.calls[-10:]}")
+
+
+def test_a_smooth_mission_visits_the_four_phases_in_order() -> None:
+    script = Script()
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    milestones = ["RequestNewTask", "LocaliseAtStart", "GetPickUpArea", "CallPickUpGuest",
+                  "GetDropOffArea", "CallDropOffGuest", "ComputeReturnGoal"]
+    positions = [next(i for i, c in enumerate(script.calls) if c.endswith(m)) for m in milestones]
+    assert positions == sorted(positions)
+    assert script.count("ResumeRunningTask") == 0
+    assert script.count("ClearCostmaps") == 0
+    assert script.count("PlanExploration") == 0
+
+
+def test_a_running_task_is_resumed_when_new_task_is_refused() -> None:
+    script = Script({"RequestNewTask": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("ResumeRunningTask") == 1
+
+
+def test_navigation_failures_climb_the_recovery_ladder_then_succeed() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE, Status.FAILURE],
+                     **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 3
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 2
+    assert script.count("GoToPickUpArea.JitterGoal") == 2
+
+
+def test_navigation_that_never_works_fails_the_mission_after_the_ladder() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 1000, **NOT_IN_AREA})
+    status, _ = run_mission(script, max_ticks=20_000)
+    assert status == Status.FAILURE
+    # the recovery ladder's 4 tries, in each of the 8 attempts at the pick-up phase
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 4 * 8
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 3 * 8  # none after the last try
+    assert script.count("GetPickUpArea") == 8
+    assert script.count("CallPickUpGuest") == 0
+
+
+def test_a_recovery_that_fails_fails_the_navigation_at_once() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE],
+                     "GoToPickUpArea.ClearCostmaps": [Status.FAILURE], **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.JitterGoal") == 0
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 2  # the second in a new phase try
+    assert script.count("GetPickUpArea") == 2
+
+
+def test_a_failed_phase_starts_over() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE] * 4, **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GetPickUpArea") == 2
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_the_approach_stops_once_inside_the_area_with_the_guest_in_range() -> None:
+    script = Script({
+        "RobotInPickUpArea": [Status.FAILURE] * 5,
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 1000)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[navigate][-1] == Status.INVALID  # the goal was cancelled
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 1
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_arriving_without_the_guest_in_range_waits_for_navigation_to_finish() -> None:
+    script = Script({
+        "GuestInRangeOnArrival": [Status.FAILURE] * 100_000,
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 30)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert Status.SUCCESS in script.terminated[navigate]
+
+
+def test_a_robot_left_outside_the_area_by_the_approach_drives_into_it() -> None:
+    script = Script({**NOT_IN_AREA, "InsidePickUpArea": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateIntoPickUpArea") == 1
+    calls = script.calls
+    assert calls.index(next(c for c in calls if c.endswith("NavigateIntoPickUpArea"))) < (
+        calls.index(next(c for c in calls if c.endswith("CallPickUpGuest"))))
+
+
+def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest() -> None:
+    script = Script(dict(NOT_IN_AREA))
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateIntoPickUpArea") == 0
+
+
+def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("ClearCostmapsForWaypoint") == 1
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint"))]
+    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint",
+                         "NavigateToWaypoint"], "the same waypoint once more, not the next"
+
+
+def test_a_waypoint_that_fails_twice_is_skipped() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [Status.FAILURE, Status.FAILURE, (Status.SUCCESS, 10),
+                               (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint"))]
+    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "NavigateToWaypoint",
+                         "NextWaypoint"]
+
+
+def test_a_waypoint_whose_costmaps_cannot_be_cleared_is_skipped() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+        "ClearCostmapsForWaypoint": [Status.FAILURE],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint"))]
+    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint",
+                         "NextWaypoint"]
+
+
+def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [(Status.SUCCESS, 10), (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("PlanExploration") == 1
+    assert script.count("NavigateToWaypoint") >= 2
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_guest_steadily_in_range_is_asked_for_from_where_the_robot_stands() -> None:
+    script = Script()
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.GuestSteadilyInRangeHere") == 1
+    assert script.count("Pickup.EstimateGuestPosition") == 0
+    assert script.count("Pickup.NavigateToGuest") == 0
+    assert script.count("Pickup.CallPickUpGuest") == 1
+
+
+def test_the_robot_closes_in_on_a_guest_at_the_edge_of_range_before_asking_for_them() -> None:
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    calls = script.calls
+    order = [calls.index(next(c for c in calls if c.endswith(leaf))) for leaf in (
+        "GuestSteadilyInRangeHere", "EstimateGuestPosition", "NavigateToGuest",
+        "GuestSteadilyInRange", "CallPickUpGuest")]
+    assert order == sorted(order)
+
+
+def test_without_an_estimate_or_a_way_there_the_pick_up_is_asked_for_from_where_it_stands(
+) -> None:
+    for trouble in ("EstimateGuestPosition", "NavigateToGuest"):
+        script = Script({trouble: [Status.FAILURE], "GuestSteadilyInRangeHere": [Status.FAILURE]})
+        status, _ = run_mission(script)
+        assert status == Status.SUCCESS
+        assert script.count("NavigateToGuest") == (trouble == "NavigateToGuest")
+        assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_guest_not_steadily_in_range_is_estimated_again_not_asked_for() -> None:
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE] * 3,
+                     "GuestSteadilyInRange": [Status.FAILURE, Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.EstimateGuestPosition") == 3
+    assert script.count("Pickup.CallPickUpGuest") == 1
+    assert script.count("PlanExploration") == 0
+
+
+def test_a_guest_who_never_stays_in_range_is_searched_for_again() -> None:
+    script = Script({"GuestSteadilyInRangeHere": [Status.FAILURE] * 4,
+                     "GuestSteadilyInRange": [Status.FAILURE] * 4,
+                     "GuestAlreadyInRange": [Status.SUCCESS, Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("Pickup.GuestSteadilyInRange") == 4  # four close-ins, all in vain
+    assert script.count("Pickup.GuestSteadilyInRangeHere") == 5  # then heard from the search
+    assert script.count("PlanExploration") == 1
+    assert script.count("Pickup.CallPickUpGuest") == 1
+
+
+def test_pick_ups_refused_again_and_again_are_retried_while_time_remains() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE] * 8})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallPickUpGuest") == 9
+
+
+def test_a_pick_up_never_granted_ends_the_mission_at_the_retry_budget() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE] * 1000})
+    status, _ = run_mission(script, max_ticks=50_000)
+    assert status == Status.FAILURE
+    assert script.count("CallPickUpGuest") == 12 * 8  # PickUpRetry's budget, 8 phase attempts
+    assert script.count("GetDropOffArea") == 0
+
+
+def test_a_failed_pick_up_is_retried_not_ignored() -> None:
+    script = Script({"CallPickUpGuest": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallPickUpGuest") == 2
+
+
+def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+        "GuestCaughtUp": [Status.FAILURE],
+        "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("PlanGuestSearch") == 1
+    assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
+    assert script.count("ComputeDropOffGoal") == 2
+    assert Status.INVALID in script.terminated[
+        next(c for c in script.calls if matches(c, "GoToDropOffArea.NavigateToGoal"))]
+
+
+def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 5)] * 1000,
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)] * 1000,
+        "GuestCaughtUp": [Status.FAILURE] * 1000,
+        "PlanGuestSearch": [Status.FAILURE] * 1000,
+    })
+    status, _ = run_mission(script, max_ticks=50_000)
+    assert status == Status.FAILURE
+    # one guiding per DropOffRetry attempt (6), in each of the 8 attempts at the phase: a failed
+    # re-acquisition is not followed by another guiding under the same GuideRetry
+    assert script.count("ComputeDropOffGoal") == 6 * 8
+    assert script.count("PlanGuestSearch") == 6 * 8
+    assert script.count("CallDropOffGuest") == 0
+
+
+def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GuestCaughtUp") == 1
+    assert script.count("PlanGuestSearch") == 0
+    assert script.count("CallPickUpGuest") == 1
+
+
+def test_a_drop_off_refused_for_a_drifted_guest_picks_them_up_again() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallDropOffGuest") == 2
+    assert script.count("CallPickUpDriftedGuest") == 1
+    assert script.count("ComputeRepositionGoal") == 0
+
+
+def test_a_drop_off_refused_with_the_guest_following_repositions_and_tries_again() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE], "CallPickUpDriftedGuest": [
+        Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("CallDropOffGuest") == 2
+    assert script.count("ComputeRepositionGoal") == 1
+
+
+def test_drop_offs_refused_over_and_over_fail_the_mission_in_the_end() -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE] * 1000,
+                     "NavigateToRepositionGoal": [Status.FAILURE] * 1000})
+    status, _ = run_mission(script, max_ticks=50_000)
+    assert status == Status.FAILURE
+    assert script.count("CallDropOffGuest") == 6 * 8  # DropOffRetry's budget, 8 phase attempts
+    assert script.count("ComputeReturnGoal") == 0
+
+
+def test_the_time_limit_ends_a_hopeless_mission_and_stops_navigation() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 10**6)], **NOT_IN_AREA})
+    status, clock = run_mission(script, time_limit_s=30.0)
+    assert status == Status.FAILURE
+    assert 30.0 <= clock.nanoseconds / 1e9 - 1.0 <= 31.0
+    navigate = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[navigate][-1] == Status.INVALID
+
+
+def test_the_sim_time_waits_follow_the_clock_not_the_wall() -> None:
+    script = Script()
+    status, clock = run_mission(script)
+    assert status == Status.SUCCESS
+    waited = 2.0  # LetGuestCatchUp
+    assert clock.nanoseconds / 1e9 - 1.0 >= waited
+
+
+def test_the_phase_is_named_by_the_phase_not_by_its_retry(ros_context: object) -> None:
+    from rclpy.node import Node
+
+    from bt_servicesim.tree.executive import MissionExecutive
+
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.RUNNING, 10**6)], **NOT_IN_AREA})
+    root = parse_behaviour_tree_xml(
+        str(DEFAULT_TREE), node_registry=scripted_registry(DEFAULT_TREE, script),
+        input_mappings={"time_limit": "900.0"})
+    node = Node("phase_probe", context=ros_context)
+    try:
+        executive = MissionExecutive(node=node, root=root)
+        executive.tree.setup(node=ManualClock())
+        phases = set()
+        for _ in range(30):
+            executive.tick()
+            phases.add(executive.phase())
+        # the executive names a phase by the Mission's child: the Pickup subtree instance
+        assert "Pickup" in phases
+        assert not any("Retry" in phase for phase in phases)
+    finally:
+        node.destroy_node()
