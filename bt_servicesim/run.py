@@ -58,7 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--speed", type=float,
                         help="sim speed: 1 = real time, 0 = as fast as possible (default 10)")
     parser.add_argument("--tree", type=Path, default=DEFAULT_TREE, help="mission tree XML")
-    parser.add_argument("--out", type=Path, help="run directory (default runs/<timestamp>/); "
+    parser.add_argument("--out", help="run directory (default runs/<timestamp>/); "
                         "an earlier run's is kept unless --overwrite")
     parser.add_argument("--overwrite", action="store_true",
                         help="let --out name a directory that holds an earlier run's report")
@@ -123,12 +123,13 @@ def _check_backend(args: argparse.Namespace) -> None:
                              "reach the backend")
 
 
-def _run_directory(out: Path | None, *, overwrite: bool) -> Path:
+def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
     """``--out`` checked, or a new timestamped directory under runs/."""
-    if out is None:
+    if argument is None:
         return Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S-%f")
-    if not str(out).strip():
+    if not argument.strip():
         raise UsageError("--out: an empty path; name a run directory")
+    out = Path(argument)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
     if (out / REPORT_NAME).exists() and not overwrite:

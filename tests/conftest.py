@@ -1,8 +1,8 @@
 """Test-wide fixtures: ROS 2 isolation, a clean blackboard, sim-time graphs.
 
-Every test process talks DDS on loopback only, in a ROS domain of its own: the pytest-xdist
-worker index and the id of the pytest run pick the domain, so parallel workers and two test
-runs at the same time never see each other's nodes. This runs at import, before any test
+Every test process talks DDS on loopback only, in a ROS domain of its own, claimed as a run
+claims one: parallel workers, two test runs at the same time and the runs the tests start never
+see each other's nodes. This runs at import, before any test
 calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
 
 Every test starts and ends with an empty py_trees blackboard. The fakes these fixtures build are
@@ -18,23 +18,25 @@ from typing import TYPE_CHECKING
 import pytest
 from py_trees.blackboard import Blackboard
 
+from bt_servicesim.ros.domain import DomainClaim, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
 if TYPE_CHECKING:
     from tests.fakes import SensorWorld, SimTimeGraph
 
-DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
-
-
-def _test_domain_id() -> int:
+def _claim_test_domain() -> DomainClaim:
+    """A domain for this test process, claimed as a run claims one (``ros/domain.py``), so that
+    runs the tests start, and other test processes, never take it; held until the process ends.
+    The pytest-xdist worker and the run's id pick where to start looking."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
     index = int(worker[2:]) if worker[2:].isdigit() else 0
     run = int(os.environ.get("PYTEST_XDIST_TESTRUNUID", "0")[:8] or "0", 16) or os.getpid()
-    return 1 + (run + index * 37) % DOMAIN_SPAN
+    return claim_domain(start=run + index * 37)
 
 
 apply_localhost_defaults()
-os.environ["ROS_DOMAIN_ID"] = str(_test_domain_id())
+TEST_DOMAIN = _claim_test_domain()
+os.environ["ROS_DOMAIN_ID"] = str(TEST_DOMAIN.domain_id)
 
 
 @pytest.fixture

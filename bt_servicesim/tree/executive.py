@@ -94,7 +94,7 @@ class MissionExecutive:
         """A tick raised: the mission fails with what it raised, and nothing stays in flight."""
         self.outcome = Status.FAILURE
         self.stop_ticking()
-        where = short_label(tip.name) if (tip := self.tree.root.tip()) is not None else "the tree"
+        where = _raising_behaviour(error) or "the tree"
         self.error = f"{type(error).__name__} in {where}: {' '.join(str(error).split())}"
         note = getattr(self.node, "note_error", None)
         if note is not None:
@@ -148,3 +148,15 @@ class MissionExecutive:
             return ""
         leaf = short_label(tip.name)
         return f"{leaf}: {tip.feedback_message}" if tip.feedback_message else leaf
+
+
+def _raising_behaviour(error: BaseException) -> str | None:
+    """The short name of the innermost behaviour whose method the exception passed through."""
+    name = None
+    frame = error.__traceback__
+    while frame is not None:
+        candidate = frame.tb_frame.f_locals.get("self")
+        if isinstance(candidate, py_trees.behaviour.Behaviour):
+            name = short_label(candidate.name)
+        frame = frame.tb_next
+    return name

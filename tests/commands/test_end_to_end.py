@@ -89,3 +89,6 @@ def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -
     assert code == 1
     assert report["completed"] is False
     assert report["failure"]
+    # the report is the referee's books when the mission ended, not after the run's shut-down
+    # (at speed 10 the 3 wall seconds the run once waited for the referee were 30 sim s)
+    assert report["sim_time_s"] <= 20.0 + 2.0
