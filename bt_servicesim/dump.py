@@ -1,22 +1,10 @@
-"""Draw a behaviour tree as ascii, unicode, dot, svg or png: ``python -m bt_servicesim.dump``.
+"""``python -m bt_servicesim.dump``: draw a tree file as ascii, unicode, dot, svg or png.
 
-Every drawing goes through py_trees' own :mod:`py_trees.display`, with one change: a node is
-labelled with its *short* name. The XML parser qualifies names with their ancestors'
-(``ServiceSimMission.MissionTimeLimit.Mission.Pickup.Pickup.GoToPickUpArea...``), which keeps
-them unique but makes a drawing unreadable; the indentation (text) or the edges (graphs) already
-show where a node sits.
-
-Text drawings are made from a :class:`TreeShape` — the tree's structure as plain data (one
-:class:`NodeShape` per behaviour, in display order) — rebuilt as a :class:`ShadowTree` of inert
-py_trees behaviours of the same kinds. The same shape is the header of a run's snapshot log, so
-a replay, the live view and ``final_tree.txt`` all draw exactly what a dump of the live tree
-draws. Text written to a file or a pipe carries no terminal escape codes.
-
-The dot source is deterministic for a given tree file (py_trees' ASCII symbols are pinned,
-whatever the terminal's encoding: ``M`` marks memory), so a committed drawing can be checked
-against its tree file. ``svg`` and
-``png`` need Graphviz's ``dot`` program; without it the command says so in one line and exits 1.
-Bad input (a missing or broken tree file, an unwritable ``--out``) is one line and exit 2.
+The drawing is :mod:`bt_servicesim.records.drawing`'s (py_trees' own, nodes labelled with their
+short names); this module is the command around it. ``svg`` and ``png`` need Graphviz's ``dot``
+program; without it the command says so in one line and exits 1. Bad input (a missing or broken
+tree file, an unwritable ``--out``, an ``--out`` whose suffix names another format) is one line
+and exit 2.
 """
 
 from __future__ import annotations
