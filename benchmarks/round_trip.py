@@ -28,7 +28,6 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from ros_harness import (
-    OneLineArgumentParser,
     Simulator,
     isolate,
     milliseconds,
@@ -36,6 +35,7 @@ from ros_harness import (
     start_task,
 )
 
+from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.ros.messages import pose_to_msg
 
 _NUMBERS = itertools.count()

@@ -38,7 +38,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ros_harness import OneLineArgumentParser, Simulator, isolate, spin_until, start_task
+from ros_harness import Simulator, isolate, spin_until, start_task
+
+from bt_servicesim.cli import OneLineArgumentParser
 
 
 def build_parser() -> OneLineArgumentParser:
@@ -142,45 +144,38 @@ class ProcessCpu:
         return (int(fields[11]) + int(fields[12])) / self.TICKS
 
 
-def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -> float:
-    """Run one mission, print its figures; the real-time factor over its task."""
-    from servicesim_competition.msg import RefereeState
+def measure_mission(*, speed: float, executive: str) -> float:
+    """Run one mission, print its figures; the real-time factor over its task.
 
-    from bt_servicesim.mission.referee_monitor import LATCHED, REFEREE_TOPIC
+    The run claims a ROS domain of its own and names it in the report it writes as it starts;
+    the benchmark reads the referee there, on a context of that domain.
+    """
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
 
-    task = Stamps()
-    ended: list[bool] = []
-
-    cpu: list[ProcessCpu] = []
-
-    def on_state(state: RefereeState) -> None:
-        if (state.task_running or state.completed) and not ended:
-            if not task.pairs and cpu:
-                cpu[0].mark()
-            task.add(seconds_of(state.stamp))
-        if state.completed and not ended:
-            ended.append(True)  # the referee keeps publishing the finished state
-            if cpu:
-                cpu[0].mark()
-
-    subscription = node.create_subscription(RefereeState, REFEREE_TOPIC, on_state, LATCHED)
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
         command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed",
                    repr(speed), "--executive", executive, "--out", out]
         started = time.monotonic()
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                env=os.environ.copy())
-        cpu.append(ProcessCpu(run.pid))
-
-        def run_over() -> bool:
-            cpu[0].sample()
-            return run.poll() is not None
-
-        spin_until(executor, run_over, 1800.0, "the mission")
+        domain = run_domain(Path(out), run)
+        context = Context()
+        rclpy.init(context=context, domain_id=domain)
+        node = Node("benchmark_sim_rtf_driven", context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        try:
+            task, cpu = watch_mission(node, executor, run)
+        finally:
+            executor.shutdown()
+            node.destroy_node()
+            context.try_shutdown()
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
         ticks = tick_times(Path(out) / "tree_log.jsonl")
-    node.destroy_subscription(subscription)
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()
@@ -190,13 +185,53 @@ def measure_mission(node: Any, executor: Any, *, speed: float, executive: str) -
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
-    if len(cpu[0].marks) == 2:
-        processes = [("executive", cpu[0].pid)] + [("simulator", pid)
-                                                   for pid in cpu[0].children()]
+    if len(cpu.marks) == 2:
+        processes = [("executive", cpu.pid)] + [("simulator", pid) for pid in cpu.children()]
         print("  CPU over the task: " + ", ".join(
-            f"{name} {cpu[0].spent(pid):.2f} s ({1000.0 * cpu[0].spent(pid) / sim_s:.1f} ms "
+            f"{name} {cpu.spent(pid):.2f} s ({1000.0 * cpu.spent(pid) / sim_s:.1f} ms "
             f"per sim s)" for name, pid in processes))
     return factor
+
+
+def run_domain(out: Path, run: subprocess.Popen[bytes]) -> int:
+    """The ROS domain the run claimed, from the report it writes as it starts."""
+    deadline = time.monotonic() + 60.0
+    while time.monotonic() < deadline and run.poll() is None:
+        try:
+            return int(json.loads((out / "report.json").read_text())["ros_domain_id"])
+        except (OSError, ValueError, KeyError):
+            time.sleep(0.05)
+    raise SystemExit("the run wrote no report naming its ROS domain")
+
+
+def watch_mission(node: Any, executor: Any,
+                  run: subprocess.Popen[bytes]) -> tuple[Stamps, ProcessCpu]:
+    """The referee's stamps over the task and the processes' CPU, until the run ends."""
+    from servicesim_competition.msg import RefereeState
+
+    from bt_servicesim.mission.referee_monitor import LATCHED, REFEREE_TOPIC
+
+    task = Stamps()
+    ended: list[bool] = []
+    cpu = ProcessCpu(run.pid)
+
+    def on_state(state: RefereeState) -> None:
+        if (state.task_running or state.completed) and not ended:
+            if not task.pairs:
+                cpu.mark()
+            task.add(seconds_of(state.stamp))
+        if state.completed and not ended:
+            ended.append(True)  # the referee keeps publishing the finished state
+            cpu.mark()
+
+    node.create_subscription(RefereeState, REFEREE_TOPIC, on_state, LATCHED)
+
+    def run_over() -> bool:
+        cpu.sample()
+        return run.poll() is not None
+
+    spin_until(executor, run_over, 1800.0, "the mission")
+    return task, cpu
 
 
 def tick_times(tree_log: Path) -> list[float]:
@@ -221,6 +256,7 @@ def print_ticks(ticks: list[float], *, start: float, end: float) -> None:
           f"task (longest gap {max(gaps):.1f} sim s)")
 
 
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if not args.seconds > 0.0:
@@ -242,7 +278,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.add_node(node)
     try:
         measure_alone(node, executor, speed=0.0, seconds=args.seconds)
-        factors = [measure_mission(node, executor, speed=args.speed, executive=args.executive)
+        factors = [measure_mission(speed=args.speed, executive=args.executive)
                    for _mission in range(args.missions)]
         if len(factors) > 1:
             print(f"driven by {args.executive}, {len(factors)} missions: real-time factor "

@@ -26,7 +26,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from ros_harness import REPO, OneLineArgumentParser, isolate
+from ros_harness import REPO, isolate
+
+from bt_servicesim.cli import OneLineArgumentParser
 
 sys.path.insert(0, str(REPO))  # tests.mission_script, the scripted leaves the tree tests use
 

@@ -3,8 +3,8 @@
 The claim of this project is that the behaviour tree completes missions the seed's state machine
 does not, faster and with a lower score. Evaluation checks that claim with numbers: for every
 scenario set and episode number it runs *each* executive on the *same* seed, each episode a
-``python -m bt_servicesim.run --headless`` subprocess (its own simulator, its own run directory)
-with a ROS domain of its own, several at once. It writes
+``python -m bt_servicesim.run --headless`` subprocess (its own simulator, its own run directory,
+a ROS domain the run claims for itself), several at once. It writes
 
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
@@ -15,54 +15,54 @@ with a ROS domain of its own, several at once. It writes
 
 An episode is never dropped: one that outlives its wall-time limit is stopped (SIGINT, so the
 run stops its simulator and writes its report, then SIGKILL for whatever is left) and recorded
-as failed with the reason; one that crashes is recorded with its exit code and last error line.
-Statistics are defined in ``docs/evaluation.md``.
+as failed with the reason; one that crashes is recorded with its exit code and last error line;
+a report is counted only if it carries the episode's run id. Ctrl-C, SIGTERM and SIGHUP all stop
+an evaluation the same way: the episodes under way are stopped as above, none is left running or
+writing, the results of the episodes played are written, and the exit status is 128 + the
+signal's number. Statistics are defined in ``docs/evaluation.md``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import math
 import os
 import shlex
+import signal
 import sys
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
-from bt_servicesim.cli import (
-    EXIT_BAD_INPUT,
-    EXIT_INTERRUPTED,
-    EXIT_OK,
-    OneLineArgumentParser,
-    UsageError,
-)
+from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, UsageError, error_line
 from bt_servicesim.evaluation.episodes import (
     EpisodeCommand,
     ProgressBar,
+    StopSignals,
     as_minutes,
     plan_episodes,
+    planned_count,
     run_command,
     run_episodes,
+    signal_of,
 )
 from bt_servicesim.evaluation.report import write_results
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
     DEFAULT_SPEED,
-    DOMAIN_SPAN,
+    MAX_EPISODE_TIMEOUT_S,
+    MAX_JOBS,
+    MAX_TIME_LIMIT_S,
     EvaluationSettings,
     load_warning,
 )
 from bt_servicesim.mission.settings import EXECUTIVES
+from bt_servicesim.mission.stopping import Terminated
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
 PROG = "python -m bt_servicesim.evaluate"
-
-
-
-
-
-
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -98,12 +98,18 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
     scenarios = _names(args.scenarios, "--scenarios", SCENARIO_SETS)
     executives = _names(args.executive, "--executive", EXECUTIVES)
     _check(args.episodes >= 1, f"--episodes {args.episodes}: must be 1 or more")
-    _check(1 <= args.jobs <= DOMAIN_SPAN, f"--jobs {args.jobs}: must be within 1..{DOMAIN_SPAN}")
+    _check(1 <= args.jobs <= MAX_JOBS, f"--jobs {args.jobs}: must be within 1..{MAX_JOBS} "
+                                       "(each running episode claims a ROS domain of its own)")
     _check(args.seed >= 0, f"--seed {args.seed}: must be 0 or more")
-    _check(args.speed >= 0.0, f"--speed {args.speed}: must be 0 or more")
-    _check(args.episode_timeout > 0.0,
-           f"--episode-timeout {args.episode_timeout}: must be more than 0")
-    _check(args.time_limit > 0.0, f"--time-limit {args.time_limit}: must be more than 0")
+    _check(math.isfinite(args.speed) and args.speed >= 0.0,
+           f"--speed {args.speed}: must be a finite number, 0 or more")
+    _check(math.isfinite(args.episode_timeout)
+           and 0.0 < args.episode_timeout <= MAX_EPISODE_TIMEOUT_S,
+           f"--episode-timeout {args.episode_timeout}: must be more than 0 and at most "
+           f"{MAX_EPISODE_TIMEOUT_S:.0f} wall seconds")
+    _check(math.isfinite(args.time_limit) and 0.0 < args.time_limit <= MAX_TIME_LIMIT_S,
+           f"--time-limit {args.time_limit}: must be more than 0 and at most "
+           f"{MAX_TIME_LIMIT_S:.0f} sim seconds")
     for flag, path in (("--out", args.out), ("--docs", args.docs)):
         _check(path is None or not path.exists() or path.is_dir(),
                f"{flag} {path}: exists and is not a directory")
@@ -114,8 +120,6 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
         resume=args.resume,
     )
-
-
 
 
 def _names(value: str, flag: str, known: Iterable[str]) -> tuple[str, ...]:
@@ -132,137 +136,48 @@ def _check(condition: bool, message: str) -> None:
         raise UsageError(message)
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 def evaluate(settings: EvaluationSettings, command: EpisodeCommand = run_command,
-             stream: TextIO | None = None) -> tuple[list[dict[str, Any]], bool]:
-    """Run the whole evaluation and write its results: the rows, in plan order, and whether
-    it was interrupted (the results of an interrupted evaluation are written all the same)."""
-    episodes = plan_episodes(settings)
-    progress = ProgressBar(len(episodes), stream)
+             stream: TextIO | None = None) -> tuple[list[dict[str, Any]], int | None]:
+    """Run the whole evaluation and write its results: the rows, in plan order, and the signal
+    that stopped it, if one did (the results of a stopped evaluation are written all the same,
+    for the episodes it played)."""
+    progress = ProgressBar(planned_count(settings), stream)
     started = time.monotonic()
-    try:
-        rows, interrupted = run_episodes(settings, episodes, command, progress)
-    finally:
-        progress.close()
-    write_results(settings, rows)
-    out = stream or sys.stderr
-    out.write(f"{len(rows)} episodes in {as_minutes(time.monotonic() - started)}"
-              f"{' (interrupted)' if interrupted else ''}; "
-              f"results: {settings.out / 'results.md'}\n")
-    return rows, interrupted
+    with StopSignals() as stops:
+        rows = run_episodes(settings, plan_episodes(settings), command, progress, stops)
+        progress.close()  # from here on a stop signal is only noted: the results are written
+        write_results(settings, rows)
+        stopped = f" (stopped by {signal.Signals(stops.first).name})" if stops.first else ""
+        with contextlib.suppress(OSError, ValueError):  # the terminal may have hung up
+            (stream or sys.stderr).write(
+                f"{len(rows)} episodes in {as_minutes(time.monotonic() - started)}{stopped}; "
+                f"results: {settings.out / 'results.md'}\n")
+    return rows, stops.first
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, command: EpisodeCommand = run_command) -> int:
+    """The command; ``command`` makes each episode's command line (tests give a stand-in)."""
+    with StopSignals():  # a stop before any episode started: nothing to clean up, no traceback
+        try:
+            return _main(argv, command)
+        except (KeyboardInterrupt, Terminated) as stop:
+            return 128 + signal_of(stop)
+
+
+def _main(argv: Sequence[str] | None, command: EpisodeCommand) -> int:
     arguments = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(arguments)
     try:
         settings = settings_from(args, arguments)
         settings.out.mkdir(parents=True, exist_ok=True)
     except (UsageError, OSError) as error:
-        print(f"{PROG}: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return error_line(PROG, error)
     apply_localhost_defaults()
     warning = load_warning(jobs=settings.jobs, speed=settings.speed, cores=os.cpu_count() or 1)
     if warning is not None:
         print(f"{PROG}: warning: {warning}", file=sys.stderr)
-    _, interrupted = evaluate(settings)
-    return EXIT_INTERRUPTED if interrupted else EXIT_OK
+    _, stopped_by = evaluate(settings, command)
+    return EXIT_OK if stopped_by is None else 128 + stopped_by
 
 
 if __name__ == "__main__":

@@ -1,14 +1,27 @@
 """The episodes of an evaluation: each one a ``python -m bt_servicesim.run --headless`` process.
 
-Every episode runs in a subprocess of its own with its own simulator, run directory and ROS
-domain, several at once; an episode that hangs past its wall-time limit, or the whole batch
-when it is interrupted, is stopped with its whole process tree. Each finished episode leaves
-its row (``episode.json``) beside its report, so ``--resume`` keeps what was done.
+Every episode runs in a subprocess of its own with its own simulator and run directory, several
+at once; each run claims a ROS domain of its own (:mod:`bt_servicesim.ros.domain`), so episodes
+running at once never hear each other, and its report says which. An episode that hangs past
+its wall-time limit, or every running one when the evaluation is stopped, is stopped with its
+whole process tree. Each finished episode leaves its row (``episode.json``) beside its report, so
+``--resume`` keeps what was done.
+
+A report counts only if it is the episode's own: every episode is started with a run id of its
+own (``--run-id``), and a ``report.json`` with another run id (an earlier run's, or one that a
+run left behind by an earlier evaluation wrote late) is never read as the episode's. A report
+that still says ``"status": "running"`` is a run that was killed before it finished: a failed
+episode, with that reason.
+
+Episodes are planned lazily and only ``jobs`` of them are under way at a time, so a batch of a
+million episodes starts its first as promptly as a batch of ten, and stopping it costs only the
+episodes under way.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import json
 import os
 import shutil
@@ -17,37 +30,45 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+import uuid
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from queue import Queue
+from queue import Empty, Queue
+from types import FrameType, TracebackType
 from typing import Any, TextIO
 
 from bt_servicesim.evaluation.report import source_revision
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
-    DOMAIN_SPAN,
     EPISODE_NAME,
     INTERRUPTED,
     STOP_GRACE_S,
     EvaluationSettings,
 )
+from bt_servicesim.mission.report import read_report
 from bt_servicesim.mission.settings import REPORT_NAME
+from bt_servicesim.mission.stopping import STOP_SIGNALS, Terminated
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
-PARENT_FIELD, START_TIME_FIELD = 4, 22  # of /proc/<pid>/stat
+PARENT_FIELD, STATE_FIELD, START_TIME_FIELD = 4, 3, 22  # of /proc/<pid>/stat
+FINAL_STATUSES = ("completed", "failed", "interrupted")  # what a finished run's report says
+PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
+GONE_WAIT_S = 5.0  # wall seconds to wait for SIGKILLed processes to be gone
+POLL_S = 0.1  # wall seconds between looks at the episodes under way
 
 
 @dataclass(frozen=True)
 class Episode:
-    """One mission: an executive on one scenario of one set."""
+    """One mission: an executive on one scenario of one set, and the run id its report carries."""
 
     executive: str
     scenario: str
     index: int
     seed: int | None
     out: Path
+    run_id: str = ""
 
     @property
     def label(self) -> str:
@@ -58,22 +79,38 @@ class Episode:
 EpisodeCommand = Callable[[Episode, EvaluationSettings], list[str]]
 
 
-def plan_episodes(settings: EvaluationSettings) -> list[Episode]:
-    """Episode n of every set, for every executive, before episode n+1: partial runs compare."""
-    return [
-        Episode(executive=executive, scenario=scenario, index=index,
-                seed=settings.seed + index if SCENARIO_SETS[scenario].seeded else None,
-                out=settings.out / executive / scenario / str(index))
-        for index in range(settings.episodes)
-        for scenario in settings.scenarios
-        for executive in settings.executives
-    ]
+def plan_episodes(settings: EvaluationSettings) -> Iterator[Episode]:
+    """Episode n of every set, for every executive, before episode n+1: partial runs compare.
+
+    Lazily: a plan of millions costs nothing until its episodes are reached. Run ids are
+    ``<token>-<executive>-<set>-<n>``, the token drawn once per evaluation.
+    """
+    token = uuid.uuid4().hex[:12]
+    for index in range(settings.episodes):
+        for scenario in settings.scenarios:
+            for executive in settings.executives:
+                yield Episode(executive=executive, scenario=scenario, index=index,
+                              seed=settings.seed + index if SCENARIO_SETS[scenario].seeded
+                              else None,
+                              out=settings.out / executive / scenario / str(index),
+                              run_id=f"{token}-{executive}-{scenario}-{index}")
+
+
+def planned_count(settings: EvaluationSettings) -> int:
+    """How many episodes :func:`plan_episodes` plans."""
+    return settings.episodes * len(settings.scenarios) * len(settings.executives)
 
 
 def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
-    """The run command for one episode."""
+    """The run command for one episode.
+
+    ``--overwrite``: the episode's directory is the evaluation's own and is cleared before the
+    episode starts; should a run of an earlier evaluation still write into it, the new run must
+    not refuse the directory (its run id tells the reports apart).
+    """
     command = [sys.executable, "-m", "bt_servicesim.run", "--headless",
-               "--out", str(episode.out), "--executive", episode.executive,
+               "--out", str(episode.out), "--overwrite", "--run-id", episode.run_id,
+               "--executive", episode.executive,
                "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s)]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
@@ -98,23 +135,36 @@ class EpisodeRunner:
         self.settings = settings
         self.command = command
         self.stopping = threading.Event()
+        self.finished: Queue[tuple[int, dict[str, Any] | None]] = Queue()
+        """Each episode's plan number and row (None: not started), as they finish."""
         self.revision = source_revision()
+        self._die_with_us = parent_death_signal(os.getpid())
 
-    def run(self, episode: Episode, domain_id: int) -> dict[str, Any]:
-        """Run the episode in ROS domain ``domain_id``; its row for the summary."""
+    def run(self, episode: Episode) -> dict[str, Any] | None:
+        """Run the episode; its row for the summary, or None if the evaluation was stopped
+        before the episode started."""
         if self.settings.resume and (kept := self.finished_row(episode)) is not None:
             return kept
-        if episode.out.exists():
-            shutil.rmtree(episode.out)  # a stale report must never pass for this episode's
-        episode.out.mkdir(parents=True)
         if self.stopping.is_set():
-            return episode_row(episode, EpisodeOutcome(None, 0.0, INTERRUPTED), domain_id)
-        outcome = self._run_process(episode, domain_id)
-        row = episode_row(episode, outcome, domain_id)
+            return None
+        if episode.out.exists():
+            shutil.rmtree(episode.out)  # whatever an earlier run left is not this episode's
+        episode.out.mkdir(parents=True)
+        outcome = self._run_process(episode)
+        row = episode_row(episode, outcome)
         row.update(revision=self.revision, episode_key=self.key(episode))
         if outcome.stopped != INTERRUPTED:
             (episode.out / EPISODE_NAME).write_text(json.dumps(row, indent=1) + "\n")
         return row
+
+    def run_numbered(self, number: int, episode: Episode) -> None:
+        """Run episode ``number`` of the plan and put its row in :attr:`finished`."""
+        try:
+            row = self.run(episode)
+        except Exception as error:  # one episode's trouble must not end the batch
+            row = episode_row(episode, EpisodeOutcome(None, 0.0, (
+                f"the evaluation could not run it: {type(error).__name__}: {error}")))
+        self.finished.put((number, row))
 
     def key(self, episode: Episode) -> dict[str, Any]:
         """What makes two runs of an episode the same episode."""
@@ -132,14 +182,15 @@ class EpisodeRunner:
             return None
         return dict(row, resumed=True)
 
-    def _run_process(self, episode: Episode, domain_id: int) -> EpisodeOutcome:
-        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
+    def _run_process(self, episode: Episode) -> EpisodeOutcome:
+        environment = dict(os.environ)
         apply_localhost_defaults(environment)
         started = time.monotonic()
         with (episode.out / "run.log").open("wb") as log:
             process = subprocess.Popen(
                 self.command(episode, self.settings), stdout=log, stderr=subprocess.STDOUT,
-                stdin=subprocess.DEVNULL, env=environment, start_new_session=True)
+                stdin=subprocess.DEVNULL, env=environment, start_new_session=True,
+                preexec_fn=self._die_with_us)
             stopped = self._wait(process, started + self.settings.episode_timeout_s)
         return EpisodeOutcome(process.returncode, time.monotonic() - started, stopped)
 
@@ -159,22 +210,61 @@ class EpisodeRunner:
                         "exceeded; stopped")
 
 
+def parent_death_signal(parent: int) -> Callable[[], None]:
+    """What an episode runs before its program: SIGTERM to it when the evaluation is gone.
+
+    SIGTERM is a stop signal to the run (it stops its simulator and writes its report), so an
+    evaluation that is killed outright (SIGKILL, the OOM killer) leaves no episode running on
+    and writing into its directory. ``prctl`` is looked up here, in the parent: the child
+    only calls it, between fork and exec, where nothing may take a lock. (Linux ties the signal
+    to the thread that started the child, not the process: each episode's thread waits for its
+    episode to end, so it outlives it.)
+    """
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+
+    def in_the_child() -> None:
+        prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+        if os.getppid() != parent:  # the evaluation died before the request took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    return in_the_child
+
+
 def stop_process_tree(process: subprocess.Popen[bytes]) -> None:
-    """SIGINT the episode (it then stops its simulator), then SIGKILL whatever is left.
+    """SIGINT the episode (it then stops its simulator and writes its report), then SIGKILL
+    whatever is left, and wait until it is gone.
 
     The run starts its simulator in a session of its own, so the tree is collected from
-    ``/proc`` before anything is signalled; a process is only killed if it is still the one
-    that was collected (same pid and start time).
+    ``/proc`` before anything is signalled, and again before the SIGKILL (a run stopped while
+    starting may have started its simulator meanwhile); a process is only killed if it is
+    still the one that was collected (same pid and start time).
     """
-    family = [process.pid, *descendants(process.pid)]
-    identities = {pid: start_time(pid) for pid in family}
+    identities = _identities([process.pid, *descendants(process.pid)])
     _signal(process.pid, signal.SIGINT)
     with contextlib.suppress(subprocess.TimeoutExpired):
         process.wait(timeout=STOP_GRACE_S)
-    for pid in family:
-        if identities[pid] is not None and start_time(pid) == identities[pid]:
+    if process.poll() is None:
+        identities.update(_identities(descendants(process.pid)))
+    for pid, started in identities.items():
+        if _alive_as(pid, started):
             _signal(pid, signal.SIGKILL)
     process.wait()
+    deadline = time.monotonic() + GONE_WAIT_S
+    while any(_alive_as(pid, started) for pid, started in identities.items()):
+        if time.monotonic() > deadline:
+            break
+        time.sleep(0.02)
+
+
+def _identities(pids: Iterable[int]) -> dict[int, int]:
+    """Each pid's start time, for the pids that are running."""
+    found = {pid: start_time(pid) for pid in pids}
+    return {pid: started for pid, started in found.items() if started is not None}
+
+
+def _alive_as(pid: int, started: int) -> bool:
+    """Whether ``pid`` is still the process that started at ``started`` and not a zombie."""
+    return start_time(pid) == started and _state(pid) not in (None, "Z", "X")
 
 
 def descendants(pid: int) -> list[int]:
@@ -184,7 +274,7 @@ def descendants(pid: int) -> list[int]:
         if entry.name.isdigit():
             parent = _stat_field(int(entry.name), PARENT_FIELD)
             if parent is not None:
-                children.setdefault(parent, []).append(int(entry.name))
+                children.setdefault(int(parent), []).append(int(entry.name))
     found, frontier = [], [pid]
     while frontier:
         below = children.get(frontier.pop(), [])
@@ -195,17 +285,23 @@ def descendants(pid: int) -> list[int]:
 
 def start_time(pid: int) -> int | None:
     """The process's start time in clock ticks since boot; None if it is gone."""
-    return _stat_field(pid, START_TIME_FIELD)
+    value = _stat_field(pid, START_TIME_FIELD)
+    return None if value is None else int(value)
 
 
-def _stat_field(pid: int, number: int) -> int | None:
+def _state(pid: int) -> str | None:
+    """The process's state letter (R, S, Z, ...); None if it is gone."""
+    return _stat_field(pid, STATE_FIELD)
+
+
+def _stat_field(pid: int, number: int) -> str | None:
     """Field ``number`` (1-based, as proc(5) counts) of ``/proc/<pid>/stat``."""
     try:
         text = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
         return None
     after_name = text[text.rfind(")") + 2:].split()  # the name (field 2) may hold spaces
-    return int(after_name[number - 3])
+    return after_name[number - 3]
 
 
 def _signal(pid: int, signal_number: int) -> None:
@@ -213,37 +309,59 @@ def _signal(pid: int, signal_number: int) -> None:
         os.kill(pid, signal_number)
 
 
-def episode_row(episode: Episode, outcome: EpisodeOutcome, domain_id: int) -> dict[str, Any]:
-    """The run's report.json (or a failed stand-in), with where it belongs in the evaluation."""
-    report = _read_report(episode.out / REPORT_NAME)
-    row = report if report is not None else _missing_report(episode, outcome)
+def episode_row(episode: Episode, outcome: EpisodeOutcome) -> dict[str, Any]:
+    """The run's own report.json (or a failed stand-in), with where it belongs in the evaluation.
+
+    Only a report with the episode's run id is read; one that still says ``running`` is a run
+    that never finished (killed, or stopped before it could write its end).
+    """
+    report = read_report(episode.out / REPORT_NAME)
+    own = report is not None and report.get("run_id") == episode.run_id
+    if own and report is not None and report.get("status") in FINAL_STATUSES \
+            and "completed" in report:
+        row = dict(report)
+    elif own and report is not None:
+        row = {**_stand_in(episode, outcome), **report, "completed": False, "score": None,
+               "failure": (f"the run {_ended(outcome)} before it finished (its report still "
+                           f"says {report.get('status')!r}): "
+                           f"{_last_line(episode.out / 'run.log')}")}
+    else:
+        row = _stand_in(episode, outcome)
+        foreign = "" if report is None else (
+            f" (the {REPORT_NAME} there is another run's, run id {report.get('run_id')!r})")
+        row["failure"] = (f"the run {_ended(outcome)} and no report of its own{foreign}: "
+                          f"{_last_line(episode.out / 'run.log')}")
     if outcome.stopped is not None:
         row["completed"] = False
         row["failure"] = outcome.stopped
-    # Ctrl-C stopped it or it never started: no verdict on the executive, and no statistic
+    # the evaluation was stopped while it ran: no verdict on the executive, and no statistic
     row["not_run"] = outcome.stopped == INTERRUPTED
-    row.update(scenario=episode.scenario, episode=episode.index, episode_seed=episode.seed,
-               ros_domain_id=domain_id, returncode=outcome.returncode,
+    row.setdefault("ros_domain_id", None)  # the domain the run claimed, as its report says
+    row.update(run_id=episode.run_id, scenario=episode.scenario, episode=episode.index,
+               episode_seed=episode.seed, returncode=outcome.returncode,
                episode_wall_time_s=round(outcome.wall_time_s, 3), out=str(episode.out))
     return row
 
 
-def _read_report(path: Path) -> dict[str, Any] | None:
-    try:
-        report = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    return report if isinstance(report, dict) and "completed" in report else None
-
-
-def _missing_report(episode: Episode, outcome: EpisodeOutcome) -> dict[str, Any]:
+def _stand_in(episode: Episode, outcome: EpisodeOutcome) -> dict[str, Any]:
     return {
         "completed": False, "score": None, "sim_time_s": None, "checkpoints": [],
         "penalties": {}, "wall_time_s": round(outcome.wall_time_s, 3), "seed": episode.seed,
         "world": "default", "executive": episode.executive, "exit_code": outcome.returncode,
-        "failure": outcome.stopped or (f"the run exited with code {outcome.returncode} and "
-                                       f"no report: {_last_line(episode.out / 'run.log')}"),
+        "failure": outcome.stopped,
     }
+
+
+def _ended(outcome: EpisodeOutcome) -> str:
+    """How the run's process ended, as words."""
+    code = outcome.returncode
+    if code is None:
+        return "never started"
+    if code < 0:
+        with contextlib.suppress(ValueError):
+            return f"was killed by {signal.Signals(-code).name}"
+        return f"was killed by signal {-code}"
+    return f"exited with code {code}"
 
 
 def _last_line(path: Path) -> str:
@@ -255,32 +373,45 @@ def _last_line(path: Path) -> str:
 
 
 class ProgressBar:
-    """One redrawn line on a terminal; one line per finished episode otherwise (logs, CI)."""
+    """One redrawn line on a terminal; one line per finished episode otherwise (logs, CI).
+
+    A stream that fails (the terminal hung up) ends the progress output, never the evaluation.
+    """
 
     WIDTH = 30
 
     def __init__(self, total: int, stream: TextIO | None = None) -> None:
         self.total, self.done, self.failed = total, 0, 0
         self.stream = stream or sys.stderr
-        self.live = self.stream.isatty()
+        try:
+            self.live = self.stream.isatty()
+        except (OSError, ValueError):
+            self.live = False
         self.started = time.monotonic()
 
     def advance(self, row: dict[str, Any]) -> None:
         self.done += 1
         self.failed += not row["completed"]
         if self.live:
-            self.stream.write("\r\x1b[2K" + self._bar())
+            self._write("\r\x1b[2K" + self._bar())
         else:
-            self.stream.write(f"{self._bar()}  {_row_line(row)}\n")
-        self.stream.flush()
+            self._write(f"{self._bar()}  {_row_line(row)}\n")
 
     def close(self) -> None:
         if self.live:
-            self.stream.write("\n")
+            self._write("\n")
+
+    def _write(self, text: str) -> None:
+        if self.stream is None:
+            return
+        try:
+            self.stream.write(text)
             self.stream.flush()
+        except (OSError, ValueError):
+            self.stream = None  # type: ignore[assignment]
 
     def _bar(self) -> str:
-        filled = round(self.WIDTH * self.done / self.total)
+        filled = round(self.WIDTH * self.done / self.total) if self.total else self.WIDTH
         elapsed = time.monotonic() - self.started
         left = elapsed / self.done * (self.total - self.done) if self.done else 0.0
         return (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] {self.done}/{self.total} "
@@ -299,52 +430,125 @@ def as_minutes(seconds: float) -> str:
     return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
 
 
-def domain_ids(jobs: int, base: int | None = None) -> list[int]:
-    """Distinct ROS domains 1..101, one per parallel job, starting from ``ROS_DOMAIN_ID``.
+class StopSignals:
+    """How an evaluation is stopped from outside: Ctrl-C (SIGINT), SIGTERM and SIGHUP alike.
 
-    Without one set, the start depends on this process's id, so two evaluations at once are
-    unlikely to share domains.
+    Inside ``with StopSignals()``, a stop signal raises in the main thread (``KeyboardInterrupt``
+    or :class:`~bt_servicesim.mission.stopping.Terminated`), wherever the evaluation was:
+    planning, starting episodes or waiting for them. :meth:`hold` turns that off for the
+    clean-up -- stopping the episodes under way, writing the results -- during which a stop
+    signal is only noted. The first signal decides the exit status (128 + its number). On the
+    way out the handlers are put back as they were. Outside the main thread Python delivers no
+    signals, and nothing is changed.
     """
-    if base is None:
-        given = os.environ.get("ROS_DOMAIN_ID", "")
-        base = int(given) if given.isdigit() else os.getpid()
-    return [1 + (base + job) % DOMAIN_SPAN for job in range(jobs)]
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+        self._previous: dict[int, Any] = {}
+        self._main = threading.current_thread() is threading.main_thread()
+
+    def __enter__(self) -> StopSignals:
+        if self._main:
+            self._previous = {number: signal.getsignal(number) for number in STOP_SIGNALS}
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+            signal.signal(signal.SIGTERM, _raise_terminated)
+            signal.signal(signal.SIGHUP, _raise_terminated)
+        return self
+
+    def hold(self, stop: BaseException | None = None) -> None:
+        """From now on a stop signal is only noted; ``stop`` is one that was raised."""
+        if stop is not None:
+            self.received.insert(0, signal_of(stop))
+        if self._main:
+            for number in STOP_SIGNALS:
+                signal.signal(number, self._note)
+
+    @property
+    def first(self) -> int | None:
+        """The signal that stopped the evaluation, if one did."""
+        return self.received[0] if self.received else None
+
+    def _note(self, signal_number: int, _frame: FrameType | None) -> None:
+        self.received.append(signal_number)
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 _traceback: TracebackType | None) -> None:
+        if self._main:
+            for number, handler in self._previous.items():
+                signal.signal(number, handler if handler is not None else signal.SIG_DFL)
 
 
-def run_episodes(settings: EvaluationSettings, episodes: list[Episode],
-                 command: EpisodeCommand = run_command,
-                 progress: ProgressBar | None = None) -> tuple[list[dict[str, Any]], bool]:
-    """Run every episode, ``settings.jobs`` at once: a row for each, in plan order, and
-    whether Ctrl-C cut the batch short (running episodes are then stopped, the rest not
-    started, and every one of them still gets a row saying so).
+def _raise_terminated(signal_number: int, _frame: FrameType | None) -> None:
+    raise Terminated(signal_number)
+
+
+def signal_of(stop: BaseException) -> int:
+    """The signal a stop exception stands for."""
+    return stop.signal_number if isinstance(stop, Terminated) else int(signal.SIGINT)
+
+
+def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],
+                 command: EpisodeCommand = run_command, progress: ProgressBar | None = None,
+                 stops: StopSignals | None = None) -> list[dict[str, Any]]:
+    """Run every episode, ``settings.jobs`` at once; the rows, in plan order.
+
+    A stop signal (see :class:`StopSignals`) cuts the batch short: the episodes under way are
+    stopped (SIGINT, so that each writes its report, then SIGKILL) and get a row saying so
+    (``not_run``), the rest are not started and get no row. Whatever happened, this returns
+    only once no episode process is left, with ``stops`` held (a stop signal is then only
+    noted): the caller writes the results undisturbed.
     """
     runner = EpisodeRunner(settings, command)
-    free: Queue[int] = Queue()
-    for domain in domain_ids(settings.jobs):
-        free.put(domain)
+    finished = runner.finished
+    rows: list[tuple[int, dict[str, Any]]] = []
 
-    def in_a_domain(episode: Episode) -> dict[str, Any]:
-        domain = free.get()
-        try:
-            return runner.run(episode, domain)
-        finally:
-            free.put(domain)
-
-    with ThreadPoolExecutor(max_workers=settings.jobs) as pool:
-        futures = [pool.submit(in_a_domain, episode) for episode in episodes]
-        try:
-            _report_progress(futures, progress)
-        except KeyboardInterrupt:
-            runner.stopping.set()
-    return [future.result() for future in futures], runner.stopping.is_set()
-
-
-def _report_progress(futures: list[Future[dict[str, Any]]], progress: ProgressBar | None) -> None:
-    reported: set[int] = set()
-    while len(reported) < len(futures):
-        for number, future in enumerate(futures):
-            if number not in reported and future.done():
-                reported.add(number)
+    def collect() -> None:
+        while True:
+            try:
+                number, row = finished.get_nowait()
+            except Empty:
+                return
+            if row is not None:
+                rows.append((number, row))
                 if progress is not None:
-                    progress.advance(future.result())
-        time.sleep(0.2)
+                    progress.advance(row)
+
+    with contextlib.ExitStack() as stack:
+        if stops is None:
+            stops = stack.enter_context(StopSignals())
+        _run_all(settings, episodes, runner, collect, stops)
+    return [row for _, row in sorted(rows, key=lambda pair: pair[0])]
+
+
+def _run_all(settings: EvaluationSettings, episodes: Iterable[Episode], runner: EpisodeRunner,
+             collect: Callable[[], None], stops: StopSignals) -> None:
+    """Keep ``settings.jobs`` episodes under way until the plan is done or a stop signal comes;
+    return once every episode process has ended, with ``stops`` held."""
+    pool = ThreadPoolExecutor(max_workers=settings.jobs, thread_name_prefix="episode")
+    try:
+        under_way: set[Future[None]] = set()
+        for number, episode in enumerate(episodes):
+            while len(under_way) >= settings.jobs:
+                time.sleep(POLL_S)
+                under_way = {future for future in under_way if not future.done()}
+                collect()
+            if settings.resume and (kept := runner.finished_row(episode)) is not None:
+                runner.finished.put((number, kept))  # no need of a worker to read a file
+            else:
+                under_way.add(pool.submit(runner.run_numbered, number, episode))
+            collect()
+        while under_way:
+            time.sleep(POLL_S)
+            under_way = {future for future in under_way if not future.done()}
+            collect()
+        stops.hold()
+    except (KeyboardInterrupt, Terminated) as stop:
+        stops.hold(stop)
+        runner.stopping.set()
+    except BaseException:
+        stops.hold()
+        runner.stopping.set()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)  # the episodes under way stop themselves
+        collect()

@@ -22,6 +22,7 @@ from bt_servicesim.evaluation.summary import (
     played,
     summarise,
     summary_of,
+    unplayed,
 )
 from bt_servicesim.mission.settings import EXECUTIVES
 
@@ -38,7 +39,7 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"{settings.time_limit_s:g} sim s, episode wall-time limit "
              f"{settings.episode_timeout_s:g} s. Definitions: "
              "[evaluation.md](evaluation.md).", "",
-             "## Per executive and scenario set", "", *_not_run_note(rows),
+             "## Per executive and scenario set", "", *_not_run_note(settings, rows),
              *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
         lines += ["## Paired: the same episodes, both executives", "",
@@ -50,9 +51,9 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
     return "\n".join(lines) + "\n"
 
 
-def _not_run_note(rows: list[dict[str, Any]]) -> list[str]:
-    """A line saying how many episodes an interrupted evaluation left unplayed, if any."""
-    counts = Counter((row["executive"], row["scenario"]) for row in rows if row.get("not_run"))
+def _not_run_note(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
+    """A line saying how many episodes a stopped evaluation left unplayed, if any."""
+    counts = unplayed(settings, rows)
     if not counts:
         return []
     parts = ", ".join(f"{executive} {scenario}: {count}"

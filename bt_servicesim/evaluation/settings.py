@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from bt_servicesim.ros.domain import DOMAINS
+
 #: Episodes run at 20x real time by default, not flat out: at speed 0 the simulator runs as
 #: fast as its core allows and never waits for the executive, which needs about as much CPU
 #: per sim second; with a few episodes at once on a small machine the executive then falls
@@ -18,7 +20,17 @@ from pathlib import Path
 DEFAULT_SPEED = 20.0
 
 
-DOMAIN_SPAN = 101  # ROS_DOMAIN_ID 1..101; 0 is left to the user's own graph
+MAX_JOBS = len(DOMAINS) - 1
+"""Episodes at once: each run claims a ROS domain of its own (:mod:`bt_servicesim.ros.domain`),
+and one of them may be the user's, which no run claims."""
+
+
+MAX_TIME_LIMIT_S = 1e6
+"""The longest mission time limit in sim seconds, as ``python -m bt_servicesim.run`` allows."""
+
+
+MAX_EPISODE_TIMEOUT_S = 1e6
+"""The longest wall-time limit of an episode, in wall seconds (eleven days): longer is a typo."""
 
 
 STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
@@ -33,6 +45,7 @@ EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
 
 
 INTERRUPTED = "evaluation interrupted"
+"""The failure of an episode the evaluation stopped because it was stopped itself."""
 
 
 PENALTY_KEYS = ("failed_pickup", "failed_dropoff", "too_fast", "drifts", "contact",

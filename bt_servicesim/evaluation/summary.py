@@ -14,15 +14,16 @@ from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings
 
 
 def played(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rows of episodes that ran to an outcome: not those a Ctrl-C stopped or never ran."""
+    """The rows of episodes that ran to an outcome: not those a stopped evaluation stopped."""
     return [row for row in rows if not row.get("not_run")]
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The summary of one executive's rows (see ``docs/evaluation.md`` for the definitions).
 
-    Episodes an interrupted evaluation did not play to an outcome are counted as ``not_run``
-    and left out of every statistic; their rows are kept.
+    Episodes a stopped evaluation did not play to an outcome are counted as ``not_run`` and
+    left out of every statistic; their rows are kept. (:func:`summary_of` also counts the
+    episodes such an evaluation never started, which have no row.)
     """
     every = rows
     rows = played(every)
@@ -49,9 +50,28 @@ def mean_penalties(rows: list[dict[str, Any]]) -> dict[str, float]:
 
 
 def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """``summary.json``: each executive's name to its summary."""
-    return {executive: summarise([row for row in rows if row["executive"] == executive])
-            for executive in settings.executives}
+    """``summary.json``: each executive's name to its summary; ``not_run`` counts every planned
+    episode that was not played, started or not."""
+    summaries = {}
+    for executive in settings.executives:
+        summary = summarise([row for row in rows if row["executive"] == executive])
+        summary["not_run"] = settings.episodes * len(settings.scenarios) - summary["episodes"]
+        summaries[executive] = summary
+    return summaries
+
+
+def unplayed(settings: EvaluationSettings,
+             rows: list[dict[str, Any]]) -> dict[tuple[str, str], int]:
+    """How many planned episodes of each (executive, set) were not played, started or not."""
+    played_rows = played(rows)
+    counts = {}
+    for executive in settings.executives:
+        for scenario in settings.scenarios:
+            done = sum(row["executive"] == executive and row["scenario"] == scenario
+                       for row in played_rows)
+            if done < settings.episodes:
+                counts[(executive, scenario)] = settings.episodes - done
+    return counts
 
 
 def paired_scores(rows: list[dict[str, Any]], scenario: str, first: str,

@@ -1,4 +1,4 @@
-"""Keep ROS 2 traffic on this machine unless the user asks for more.
+"""Keep ROS 2 traffic on this machine unless the user asks for more, and leave nothing behind.
 
 Fast DDS announces itself by multicast on every network interface by default. A mission
 executive that students run on a laptop in a lab, and that CI runs hundreds of times, must not
@@ -6,19 +6,156 @@ spray discovery traffic over the network, so every entry point calls
 :func:`apply_localhost_defaults` before ``rclpy.init``. A user who wants the simulator and the
 executive on two machines sets ``ROS_AUTOMATIC_DISCOVERY_RANGE`` (and ``ROS_DOMAIN_ID``)
 themselves; their values are never overwritten.
+
+On loopback, rmw_fastrtps gives every participant (one per process) Fast DDS's shared-memory
+transport: a segment in ``/dev/shm`` (``fastdds_<16 hex digits>`` and its lock file ``…_el``,
+about 0.5 MB). The participant removes it when it is deleted; a process that ends without
+deleting it leaves it there for good. Called for this process (no ``environment`` given),
+:func:`apply_localhost_defaults` therefore also
+
+* removes the segments of dead participants that this user left (:func:`remove_dead_segments`):
+  what a process killed outright (SIGKILL) could not remove, the next process removes;
+* has the process delete its participant on its way out (:func:`shut_ros_down_at_exit`, at
+  exit): rclpy leaves that to the garbage collector, which at interpreter exit does not always
+  get to it -- a run that ended cleanly left its segment about one time in three.
+
+(``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` would avoid the segments altogether, but rmw_fastrtps
+replaces Fast DDS's builtin transports with its own, shared memory included, whenever discovery
+is ``LOCALHOST``: see docs/evaluation.md, "Leaks".)
 """
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import fcntl
+import gc
 import os
+import re
+import stat
+import sys
+import time
 from collections.abc import MutableMapping
+from pathlib import Path
+
+__all__ = ["apply_localhost_defaults", "remove_dead_segments", "shut_ros_down_at_exit"]
 
 DISCOVERY_RANGE_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 LOCALHOST = "LOCALHOST"
 
+SHARED_MEMORY = Path("/dev/shm")
+SEGMENT_LOCK = re.compile(r"^fastdds_[0-9a-f]{16}_el$")
+"""A Fast DDS segment's lock file; the segment is the same name without ``_el``."""
+SETTLED_S = 30.0
+"""A lock file younger than this is left alone: its owner may not have locked it yet (it does
+within microseconds of creating it)."""
+
+_at_exit_registered = False
+
 
 def apply_localhost_defaults(environment: MutableMapping[str, str] | None = None) -> None:
-    """Default DDS discovery to localhost in ``environment`` (``os.environ`` when omitted)."""
+    """Default DDS discovery to localhost in ``environment`` (``os.environ`` when omitted).
+
+    For this process (``environment`` omitted) also remove dead participants' shared-memory
+    segments and have the process delete its own participant at exit.
+    """
     target = os.environ if environment is None else environment
     if not target.get(DISCOVERY_RANGE_VARIABLE):
         target[DISCOVERY_RANGE_VARIABLE] = LOCALHOST
+    if environment is None:
+        remove_dead_segments()
+        _register_at_exit()
+
+
+def remove_dead_segments(directory: Path = SHARED_MEMORY, *,
+                         settled_s: float = SETTLED_S) -> list[str]:
+    """Remove the Fast DDS shared-memory segments whose owner is dead; the names removed.
+
+    A participant holds an exclusive ``flock`` on its segment's lock file for as long as it
+    lives; the kernel releases it when the process ends, however it ends. A segment is removed
+    only when that is provably over and the segment is this user's: the lock file and the
+    segment belong to this user, the lock file is older than ``settled_s``, and this process
+    gets the exclusive lock itself -- and holds it while both files are unlinked, so nobody can
+    take the segment meanwhile. Anything else (a live owner, another user's files, an error) is
+    left as it is.
+    """
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return []
+    removed = []
+    for name in names:
+        if SEGMENT_LOCK.match(name) and _remove_if_dead(directory, name, settled_s):
+            removed.append(name[:-3])
+    return removed
+
+
+def _remove_if_dead(directory: Path, lock_name: str, settled_s: float) -> bool:
+    lock_path, segment_path = directory / lock_name, directory / lock_name[:-3]
+    try:
+        descriptor = os.open(lock_path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        lock = os.fstat(descriptor)
+        if (lock.st_uid != os.getuid() or not stat.S_ISREG(lock.st_mode)
+                or time.time() - lock.st_mtime < settled_s):
+            return False
+        with contextlib.suppress(FileNotFoundError):
+            segment = os.lstat(segment_path)
+            if segment.st_uid != os.getuid() or not stat.S_ISREG(segment.st_mode):
+                return False
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # held: its owner is alive
+            return False
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(segment_path)
+        with contextlib.suppress(FileNotFoundError):
+            if os.lstat(lock_path).st_ino == lock.st_ino:  # still the file that was locked
+                os.unlink(lock_path)
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(descriptor)  # releases the lock
+
+
+def shut_ros_down_at_exit() -> None:
+    """Delete this process's DDS participant now, if rclpy made one.
+
+    rclpy deletes a context's participant only once nothing uses the context any more, and
+    leaves the rest to the garbage collector: ``Node.destroy_node`` does not destroy the node's
+    waitables (an ``ActionClient`` keeps the node, and with it the context, alive), and objects
+    in reference cycles or held by module globals are not always freed before the process ends.
+    So this shuts rclpy's default context down (which destroys the nodes it tracks), collects
+    the garbage, destroys every node still alive with its waitables, and destroys the context.
+
+    Registered with :mod:`atexit` by :func:`apply_localhost_defaults`, so it runs on every way
+    out the process controls (a return from ``main``, ``sys.exit``, an uncaught exception,
+    Ctrl-C), before the interpreter puts the default signal handlers back: a late stop signal
+    then finds the participant deleted already.
+    """
+    if "rclpy" not in sys.modules:
+        return
+    with contextlib.suppress(Exception):
+        from rclpy.node import Node
+        from rclpy.utilities import get_default_context
+
+        context = get_default_context()
+        context.try_shutdown()
+        gc.collect()
+        for node in [item for item in gc.get_objects() if isinstance(item, Node)]:
+            for waitable in list(node.waitables):
+                with contextlib.suppress(Exception):
+                    waitable.destroy()
+            with contextlib.suppress(Exception):
+                node.destroy_node()
+        context.destroy()
+
+
+def _register_at_exit() -> None:
+    global _at_exit_registered
+    if not _at_exit_registered:
+        atexit.register(shut_ros_down_at_exit)
+        _at_exit_registered = True

@@ -81,6 +81,16 @@ class ExecutiveNode(Node):
             self.callback_error = f"{type(error).__name__} in {where}: {text}"
             self.callback_traceback = "".join(traceback.format_exception(error))
 
+    def destroy_node(self) -> None:
+        """Destroy the shared action clients too: rclpy's ``destroy_node`` leaves waitables
+        alive, and an action client keeps the node, its context and its DDS participant (with a
+        shared-memory segment in /dev/shm) alive until the process ends, sometimes for good."""
+        for client in _clients_of(self).values():
+            if isinstance(client, ActionClient):
+                client.destroy()
+        _clients_of(self).clear()
+        super().destroy_node()
+
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., Any],
                             qos_profile: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks",

@@ -1,14 +1,20 @@
 """Batch evaluation with fake episodes: the summary's shape, stopped and crashed episodes, input.
 
-A fake episode is a small Python process standing in for ``python -m bt_servicesim.run``: it
-writes a report.json whose outcome depends on the executive and the seed, records the ROS
-environment it was given, and can be told to hang or to crash.
+A fake episode is a small Python process standing in for ``python -m bt_servicesim.run``: like
+the run it claims a ROS domain of its own and writes report.json with its run id, "running" at
+the start and its outcome (which depends on the executive and the seed) at the end; it records
+the ROS environment it was given, and can be told to hang (and write "interrupted" on SIGINT,
+beside an orphan child that writes a report of its own later), to crash, to be killed, or to
+crash after another run's report appeared in its directory. ``DRIVER`` runs the command itself,
+``python -m bt_servicesim.evaluate``, on fake episodes, for the tests that signal it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -22,7 +28,6 @@ from bt_servicesim.evaluation.episodes import (
     Episode,
     EpisodeCommand,
     EpisodeOutcome,
-    domain_ids,
     episode_row,
     plan_episodes,
     run_command,
@@ -30,45 +35,91 @@ from bt_servicesim.evaluation.episodes import (
 )
 from bt_servicesim.evaluation.report import PLOTS, markdown_report
 from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
-from bt_servicesim.evaluation.summary import summarise
+from bt_servicesim.evaluation.summary import summarise, summary_of
 from tests.fakes import run_module
 
 FAKE_EPISODE = r"""
 import json, os, signal, subprocess, sys, time
-out, executive, seed, scenario, mode = sys.argv[1:6]
+from bt_servicesim.ros.domain import claim_domain
+out, executive, seed, scenario, mode, run_id = sys.argv[1:7]
 started = time.time()
+users = os.environ.get("ROS_DOMAIN_ID", "")
+claim = claim_domain(avoid=int(users) if users.isdigit() else None)  # as the run does
+number = 0 if seed == "None" else int(seed)
+header = {"run_id": run_id, "ros_domain_id": claim.domain_id, "executive": executive,
+          "seed": None if seed == "None" else number, "world": "default"}
+
+def write(report):
+    path = os.path.join(out, "report.json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(report, f)
+    os.replace(path + ".tmp", path)
+
+write({**header, "status": "running"})
 if mode == "hang":
-    orphan = subprocess.Popen([sys.executable, "-c",
-        "import signal, time; signal.signal(signal.SIGINT, signal.SIG_IGN); time.sleep(120)"],
-        start_new_session=True)
+    orphan = subprocess.Popen([sys.executable, "-c", ORPHAN, out], start_new_session=True)
     with open(os.path.join(out, "pids"), "w") as f:
         f.write(f"{os.getpid()} {orphan.pid}")
-    time.sleep(120)
+    try:
+        time.sleep(120)
+    except KeyboardInterrupt:  # as the run: stop, write the report, exit 130
+        write({**header, "status": "interrupted", "completed": False, "score": 0.0,
+               "sim_time_s": 1.0, "checkpoints": [], "penalties": {}, "wall_time_s": 1.0,
+               "exit_code": 130, "failure": "interrupted (SIGINT)"})
+        sys.exit(130)
 if mode == "crash":
     print("Traceback: something broke", file=sys.stderr)
     sys.exit(3)
+if mode == "killed":
+    os.kill(os.getpid(), signal.SIGKILL)
+if mode == "foreign":  # what an orphan of an earlier evaluation wrote, then this run crashed
+    write({"run_id": "an-earlier-evaluation", "status": "completed", "completed": True,
+           "score": 4252.7, "sim_time_s": 900.0, "checkpoints": [], "penalties": {},
+           "executive": executive})
+    print("Traceback: crashed at start", file=sys.stderr)
+    sys.exit(3)
 time.sleep(0.3)
-number = 0 if seed == "None" else int(seed)
 completed = executive == "bt" or number % 2 == 0
 score = (100.0 if executive == "bt" else 200.0) + number
 first = 10.0 if executive == "bt" else 20.0
 checkpoints = [{"name": name, "done": completed or index < 3, "sim_time_s": first + 10.0 * index}
                for index, name in enumerate(("go_to_pick_up", "pick_up_guest",
                                               "drop_off_guest", "return_to_start"))]
-report = {
+write({
+    **header, "status": "completed" if completed else "failed",
     "completed": completed, "score": score, "sim_time_s": score / 2,
-    "checkpoints": checkpoints, "wall_time_s": 0.3, "seed": None if seed == "None" else number,
-    "world": "default", "executive": executive, "exit_code": 0 if completed else 1,
+    "checkpoints": checkpoints, "wall_time_s": 0.3, "exit_code": 0 if completed else 1,
     "failure": None if completed else "the mission tree ended with SUCCESS",
     "penalties": {"failed_pickup": 1 if executive == "baseline" else 0, "failed_dropoff": 0,
                   "too_fast": 0, "drifts": 0, "contact": 0.0, "approximation": 2.0},
     "environment": {key: os.environ.get(key) for key in
                     ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")},
     "interval": [started, time.time()],
-}
-with open(os.path.join(out, "report.json"), "w") as f:
-    json.dump(report, f)
+})
 """
+
+ORPHAN_DELAY_S = 5.0
+"""When the hanging fake's orphan writes a report of its own into the episode's directory."""
+
+ORPHAN = f"""
+import json, os, signal, sys, time
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+time.sleep({ORPHAN_DELAY_S})
+with open(os.path.join(sys.argv[1], "report.json"), "w") as f:
+    json.dump({{"run_id": "orphan", "status": "completed", "completed": True, "score": 1.0}}, f)
+"""
+
+DRIVER = r"""
+import sys
+from bt_servicesim.evaluate import main
+fake, mode = sys.argv[1:3]
+code = open(fake).read()
+def command(episode, settings):
+    return [sys.executable, "-c", code, str(episode.out), episode.executive, str(episode.seed),
+            episode.scenario, mode, episode.run_id]
+sys.exit(main(sys.argv[3:], command=command))
+"""
+"""``python -m bt_servicesim.evaluate`` with the fake episodes: ``DRIVER fake.py mode args``."""
 
 SUMMARY_KEYS = {"episodes", "success_rate", "mean_score", "median_score", "mean_sim_time_s",
                 "penalties", "wall_time_s", "not_run", "rows"}
@@ -83,20 +134,27 @@ def settings(tmp_path: Path, **changes: Any) -> EvaluationSettings:
     return EvaluationSettings(**values)
 
 
+def fake_code() -> str:
+    return FAKE_EPISODE.replace("ORPHAN", repr(ORPHAN), 1)
+
+
 def fake(mode_for: dict[tuple[str, int | None], str] | None = None) -> EpisodeCommand:
-    """The fake episode; ``mode_for[(executive, seed)]`` makes that one hang or crash."""
+    """The fake episode; ``mode_for[(executive, seed)]`` makes that one hang, crash, be killed
+    or leave another run's report."""
+    code = fake_code()
+
     def command(episode: Episode, _: EvaluationSettings) -> list[str]:
         mode = (mode_for or {}).get((episode.executive, episode.seed), "report")
-        return [sys.executable, "-c", FAKE_EPISODE, str(episode.out), episode.executive,
-                str(episode.seed), episode.scenario, mode]
+        return [sys.executable, "-c", code, str(episode.out), episode.executive,
+                str(episode.seed), episode.scenario, mode, episode.run_id]
     return command
 
 
 def quietly(tmp_path: Path, chosen: EvaluationSettings,
             command: EpisodeCommand) -> list[dict[str, Any]]:
     with (tmp_path / "progress.log").open("w") as stream:
-        rows, interrupted = evaluate(chosen, command=command, stream=stream)
-    assert not interrupted
+        rows, stopped_by = evaluate(chosen, command=command, stream=stream)
+    assert stopped_by is None
     return rows
 
 
@@ -136,18 +194,27 @@ def test_rows_are_the_run_reports_with_their_place_in_the_evaluation(tmp_path: P
     for row in rows:
         assert Path(row["out"]) == chosen.out / row["executive"] / row["scenario"] / str(
             row["episode"])
-        assert (Path(row["out"]) / "report.json").is_file()
+        report = json.loads((Path(row["out"]) / "report.json").read_text())
+        assert report["run_id"] == row["run_id"] and report["status"] in ("completed", "failed")
         assert row["environment"]["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
-        assert 1 <= int(row["environment"]["ROS_DOMAIN_ID"]) <= 101
+    assert len({row["run_id"] for row in rows}) == len(rows), "every episode has its own run id"
 
 
-def test_episodes_running_at_once_have_distinct_ros_domains(tmp_path: Path) -> None:
+def test_episodes_running_at_once_have_distinct_ros_domains_as_their_reports_say(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ROS_DOMAIN_ID", "0")
     rows = quietly(tmp_path, settings(tmp_path), fake())
+    for row in rows:
+        report = json.loads((Path(row["out"]) / "report.json").read_text())
+        assert row["ros_domain_id"] == report["ros_domain_id"]
+        assert 1 <= row["ros_domain_id"] <= 101
+        # the evaluation leaves the domain to the run: the environment is passed on as it is
+        assert row["environment"]["ROS_DOMAIN_ID"] == "0"
     overlapping = [(a, b) for a in rows for b in rows if a is not b
                    and a["interval"][0] < b["interval"][1] and b["interval"][0] < a["interval"][1]]
     assert overlapping, "two jobs ran at once"
     for a, b in overlapping:
-        assert a["environment"]["ROS_DOMAIN_ID"] != b["environment"]["ROS_DOMAIN_ID"]
+        assert a["ros_domain_id"] != b["ros_domain_id"]
 
 
 def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
@@ -198,6 +265,31 @@ def test_a_stale_report_never_passes_for_a_new_episode(tmp_path: Path) -> None:
     assert not rows[0]["completed"]
 
 
+def test_a_report_of_another_run_is_never_counted(tmp_path: Path) -> None:
+    """The measured bug: an orphan of an earlier evaluation wrote a completed report into the
+    directory of an episode that then crashed, and the crash counted as completed."""
+    chosen = settings(tmp_path, episodes=1, scenarios=("random",), executives=("bt",))
+    rows = quietly(tmp_path, chosen, fake({("bt", 0): "foreign"}))
+    row = rows[0]
+    assert not row["completed"] and row["score"] is None
+    assert "another run's, run id 'an-earlier-evaluation'" in row["failure"]
+    assert "exited with code 3" in row["failure"] and "crashed at start" in row["failure"]
+    assert row["ros_domain_id"] is None, "nothing of the other run's report is taken"
+    summary = json.loads((chosen.out / "summary.json").read_text())
+    assert summary["bt"]["success_rate"] == 0.0 and summary["bt"]["mean_score"] is None
+
+
+def test_a_report_that_still_says_running_is_a_failed_episode(tmp_path: Path) -> None:
+    chosen = settings(tmp_path, episodes=1, scenarios=("random",), executives=("bt",))
+    rows = quietly(tmp_path, chosen, fake({("bt", 0): "killed"}))
+    row = rows[0]
+    assert not row["completed"] and not row["not_run"]
+    assert row["failure"] == ("the run was killed by SIGKILL before it finished (its report "
+                              "still says 'running'): no output")
+    assert row["returncode"] == -9 and 1 <= row["ros_domain_id"] <= 101
+    assert "| bt | random | 1 | 0% |" in (chosen.out / "results.md").read_text()
+
+
 def test_resume_keeps_finished_episodes_and_runs_the_rest(tmp_path: Path) -> None:
     first = settings(tmp_path, episodes=1, scenarios=("random",), executives=("baseline",))
     kept = quietly(tmp_path, first, fake())[0]
@@ -224,7 +316,7 @@ def test_resume_reruns_an_episode_played_with_other_settings(tmp_path: Path) -> 
 
 def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
     chosen = settings(tmp_path, scenarios=("default", "hard"), speed=2.0)
-    plan = plan_episodes(chosen)
+    plan = list(plan_episodes(chosen))
     default = run_command(next(e for e in plan if e.scenario == "default"), chosen)
     hard = run_command(next(e for e in plan if e.scenario == "hard" and e.index == 1), chosen)
     assert "--seed" not in default and "--sim-arg=--difficulty" not in default
@@ -232,12 +324,21 @@ def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
     assert hard[-2:] == ["--sim-arg=--difficulty", "--sim-arg=hard"]
     assert hard[hard.index("--speed") + 1] == "2.0"
     assert hard[hard.index("--executive") + 1] in ("bt", "baseline")
+    for episode in plan:
+        command = run_command(episode, chosen)
+        assert command[command.index("--run-id") + 1] == episode.run_id
+        assert "--overwrite" in command, "a rerun's directory is the evaluation's own"
+        assert "ROS_DOMAIN_ID" not in " ".join(command)
+    assert len({episode.run_id for episode in plan}) == len(plan)
+    assert not {e.run_id for e in plan} & {e.run_id for e in plan_episodes(chosen)}, \
+        "each evaluation draws new run ids"
 
 
-def test_domains_are_distinct_and_in_range() -> None:
-    domains = domain_ids(8, base=97)
-    assert len(set(domains)) == 8
-    assert all(1 <= domain <= 101 for domain in domains)
+def test_the_time_limit_bound_is_the_runs() -> None:
+    from bt_servicesim.evaluation.settings import MAX_TIME_LIMIT_S
+    from bt_servicesim.run import MAX_TIME_LIMIT_S as RUN_MAX_TIME_LIMIT_S
+
+    assert MAX_TIME_LIMIT_S == RUN_MAX_TIME_LIMIT_S
 
 
 def alive(pid: int) -> bool:
@@ -260,15 +361,35 @@ def alive(pid: int) -> bool:
     ("arguments", "named"),
     [
         (["--episodes", "0"], "--episodes"),
+        (["--episodes", "-3"], "--episodes"),
         (["--episodes", "many"], "--episodes"),
+        (["--episodes", "inf"], "--episodes"),
+        (["--episodes", "nan"], "--episodes"),
         (["--scenarios", "easy"], "easy"),
         (["--scenarios", "random,random"], "repeated"),
         (["--executive", "bt,magic"], "magic"),
         (["--jobs", "0"], "--jobs"),
+        (["--jobs", "-1"], "--jobs"),
+        (["--jobs", "101"], "--jobs"),
+        (["--jobs", "nan"], "--jobs"),
+        (["--jobs", "inf"], "--jobs"),
         (["--seed", "-1"], "--seed"),
+        (["--seed", "nan"], "--seed"),
+        (["--seed", "inf"], "--seed"),
         (["--speed", "-2"], "--speed"),
+        (["--speed", "nan"], "--speed"),
+        (["--speed", "inf"], "--speed"),
+        (["--speed", "-inf"], "--speed"),
         (["--episode-timeout", "0"], "--episode-timeout"),
+        (["--episode-timeout", "-1"], "--episode-timeout"),
+        (["--episode-timeout", "nan"], "--episode-timeout"),
+        (["--episode-timeout", "inf"], "--episode-timeout"),
+        (["--episode-timeout", "1e7"], "--episode-timeout"),
         (["--time-limit", "-5"], "--time-limit"),
+        (["--time-limit", "0"], "--time-limit"),
+        (["--time-limit", "nan"], "--time-limit"),
+        (["--time-limit", "inf"], "--time-limit"),
+        (["--time-limit", "1e7"], "--time-limit"),
         (["--frobnicate"], "--frobnicate"),
     ],
 )
@@ -295,20 +416,23 @@ def evaluate_command(cwd: Path, *arguments: str) -> subprocess.CompletedProcess[
 
 def test_episodes_an_interrupted_evaluation_did_not_play_are_left_out_of_the_statistics(
         tmp_path: Path) -> None:
-    chosen = settings(tmp_path, episodes=3, scenarios=("random",), executives=("bt",))
-    episodes = plan_episodes(chosen)
+    chosen = settings(tmp_path, episodes=4, scenarios=("random",), executives=("bt",))
+    episodes = list(plan_episodes(chosen))
     for episode in episodes:
         episode.out.mkdir(parents=True)
-    played_ok = dict(episode_row(episodes[0], EpisodeOutcome(0, 1.0), 7),
+    played_ok = dict(episode_row(episodes[0], EpisodeOutcome(0, 1.0)),
                      completed=True, score=10.0, sim_time_s=5.0)
-    failed = episode_row(episodes[1], EpisodeOutcome(1, 1.0), 7)
-    not_run = episode_row(episodes[2], EpisodeOutcome(None, 0.0, INTERRUPTED), 7)
-    assert not_run["not_run"] and not failed["not_run"]
-    summary = summarise([played_ok, failed, not_run])
+    failed = episode_row(episodes[1], EpisodeOutcome(1, 1.0))
+    stopped = episode_row(episodes[2], EpisodeOutcome(130, 1.0, INTERRUPTED))
+    # episode 3 was never started: it has no row
+    assert stopped["not_run"] and not failed["not_run"]
+    rows = [played_ok, failed, stopped]
+    summary = summarise(rows)
     assert (summary["episodes"], summary["success_rate"], summary["not_run"]) == (2, 0.5, 1)
-    assert len(summary["rows"]) == 3, "the unplayed row is kept, not dropped"
-    report = markdown_report(chosen, [played_ok, failed, not_run], ".")
-    assert "not played and are left out of the statistics (bt random: 1)" in report
+    assert len(summary["rows"]) == 3, "the stopped episode's row is kept, not dropped"
+    assert summary_of(chosen, rows)["bt"]["not_run"] == 2, "stopped, and never started"
+    report = markdown_report(chosen, rows, ".")
+    assert "not played and are left out of the statistics (bt random: 2)" in report
     assert INTERRUPTED not in report.split("## Why episodes failed")[1]
 
 
@@ -320,3 +444,97 @@ def test_settings_that_overload_the_machine_are_warned_about() -> None:
     assert warning is not None and "2.2 cores" in warning and "this machine has 2" in warning
     assert load_warning(jobs=1, speed=0.0, cores=2) is None
     assert load_warning(jobs=2, speed=0.0, cores=2) is not None
+
+
+def start_evaluation(tmp_path: Path, mode: str, *arguments: str) -> subprocess.Popen[str]:
+    """``python -m bt_servicesim.evaluate`` on fake episodes, all in ``mode``, out in
+    ``tmp_path / "evaluation"``."""
+    fake_file = tmp_path / "fake_episode.py"
+    fake_file.write_text(fake_code())
+    return subprocess.Popen(
+        [sys.executable, "-c", DRIVER, str(fake_file), mode, "--out",
+         str(tmp_path / "evaluation"), *arguments],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def wait_for(paths: list[Path], process: subprocess.Popen[str], limit_s: float) -> None:
+    deadline = time.monotonic() + limit_s
+    while not all(path.is_file() and path.stat().st_size for path in paths):
+        assert process.poll() is None, process.communicate()
+        if time.monotonic() > deadline:
+            process.kill()
+            pytest.fail(f"none of {paths} within {limit_s} s: {process.communicate()}")
+        time.sleep(0.05)
+
+
+def files_under(directory: Path) -> dict[str, tuple[int, int]]:
+    return {str(path): (path.stat().st_size, path.stat().st_mtime_ns)
+            for path in directory.rglob("*") if path.is_file()}
+
+
+@pytest.mark.parametrize(("stop", "code"), [(signal.SIGTERM, 143), (signal.SIGHUP, 129),
+                                            (signal.SIGINT, 130)])
+def test_a_stop_signal_stops_every_episode_and_nothing_writes_after_the_exit(
+        tmp_path: Path, stop: signal.Signals, code: int) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
+                               "--jobs", "2", "--speed", "1")
+    out = tmp_path / "evaluation"
+    pid_files = [out / executive / "random" / "0" / "pids" for executive in ("bt", "baseline")]
+    wait_for(pid_files, process, 30.0)
+    pids = [int(pid) for path in pid_files for pid in path.read_text().split()]
+    process.send_signal(stop)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == code, stderr
+    assert "Traceback" not in stderr
+    assert all(not alive(pid) for pid in pids), "every episode and its orphan are gone"
+    written = files_under(out)
+    time.sleep(ORPHAN_DELAY_S + 1.0)  # the orphans would have written their reports by now
+    assert files_under(out) == written, "nothing writes into --out after the evaluation exited"
+    summary = json.loads((out / "summary.json").read_text())
+    for executive in ("bt", "baseline"):
+        (row,) = summary[executive]["rows"]
+        assert row["not_run"] and row["failure"] == "evaluation interrupted"
+        report = json.loads((Path(row["out"]) / "report.json").read_text())
+        assert (report["run_id"], report["status"]) == (row["run_id"], "interrupted")
+        assert summary[executive]["not_run"] == 3 and summary[executive]["episodes"] == 0
+    assert f"(stopped by {stop.name})" in stderr
+
+
+def test_a_million_episodes_start_at_once_and_ctrl_c_ends_them_cleanly(tmp_path: Path) -> None:
+    process = start_evaluation(tmp_path, "report", "--episodes", "1000000", "--jobs", "2",
+                               "--speed", "1")
+    out = tmp_path / "evaluation"
+    wait_for([out / "bt" / "default" / "0" / "report.json"], process, 10.0)
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["bt"]["episodes"] >= 1 and summary["bt"]["not_run"] > 2_990_000
+    assert "were not played" in (out / "results.md").read_text()
+
+
+def test_ctrl_c_while_the_first_episodes_start_prints_no_traceback(tmp_path: Path) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "2", "--jobs", "2", "--speed", "1")
+    wait_for([tmp_path / "evaluation" / "bt" / "default" / "0" / "report.json"], process, 10.0)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130 and "Traceback" not in stderr, stderr
+
+
+def test_episodes_die_with_an_evaluation_killed_outright(tmp_path: Path) -> None:
+    """SIGKILL cannot be caught: the episodes then get SIGTERM from the kernel (their parent-death
+    signal), which stops a run as Ctrl-C does, instead of running on as orphans."""
+    process = start_evaluation(tmp_path, "hang", "--episodes", "1", "--scenarios", "random",
+                               "--executive", "bt", "--jobs", "1", "--speed", "1")
+    pid_file = tmp_path / "evaluation" / "bt" / "random" / "0" / "pids"
+    wait_for([pid_file], process, 30.0)
+    episode, orphan = (int(pid) for pid in pid_file.read_text().split())
+    try:
+        process.kill()
+        process.communicate(timeout=30)
+        assert not alive(episode), "the episode went with the evaluation"
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(orphan, signal.SIGKILL)  # the fake's own child has no such signal
