@@ -40,13 +40,11 @@ from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, UsageError, error_
 from bt_servicesim.evaluation.episodes import (
     EpisodeCommand,
     ProgressBar,
-    StopSignals,
     as_minutes,
     plan_episodes,
     planned_count,
     run_command,
     run_episodes,
-    signal_of,
 )
 from bt_servicesim.evaluation.report import write_results
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
@@ -59,7 +57,7 @@ from bt_servicesim.evaluation.settings import (
     load_warning,
 )
 from bt_servicesim.mission.settings import EXECUTIVES
-from bt_servicesim.mission.stopping import Terminated
+from bt_servicesim.mission.stopping import StopSignals, Terminated, signal_of
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
 PROG = "python -m bt_servicesim.evaluate"

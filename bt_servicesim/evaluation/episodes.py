@@ -21,7 +21,6 @@ episodes under way.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import json
 import os
 import shutil
@@ -36,7 +35,6 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from queue import Empty, Queue
-from types import FrameType, TracebackType
 from typing import Any, TextIO
 
 from bt_servicesim.evaluation.report import source_revision
@@ -49,12 +47,15 @@ from bt_servicesim.evaluation.settings import (
 )
 from bt_servicesim.mission.report import read_report
 from bt_servicesim.mission.settings import REPORT_NAME
-from bt_servicesim.mission.stopping import STOP_SIGNALS, Terminated
+from bt_servicesim.mission.stopping import (
+    StopSignals,
+    Terminated,
+    parent_death_signal,
+)
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
 PARENT_FIELD, STATE_FIELD, START_TIME_FIELD = 4, 3, 22  # of /proc/<pid>/stat
 FINAL_STATUSES = ("completed", "failed", "interrupted")  # what a finished run's report says
-PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
 GONE_WAIT_S = 5.0  # wall seconds to wait for SIGKILLed processes to be gone
 POLL_S = 0.1  # wall seconds between looks at the episodes under way
 
@@ -210,24 +211,6 @@ class EpisodeRunner:
                         "exceeded; stopped")
 
 
-def parent_death_signal(parent: int) -> Callable[[], None]:
-    """What an episode runs before its program: SIGTERM to it when the evaluation is gone.
-
-    SIGTERM is a stop signal to the run (it stops its simulator and writes its report), so an
-    evaluation that is killed outright (SIGKILL, the OOM killer) leaves no episode running on
-    and writing into its directory. ``prctl`` is looked up here, in the parent: the child
-    only calls it, between fork and exec, where nothing may take a lock. (Linux ties the signal
-    to the thread that started the child, not the process: each episode's thread waits for its
-    episode to end, so it outlives it.)
-    """
-    prctl = ctypes.CDLL(None, use_errno=True).prctl
-
-    def in_the_child() -> None:
-        prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
-        if os.getppid() != parent:  # the evaluation died before the request took effect
-            os.kill(os.getpid(), signal.SIGTERM)
-
-    return in_the_child
 
 
 def stop_process_tree(process: subprocess.Popen[bytes]) -> None:
@@ -430,61 +413,8 @@ def as_minutes(seconds: float) -> str:
     return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
 
 
-class StopSignals:
-    """How an evaluation is stopped from outside: Ctrl-C (SIGINT), SIGTERM and SIGHUP alike.
-
-    Inside ``with StopSignals()``, a stop signal raises in the main thread (``KeyboardInterrupt``
-    or :class:`~bt_servicesim.mission.stopping.Terminated`), wherever the evaluation was:
-    planning, starting episodes or waiting for them. :meth:`hold` turns that off for the
-    clean-up -- stopping the episodes under way, writing the results -- during which a stop
-    signal is only noted. The first signal decides the exit status (128 + its number). On the
-    way out the handlers are put back as they were. Outside the main thread Python delivers no
-    signals, and nothing is changed.
-    """
-
-    def __init__(self) -> None:
-        self.received: list[int] = []
-        self._previous: dict[int, Any] = {}
-        self._main = threading.current_thread() is threading.main_thread()
-
-    def __enter__(self) -> StopSignals:
-        if self._main:
-            self._previous = {number: signal.getsignal(number) for number in STOP_SIGNALS}
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-            signal.signal(signal.SIGTERM, _raise_terminated)
-            signal.signal(signal.SIGHUP, _raise_terminated)
-        return self
-
-    def hold(self, stop: BaseException | None = None) -> None:
-        """From now on a stop signal is only noted; ``stop`` is one that was raised."""
-        if stop is not None:
-            self.received.insert(0, signal_of(stop))
-        if self._main:
-            for number in STOP_SIGNALS:
-                signal.signal(number, self._note)
-
-    @property
-    def first(self) -> int | None:
-        """The signal that stopped the evaluation, if one did."""
-        return self.received[0] if self.received else None
-
-    def _note(self, signal_number: int, _frame: FrameType | None) -> None:
-        self.received.append(signal_number)
-
-    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
-                 _traceback: TracebackType | None) -> None:
-        if self._main:
-            for number, handler in self._previous.items():
-                signal.signal(number, handler if handler is not None else signal.SIG_DFL)
 
 
-def _raise_terminated(signal_number: int, _frame: FrameType | None) -> None:
-    raise Terminated(signal_number)
-
-
-def signal_of(stop: BaseException) -> int:
-    """The signal a stop exception stands for."""
-    return stop.signal_number if isinstance(stop, Terminated) else int(signal.SIGINT)
 
 
 def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],

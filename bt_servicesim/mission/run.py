@@ -47,10 +47,9 @@ from bt_servicesim.mission.run_records import RunRecords
 from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.simulator_process import SimulatorProcess
 from bt_servicesim.mission.stopping import (
+    StopSignals,
     Terminated,
     exit_code_for,
-    hold_stop_signals,
-    stop_signals_raise,
 )
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.sim_clock import sim_now_s
@@ -86,26 +85,26 @@ class MissionRun:
 
     def execute(self) -> int:
         """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
-        stop_signals_raise()
-        write_report(self.settings.out / REPORT_NAME, self._header("running"))
-        try:
-            if self.simulator is not None:
-                self.simulator.start()
-            rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-            return self._execute_on(ExecutiveNode("bt_servicesim_executive"))
-        except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
-            hold_stop_signals()
-            self.failure = f"stopped by {_signal_name(stop)} while starting"
-            write_report(self.settings.out / REPORT_NAME,
-                         {**self._header("interrupted"), "failure": self.failure})
-            return exit_code_for(stop)
-        finally:
-            hold_stop_signals()
-            if self.simulator is not None:
-                self.simulator.stop()
-            rclpy.try_shutdown()
+        with StopSignals() as stops:
+            write_report(self.settings.out / REPORT_NAME, self._header("running"))
+            try:
+                if self.simulator is not None:
+                    self.simulator.start()
+                rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+                return self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
+            except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
+                stops.hold(stop)
+                self.failure = f"stopped by {_signal_name(stop)} while starting"
+                write_report(self.settings.out / REPORT_NAME,
+                             {**self._header("interrupted"), "failure": self.failure})
+                return exit_code_for(stop)
+            finally:
+                stops.hold()
+                if self.simulator is not None:
+                    self.simulator.stop()
+                rclpy.try_shutdown()
 
-    def _execute_on(self, node: ExecutiveNode) -> int:
+    def _execute_on(self, node: ExecutiveNode, stops: StopSignals) -> int:
         executor = events_executor()
         executor.add_node(node)
         monitor = RefereeMonitor(node)
@@ -115,19 +114,19 @@ class MissionRun:
         try:
             code = self._run(node, executor, monitor, executive, records)
         except (KeyboardInterrupt, Terminated) as stop:
-            hold_stop_signals()
+            stops.hold(stop)
             monitor.freeze()
             executive.interrupt()
             self._spin_for(executor, 0.5)
             self.failure = f"interrupted ({_signal_name(stop)})"
             code = exit_code_for(stop)
         except Exception as error:  # a bug of the run's own: still stop cleanly and report
-            hold_stop_signals()
+            stops.hold()
             monitor.freeze()
             self.failure = f"the run failed: {type(error).__name__}: {error}"
             self.traceback = "".join(traceback.format_exception(error))
             code = EXIT_FAILED
-        hold_stop_signals()
+        stops.hold()
         if self.simulator is not None:
             self.simulator.stop()
         records.finish(title=self._title(monitor))

@@ -12,15 +12,15 @@ it cannot see, a SIGKILL of the run, the simulator is started with Linux's paren
 
 from __future__ import annotations
 
-import ctypes
 import os
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
+from bt_servicesim.mission.stopping import parent_death_signal
+
 SIMULATOR_MODULE = "servicesim_sim"
-PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
 
 
 class SimulatorProcess:
@@ -50,7 +50,7 @@ class SimulatorProcess:
             self._process = subprocess.Popen(
                 self.command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                 env=os.environ.copy(), start_new_session=True,
-                preexec_fn=lambda: _die_with(parent),
+                preexec_fn=parent_death_signal(parent),
             )
 
     @property
@@ -89,12 +89,3 @@ class SimulatorProcess:
         except subprocess.TimeoutExpired:
             self._process.kill()
             self._process.wait()
-
-
-def _die_with(parent: int) -> None:
-    """In the child, before it runs the simulator: SIGTERM when ``parent`` dies."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    if libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
-        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
-    if os.getppid() != parent:  # the run died before the request took effect
-        os.kill(os.getpid(), signal.SIGTERM)

@@ -4,23 +4,30 @@ A run can be asked to stop by Ctrl-C (SIGINT), by ``kill`` or a process manager 
 its terminal closing (SIGHUP). All three take the same way out: the tree is stopped so that
 behaviours cancel what they have in flight, the simulator is stopped, the records are closed
 (an MCAP file needs its summary written to be read) and the report says how the run ended.
-SIGINT arrives as Python's ``KeyboardInterrupt``; :func:`stop_signals_raise` makes SIGTERM and
-SIGHUP raise :class:`Terminated`. Once clean-up has begun, :func:`hold_stop_signals` keeps a
-second signal from interrupting it: it is remembered, and the run still exits as it was told.
+Inside ``with StopSignals()``, SIGINT arrives as Python's ``KeyboardInterrupt`` and SIGTERM and
+SIGHUP raise :class:`Terminated`. Once clean-up has begun, :meth:`StopSignals.hold` keeps a
+second signal from interrupting it: it is remembered, and the process still exits as it was
+told. An evaluation is stopped the same way as a run.
 
-A SIGKILL cannot be caught; the simulator then goes with the run on its own
-(:mod:`bt_servicesim.mission.simulator_process`).
+A SIGKILL cannot be caught. A child started with :func:`parent_death_signal` (a run's
+simulator, an evaluation's episodes) gets SIGTERM from the kernel the moment its parent is gone.
 """
 
 from __future__ import annotations
 
+import ctypes
+import os
 import signal
-from types import FrameType
+import threading
+from collections.abc import Callable
+from types import FrameType, TracebackType
+from typing import Any
 
-__all__ = ["STOP_SIGNALS", "Terminated", "exit_code_for", "hold_stop_signals",
-           "stop_signals_raise"]
+__all__ = ["STOP_SIGNALS", "StopSignals", "Terminated", "exit_code_for", "parent_death_signal",
+           "signal_of"]
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
 
 
 class Terminated(BaseException):
@@ -36,27 +43,79 @@ def _raise_terminated(signal_number: int, _frame: FrameType | None) -> None:
     raise Terminated(signal_number)
 
 
-def stop_signals_raise() -> None:
-    """SIGTERM and SIGHUP raise :class:`Terminated`; SIGINT raises ``KeyboardInterrupt``."""
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    signal.signal(signal.SIGTERM, _raise_terminated)
-    signal.signal(signal.SIGHUP, _raise_terminated)
-
-
-def hold_stop_signals() -> list[int]:
-    """From now on a stop signal is only noted in the returned list (clean-up goes on)."""
-    received: list[int] = []
-
-    def note(signal_number: int, _frame: FrameType | None) -> None:
-        received.append(signal_number)
-
-    for number in STOP_SIGNALS:
-        signal.signal(number, note)
-    return received
-
-
 def exit_code_for(stop: BaseException) -> int:
     """128 + the signal's number, as a shell reports a process a signal ended."""
-    if isinstance(stop, Terminated):
-        return 128 + stop.signal_number
-    return 128 + signal.SIGINT
+    return 128 + signal_of(stop)
+
+
+def parent_death_signal(parent: int) -> Callable[[], None]:
+    """What an episode runs before its program: SIGTERM to it when the evaluation is gone.
+
+    SIGTERM is a stop signal to the run (it stops its simulator and writes its report), so an
+    evaluation that is killed outright (SIGKILL, the OOM killer) leaves no episode running on
+    and writing into its directory. ``prctl`` is looked up here, in the parent: the child
+    only calls it, between fork and exec, where nothing may take a lock. (Linux ties the signal
+    to the thread that started the child, not the process: each episode's thread waits for its
+    episode to end, so it outlives it.)
+    """
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+
+    def in_the_child() -> None:
+        prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+        if os.getppid() != parent:  # the evaluation died before the request took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    return in_the_child
+
+
+class StopSignals:
+    """How an evaluation is stopped from outside: Ctrl-C (SIGINT), SIGTERM and SIGHUP alike.
+
+    Inside ``with StopSignals()``, a stop signal raises in the main thread (``KeyboardInterrupt``
+    or :class:`~bt_servicesim.mission.stopping.Terminated`), wherever the evaluation was:
+    planning, starting episodes or waiting for them. :meth:`hold` turns that off for the
+    clean-up -- stopping the episodes under way, writing the results -- during which a stop
+    signal is only noted. The first signal decides the exit status (128 + its number). On the
+    way out the handlers are put back as they were. Outside the main thread Python delivers no
+    signals, and nothing is changed.
+    """
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+        self._previous: dict[int, Any] = {}
+        self._main = threading.current_thread() is threading.main_thread()
+
+    def __enter__(self) -> StopSignals:
+        if self._main:
+            self._previous = {number: signal.getsignal(number) for number in STOP_SIGNALS}
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+            signal.signal(signal.SIGTERM, _raise_terminated)
+            signal.signal(signal.SIGHUP, _raise_terminated)
+        return self
+
+    def hold(self, stop: BaseException | None = None) -> None:
+        """From now on a stop signal is only noted; ``stop`` is one that was raised."""
+        if stop is not None:
+            self.received.insert(0, signal_of(stop))
+        if self._main:
+            for number in STOP_SIGNALS:
+                signal.signal(number, self._note)
+
+    @property
+    def first(self) -> int | None:
+        """The signal that stopped the evaluation, if one did."""
+        return self.received[0] if self.received else None
+
+    def _note(self, signal_number: int, _frame: FrameType | None) -> None:
+        self.received.append(signal_number)
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 _traceback: TracebackType | None) -> None:
+        if self._main:
+            for number, handler in self._previous.items():
+                signal.signal(number, handler if handler is not None else signal.SIG_DFL)
+
+
+def signal_of(stop: BaseException) -> int:
+    """The signal a stop exception stands for."""
+    return stop.signal_number if isinstance(stop, Terminated) else int(signal.SIGINT)
