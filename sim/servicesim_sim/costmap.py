@@ -65,6 +65,13 @@ class GridFrame:
     def contains(self, row: int, col: int) -> bool:
         return 0 <= row < self.rows and 0 <= col < self.cols
 
+    def covers(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies on the grid; False for non-finite or huge values, which
+        :meth:`cell_of` cannot turn into a cell (``floor(inf)`` raises)."""
+        col = (x - self.origin_x) / self.resolution
+        row = (y - self.origin_y) / self.resolution
+        return 0.0 <= row < self.rows and 0.0 <= col < self.cols
+
     def centres(self, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World (x, y) of many cells' centres."""
         return (self.origin_x + (np.asarray(cols) + 0.5) * self.resolution,
@@ -156,9 +163,9 @@ class Costmap:
 
     def cost_at(self, x: float, y: float) -> int:
         """Combined cost under a world point; lethal outside the grid."""
-        row, col = self.frame.cell_of(x, y)
-        if not self.frame.contains(row, col):
+        if not self.frame.covers(x, y):
             return LETHAL
+        row, col = self.frame.cell_of(x, y)
         return int(self.costs()[row, col])
 
     def costs_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:

@@ -171,10 +171,26 @@ class SimEngine:
         self._localised = True
 
     def command_velocity(self, v: float, w: float) -> None:
+        """Drive with (v, w) for the next half second; a non-finite twist stops the robot.
+
+        Clamping alone would not do: ``min(0.5, nan)`` is 0.5, full speed ahead.
+        """
+        if not (math.isfinite(v) and math.isfinite(w)):
+            v = w = 0.0
         self._cmd_vel = (v, w, self.sim_time)
 
     def robot_pose(self) -> tuple[float, float, float]:
         return self.robot.pose
+
+    def map_to_odom(self) -> tuple[float, float, float]:
+        """The odom frame's pose (x, y, yaw) in map: the transform map -> odom.
+
+        The one place that knows where odometry's origin lies; everything given in ``odom``
+        (navigation goals) reaches ``map`` through it. Odometry is reported in ``map`` today,
+        so this is the identity; odometry that starts at zero at the spawn pose changes only
+        this function (it then returns the spawn pose).
+        """
+        return 0.0, 0.0, 0.0
 
     def robot_velocity(self) -> tuple[float, float]:
         return self.robot.v, self.robot.w

@@ -21,20 +21,34 @@ sim-time sleep) and says so with :meth:`DrainingExecutor.note_resumable`. Those 
 ways anything new becomes runnable here: the simulator has no timers and no guard conditions
 of its own. Looking costs about 170 µs a period; a paced loop looks while it waits, so
 only a loop at speed 0 or behind its schedule pays it.
+
+A burst must be served whole, and a flood must not stop the world: one pass of rclpy's executor
+(one wait) takes at most *one* request from each service and the action server, so a drain
+repeats passes for as long as an entity still has work, until nothing is left or it has spent
+:data:`DRAIN_BUDGET_S` of wall time; the rest waits for the next drain, after the loop has
+stepped. A drain that ended after its first pass served one request per service per I/O
+period: 50 waiting requests took 50 drains.
 """
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 from rclpy.exceptions import InvalidHandle
 from rclpy.executors import ShutdownException, SingleThreadedExecutor, TimeoutException
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation
+from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.waitable import NumberOfEntities
 
 _READY_KINDS = ("subscription", "client", "service", "timer", "guard_condition")
+#: The most wall time one drain spends before the loop steps on: a flood of requests slows
+#: the simulation (its pacer then slips) but never stops it. Each I/O period drains at least
+#: once, so at speed 0 a flood still gets this much time every 0.1 sim s.
+DRAIN_BUDGET_S = 0.05
+RCLError = rclpy_implementation.RCLError
 
 
 class EntityWaitSet:
@@ -136,11 +150,14 @@ class DrainingExecutor(SingleThreadedExecutor):
     service/navigation coroutines run before the loop steps on (a fixed number of
     ``spin_once`` calls would starve them when the sim runs many times faster than real time):
     through :meth:`wait_and_run` while the loop waits for the wall clock, else through
-    :meth:`run_ready`.
+    :meth:`run_ready`. A drain is bounded by ``drain_budget_s`` of wall time.
     """
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, drain_budget_s: float = DRAIN_BUDGET_S,
+                 **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        self.drain_budget_s = drain_budget_s
+        self.refused_sends = 0
         self._entity_wait_set: EntityWaitSet | None = None
         self._resumable = True  # whatever was added before the first pass runs in it
         # the context shutting down ends a wait at once, as it does rclpy's own waits
@@ -168,29 +185,50 @@ class DrainingExecutor(SingleThreadedExecutor):
         self._resumable = True
         return super().create_task(callback, *args, **kwargs)
 
-    def drain(self, *, limit: int = 500) -> int:
-        """Run ready callbacks until none is ready (or ``limit`` ran); how many ran.
+    def drain(self) -> int:
+        """Run ready callbacks until none is ready (or the budget is spent); how many ran.
 
-        A pass ends once the entities' wait finds nothing more; a task created meanwhile (a
-        goal's execution, a future's done callback) gets another pass.
+        A pass takes one request from each entity with work; passes repeat while an entity
+        still has some, or a task was created meanwhile (a goal's execution, a future's done
+        callback), and end once ``drain_budget_s`` of wall time has gone.
         """
+        deadline = time.monotonic() + self.drain_budget_s
         ran = 0
-        while ran < limit:
+        while True:
             self._resumable = False
-            ran += self._pass(limit - ran)
-            if not self._resumable:
-                break
-        return ran
+            ran += self._pass()
+            if not (self._resumable or self._entities().wait(0.0)):
+                return ran
+            if time.monotonic() >= deadline:
+                self._resumable = True  # the next drain goes on where this one stopped
+                return ran
 
-    def _pass(self, limit: int) -> int:
-        for count in range(limit):
+    def _pass(self) -> int:
+        """One wait of rclpy's executor: run what it yields until it times out."""
+        count = 0
+        while True:
             try:
                 handler, _, _ = self.wait_for_ready_callbacks(timeout_sec=0.0)
             except (TimeoutException, ShutdownException):
                 return count
             handler()
-            handler.result()  # raise what the callback raised
-        return limit
+            count += 1
+            self._raise_from(handler)
+
+    def _raise_from(self, handler: Any) -> None:
+        """Raise what the callback raised, but a reply DDS refused only costs that reply.
+
+        Writing an answer fails when DDS gives up on it (a client that vanished, a writer whose
+        reader stopped acknowledging): the client is gone or stuck, and the world goes on.
+        """
+        try:
+            handler.result()
+        except RCLError as error:
+            self.refused_sends += 1
+            if self.refused_sends in (1, 10, 100) or self.refused_sends % 1000 == 0:
+                get_logger("servicesim.executor").warning(
+                    f"a reply was dropped ({self.refused_sends} so far): "
+                    f"{str(error).splitlines()[0]}")
 
     def _entities(self) -> EntityWaitSet:
         nodes = self.get_nodes()

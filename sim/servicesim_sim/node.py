@@ -10,6 +10,15 @@ speed 0 it never sleeps. Nothing here reads the wall clock for simulation purpos
 Service answers and navigation results are coroutines that wait in *sim* time (for the
 service-latency knob and for navigation to finish), so no request ever blocks the loop, and a
 request the original made fail is answered at once with a documented error answer.
+
+Every request gets an answer, however many come at once: the services and the action's goal,
+cancel and result services hold every request of a burst (:data:`EVERY_REQUEST`; with ROS's
+default depth of 10 a burst of 1000 ``room_info`` requests got 12-25 answers), and the loop's
+executor takes all that wait (:mod:`servicesim_sim.executor`). Navigation runs one goal at a
+time, as Nav2's does: a new goal preempts the running one, which ends ABORTED with a result,
+and a goal that cannot be executed (its frame, its numbers, off the map:
+:mod:`servicesim_sim.goals`) is aborted with NavigateToPose's error code and a sentence, never
+executed as something else.
 """
 
 from __future__ import annotations
@@ -31,7 +40,7 @@ from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallba
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
@@ -50,6 +59,7 @@ from std_srvs.srv import Empty
 
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.executor import DrainingExecutor
+from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.pacing import Pacer
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
@@ -66,6 +76,16 @@ NO_PUBLISHER_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 NO_SUBSCRIPTION_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: Requests a service (or the action's goal, cancel and result services) holds until the loop
+#: takes them: a burst is held whole instead of cut to ROS's default ten (about 2 MB for 5000
+#: waiting room_info requests). Not KEEP_ALL: requests and replies share one profile, and a
+#: KEEP_ALL reply writer whose client stopped acknowledging (a frozen process) blocks each
+#: write ~100 ms once its history is full, then fails; that starved every other client of the
+#: service. A KEEP_LAST writer drops the frozen client's oldest replies instead.
+REQUEST_DEPTH = 10_000
+EVERY_REQUEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=REQUEST_DEPTH,
+                           reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.VOLATILE)
 ROBOT_NAME = "servicebot"
 
 
@@ -82,12 +102,14 @@ def duration(seconds: float) -> Duration:
 class SimulatorNode:
     """One simulated world on one ROS node; :meth:`run` until interrupted."""
 
-    def __init__(self, settings: SimSettings, *, node: Node) -> None:
+    def __init__(self, settings: SimSettings, *, node: Node,
+                 engine: SimEngine | None = None) -> None:
+        """``engine``: the world already set in motion for ``settings``; default: made here."""
         self.settings = settings
         self.node = node
-        scenario = make_scenario(settings.world, seed=settings.seed,
-                                 difficulty=settings.difficulty)
-        self.engine = SimEngine(world=settings.world, scenario=scenario)
+        self.engine = engine or SimEngine(
+            world=settings.world, scenario=make_scenario(settings.world, seed=settings.seed,
+                                                         difficulty=settings.difficulty))
         self.steps_per_io = max(1, round(IO_PERIOD_S / self.engine.dt))
         self._sleepers: list[tuple[float, Future]] = []
         self._active_goal: ServerGoalHandle | None = None
@@ -102,6 +124,8 @@ class SimulatorNode:
             execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
             handle_accepted_callback=self._on_goal_accepted,
             cancel_callback=lambda _: CancelResponse.ACCEPT,
+            goal_service_qos_profile=EVERY_REQUEST, result_service_qos_profile=EVERY_REQUEST,
+            cancel_service_qos_profile=EVERY_REQUEST,
         )
         node.create_subscription(PoseWithCovarianceStamped, "/servicebot/initialpose",
                                  self._on_initial_pose, LATCHED,
@@ -140,7 +164,8 @@ class SimulatorNode:
             (Drift, "/servicesim/drift", self._drift),
             (Empty, "/servicebot/move_base/clear_costmaps", self._clear_costmaps),
         ]
-        self._services = [self.node.create_service(kind, name, callback)
+        self._services = [self.node.create_service(kind, name, callback,
+                                                   qos_profile=EVERY_REQUEST)
                           for kind, name, callback in services]
 
     # ------------------------------------------------------------- sim sleep
@@ -234,7 +259,11 @@ class SimulatorNode:
 
     # ----------------------------------------------------------- navigation
     def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
-        self._active_goal = goal_handle  # an older goal still running is preempted
+        """One goal at a time, as Nav2: the new goal preempts whatever runs, at once."""
+        self._active_goal = goal_handle
+        for navigation in self._navigations:
+            self._end(navigation, self._preempted(navigation))
+        self._navigations.clear()
         goal_handle.execute()
 
     async def _navigate(self, goal_handle: ServerGoalHandle) -> NavigateToPose.Result:
@@ -242,15 +271,35 @@ class SimulatorNode:
 
         The goal is followed by the loop itself, once per I/O period, rather than by this
         coroutine waking each period: every wake-up of a coroutine costs the executor another
-        pass over its wait set, and that was a fifth of the simulator's time.
+        pass over its wait set, and that was a fifth of the simulator's time. A goal already
+        preempted (a burst accepts several before any runs) or refused ends here.
         """
-        pose = goal_handle.request.pose.pose
-        yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
+        if goal_handle is not self._active_goal:
+            goal_handle.abort()
+            return _preemption_result()
+        goal = self._goal_in_map(goal_handle.request.pose)
+        if isinstance(goal, GoalRefusal):
+            self.node.get_logger().warning(f"navigate_to_pose: goal aborted: {goal.error_msg}")
+            goal_handle.abort()
+            return NavigateToPose.Result(error_code=goal.error_code, error_msg=goal.error_msg)
         navigation = _Navigation(
-            handle=goal_handle, ticket=self.engine.navigate(pose.position.x, pose.position.y, yaw),
+            handle=goal_handle, ticket=self.engine.navigate(*goal),
             started=self.engine.sim_time, feedback_due=self.engine.sim_time + IO_PERIOD_S)
         self._navigations.append(navigation)
         return await navigation.result
+
+    def _goal_in_map(self, stamped: Any) -> tuple[float, float, float] | GoalRefusal:
+        """The goal message's pose in ``map`` (through the engine's map -> odom), or why not."""
+        position, orientation = stamped.pose.position, stamped.pose.orientation
+        goal = GoalPose(frame_id=stamped.header.frame_id,
+                        position=(position.x, position.y, position.z),
+                        orientation=(orientation.x, orientation.y, orientation.z, orientation.w))
+        return goal_in_map(goal, map_extent=self.settings.world.map.extent,
+                           map_to_odom=self.engine.map_to_odom())
+
+    def _end(self, navigation: _Navigation, result: NavigateToPose.Result) -> None:
+        """Complete the goal's coroutine with its result (its terminal state is already set)."""
+        navigation.result.set_result(result)
 
     def _advance_navigation(self) -> bool:
         """Once per I/O period: feedback, and the result of every goal that ended; whether
@@ -260,7 +309,7 @@ class SimulatorNode:
             result = self._navigation_outcome(navigation)
             if result is not None:
                 self._navigations.remove(navigation)
-                navigation.result.set_result(result)
+                self._end(navigation, result)
                 ended = True
         return ended
 
@@ -268,9 +317,7 @@ class SimulatorNode:
         """The goal's result if it ended (preempted, canceled, reached, failed), else None."""
         handle = navigation.handle
         if handle is not self._active_goal:
-            handle.abort()
-            return NavigateToPose.Result(error_code=NavigateToPose.Result.UNKNOWN,
-                                         error_msg="preempted by a newer goal")
+            return self._preempted(navigation)
         if handle.is_cancel_requested:
             self.engine.cancel_navigation(navigation.ticket)
             handle.canceled()
@@ -286,6 +333,12 @@ class SimulatorNode:
             handle.abort()
             return NavigateToPose.Result(error_code=state.error_code, error_msg=state.error_msg)
         return None
+
+    def _preempted(self, navigation: _Navigation) -> NavigateToPose.Result:
+        """Stop the goal's navigation and abort it: a newer goal has taken over."""
+        self.engine.cancel_navigation(navigation.ticket)
+        navigation.handle.abort()
+        return _preemption_result()
 
     def _feedback(self, state: NavigationState, started: float) -> NavigateToPose.Feedback:
         feedback = NavigateToPose.Feedback()
@@ -465,6 +518,12 @@ class SimulatorNode:
             return speed
         return 1.0
 
+
+def _preemption_result() -> NavigateToPose.Result:
+    return NavigateToPose.Result(error_code=NavigateToPose.Result.UNKNOWN,
+                                 error_msg="preempted by a newer goal")
+
+
 @dataclass
 class _Navigation:
     """A NavigateToPose goal the loop follows; ``result`` completes the goal's coroutine."""
@@ -486,14 +545,14 @@ def simulator_ros_node(name: str = "servicesim") -> Node:
         Parameter("start_type_description_service", value=False)])
 
 
-def run_simulator(settings: SimSettings) -> int:
+def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> int:
     """Run until Ctrl-C or SIGTERM; returns the process exit status."""
     import signal
 
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     node = simulator_ros_node()
-    simulator = SimulatorNode(settings, node=node)
+    simulator = SimulatorNode(settings, node=node, engine=engine)
     executor = DrainingExecutor()
     executor.add_node(node)
     task = simulator.engine.scenario.task

@@ -55,8 +55,13 @@ ROBOT_PASSAGE_CLEARANCE = 0.35  # free space the robot needs around its centre
 PASSAGE_CELL = 0.10  # metres per cell of the robot-passage connectivity grid
 PLACEMENT_DRAWS = 200  # random spots drawn per idler before giving up
 
+NAME_NUMBERS = 100_000  # human_00000 .. human_99999
+
 KeepClear = tuple[float, float, float]  # (x, y, radius) in metres
 
+
+class CrowdError(ValueError):
+    """The map has no room for the people the world asks for; the message is one line."""
 
 
 @dataclass
@@ -92,7 +97,7 @@ class Clearance:
         occupied = blocked & (np.asarray(occupancy_map.grid) != -1)
         rows, cols = np.nonzero(occupied if occupied.any() else ~blocked)
         if rows.size == 0:
-            raise ValueError("the occupancy map has neither free nor occupied cells")
+            raise CrowdError("the occupancy map has neither free nor occupied cells")
         window = blocked[rows.min():rows.max() + 1, cols.min():cols.max() + 1]
         walled = np.pad(window, 1, constant_values=True)
         cells = ndimage.distance_transform_edt(~walled)[1:-1, 1:-1]
@@ -161,6 +166,19 @@ class RobotPassage:
         return True
 
 
+def most_idlers(allowed: np.ndarray, resolution: float) -> int:
+    """An upper bound on how many idlers ``allowed`` cells hold, :data:`IDLER_SPACING` apart.
+
+    Discs of half the spacing round the idlers do not overlap, and each lies within the allowed
+    cells grown by its radius (and a cell and a half, for the grid): their areas add up to no
+    more than that grown area's.
+    """
+    radius = IDLER_SPACING / 2.0
+    reach = ndimage.distance_transform_edt(~allowed) * resolution
+    grown = float(np.count_nonzero(reach <= radius + 1.5 * resolution)) * resolution ** 2
+    return math.floor(grown / (math.pi * radius ** 2))
+
+
 def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
                 keep_clear: list[KeepClear]) -> list[tuple[float, float]]:
     """Random standing spots: off walls, apart, out of keep-clear discs, splitting nothing."""
@@ -170,7 +188,11 @@ def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
     allowed &= ~clearance.disc_mask(keep_clear, grow=PERSON_RADIUS)
     candidates = np.flatnonzero(allowed)
     if candidates.size == 0:
-        raise ValueError("no free spot for idlers: nowhere 0.6 m clear of walls")
+        raise CrowdError("no free spot for idlers: nowhere 0.6 m clear of walls")
+    most = most_idlers(allowed, clearance.resolution)
+    if count > most:  # drawing spots for them would only take minutes to fail
+        raise CrowdError(f"room for only {most} of {count} idlers on this map at best "
+                         f"({IDLER_SPACING:g} m apart, {IDLER_WALL_CLEARANCE:g} m from walls)")
     passage = RobotPassage(clearance)
     spots: list[tuple[float, float]] = []
     for _ in range(count * PLACEMENT_DRAWS):
@@ -183,7 +205,7 @@ def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
         if passage.block(x, y):
             spots.append((x, y))
     if len(spots) < count:
-        raise ValueError(f"room for only {len(spots)} of {count} idlers on this map")
+        raise CrowdError(f"room for only {len(spots)} of {count} idlers on this map")
     return spots
 
 
@@ -227,7 +249,7 @@ class RouteGrid:
         largest = np.argmax(np.bincount(component)) if component.size else 0
         self.nodes = np.flatnonzero(component == largest)
         if self.nodes.size < 2:
-            raise ValueError("no free space wide enough for walker routes on this map")
+            raise CrowdError("no free space wide enough for walker routes on this map")
 
     def loop(self, rng: np.random.Generator) -> np.ndarray:
         """A closed polyline (first point repeated last) through a few random waypoints."""
@@ -356,6 +378,9 @@ class Crowd:
                  keep_clear: list[KeepClear]) -> None:
         if walkers < 0 or idlers < 0:
             raise ValueError(f"walkers {walkers}, idlers {idlers}: counts must be 0 or more")
+        if walkers + idlers + len(taken_names) > NAME_NUMBERS:
+            raise CrowdError(f"walkers {walkers} and idlers {idlers}: more people than the "
+                             f"{NAME_NUMBERS} human_NNNNN names")
         clearance = Clearance.of(occupancy_map)
         names = fresh_names(rng, walkers + idlers, taken=taken_names)
         spots = idler_spots(clearance, rng, count=idlers, keep_clear=keep_clear)

@@ -29,6 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrow, Patch, Rectangle
 
 from servicesim_sim.engine import SimEngine
+from servicesim_sim.people import CrowdError
 from servicesim_sim.scenario import ScenarioError, make_scenario
 from servicesim_sim.world import (
     DEFAULT_WORLD,
@@ -214,6 +215,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         task, people = task_and_people(world, seed=args.seed)
     except (WorldError, ScenarioError) as error:
         parser.error(str(error))
+    except CrowdError as error:
+        parser.error(f"{args.world}: {error}")
     draw_world(world, task=task, people=people).savefig(args.out)
     print(args.out)
     return 0

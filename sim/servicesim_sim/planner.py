@@ -150,13 +150,13 @@ class Planner:
     def plan(self, start: Point, goal: Point, *, with_people: bool = True) -> PlanResult:
         """A path from ``start`` to ``goal``; ``with_people=False`` ignores the people marks."""
         frame = self.costmap.frame
-        start_cell, goal_cell = frame.cell_of(*start), frame.cell_of(*goal)
-        if not frame.contains(*start_cell):
+        if not frame.covers(*start):
             return failure(ComputePathToPoseError.START_OUTSIDE_MAP,
                            f"start ({start[0]:.2f}, {start[1]:.2f}) is outside the map")
-        if not frame.contains(*goal_cell):
+        if not frame.covers(*goal):
             return failure(ComputePathToPoseError.GOAL_OUTSIDE_MAP,
                            f"goal ({goal[0]:.2f}, {goal[1]:.2f}) is outside the map")
+        start_cell, goal_cell = frame.cell_of(*start), frame.cell_of(*goal)
         costs = self.costmap.costs() if with_people else self.costmap.static
         source = self._nearest_open(costs, start_cell, self.escape_radius)
         if source is None:
@@ -185,6 +185,8 @@ class Planner:
         not find a way short enough to be worth switching to.
         """
         frame = self.costmap.frame
+        if not (frame.covers(*start) and frame.covers(*goal)):
+            return 0.0
         start_cell, goal_cell = frame.cell_of(*start), frame.cell_of(*goal)
         if not (frame.contains(*start_cell) and frame.contains(*goal_cell)
                 and self._statically_open(start_cell) and self._statically_open(goal_cell)):

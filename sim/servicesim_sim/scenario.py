@@ -79,7 +79,7 @@ def make_scenario(world: World, *, seed: int | None = None,
         return _fixed_scenario(world, difficulty)
     rng = np.random.default_rng([0 if seed is None else seed, 1])
     free = _spot_mask(world)
-    pick_up, drop_off, start_area = _three_areas(world, rng)
+    pick_up, drop_off, start_area = _three_areas(world, rng, seeded=seed is not None)
     guest_x, guest_y = _guest_spot(world, world.areas[pick_up], free, rng, difficulty)
     start_x, start_y = _start_spot(world, world.areas[start_area], free, rng,
                                    guest=(guest_x, guest_y))
@@ -126,11 +126,13 @@ def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
     )
 
 
-def _three_areas(world: World, rng: np.random.Generator) -> tuple[str, str, str]:
+def _three_areas(world: World, rng: np.random.Generator, *,
+                 seeded: bool) -> tuple[str, str, str]:
     targets = list(world.targets)
     if len(targets) < 3:
-        raise ScenarioError(f"{world.path}: a random task needs at least 3 target areas, "
-                            f"the world has {len(targets)}")
+        why = "a random task (a seed)" if seeded else "with no fixed task (task:), a random task"
+        raise ScenarioError(f"{world.path}: {why} needs 3 target areas (pick-up, drop-off, "
+                            f"start); the world offers {len(targets)}")
     chosen = rng.choice(len(targets), size=3, replace=False)
     pick_up, drop_off, start = (targets[int(index)] for index in chosen)
     return pick_up, drop_off, start
@@ -182,7 +184,9 @@ def _out_of_range_spot(world: World, box: AreaBox, free: np.ndarray,
         x, y = centre_x + distance * math.cos(angle), centre_y + distance * math.sin(angle)
         if _free(world, reachable, x, y):
             return round(x, 3), round(y, 3)
-    raise ScenarioError(f"{world.path}: no free spot beyond RFID range of {box}")
+    low, high = OUT_OF_RANGE_M
+    raise ScenarioError(f"{world.path}: no free spot {low:g}-{high:g} m from the centre of area "
+                        f"{_area_label(world, box)} for a guest out of RFID range")
 
 
 def _reachable_from(world: World, free: np.ndarray, x: float, y: float) -> np.ndarray:
@@ -233,6 +237,13 @@ def _sampled_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.G
         if best is None or value < best[0]:
             best = (value, x, y)
     if best is None:
-        raise ScenarioError(f"{world.path}: no free spot inside area {box}")
+        raise ScenarioError(f"{world.path}: no free spot {PERSON_CLEARANCE_M:g} m from walls, "
+                            f"for a person or the robot, inside area {_area_label(world, box)}")
     return round(best[1], 3), round(best[2], 3)
+
+
+def _area_label(world: World, box: AreaBox) -> str:
+    """The area's name and box, for a message."""
+    name = next((name for name, area in world.areas.items() if area == box), "?")
+    return f"{name!r} (x {box.min_x:g}..{box.max_x:g}, y {box.min_y:g}..{box.max_y:g})"
 

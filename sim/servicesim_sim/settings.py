@@ -3,6 +3,11 @@
 Command-line arguments become a :class:`SimSettings`: the loaded world, the seed, the speed
 factor and the difficulty knobs. Every problem is a :class:`SettingsError` whose message is the
 one line the user sees (a broken world file names the file and what is wrong with it).
+
+A world can load and still be unplayable: too few target areas for a random task, no free spot
+in an area, no room for its people. :func:`playable_engine` finds that out by building the
+engine (the task drawn, the people placed) before ROS is touched, so it is one line and exit
+status 2 like any broken world file, never a traceback from inside a running node.
 """
 
 from __future__ import annotations
@@ -11,7 +16,9 @@ import argparse
 import dataclasses
 from dataclasses import dataclass
 
-from servicesim_sim.scenario import Difficulty
+from servicesim_sim.engine import SimEngine
+from servicesim_sim.people import CrowdError
+from servicesim_sim.scenario import Difficulty, ScenarioError, make_scenario
 from servicesim_sim.world import DEFAULT_WORLD, World, WorldError, load_world
 
 
@@ -52,6 +59,18 @@ def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
         raise SettingsError(f"{args.world}: {error.strerror or error}") from error
     return SimSettings(world=world, seed=args.seed, speed=args.speed,
                        difficulty=difficulty_from(args), camera_rate_hz=args.camera_rate)
+
+
+def playable_engine(settings: SimSettings) -> SimEngine:
+    """The world set in motion for these settings, or a :class:`SettingsError` saying why not."""
+    try:
+        scenario = make_scenario(settings.world, seed=settings.seed,
+                                 difficulty=settings.difficulty)
+        return SimEngine(world=settings.world, scenario=scenario)
+    except ScenarioError as error:  # its message names the world file
+        raise SettingsError(str(error)) from error
+    except CrowdError as error:
+        raise SettingsError(f"{settings.world.path}: {error}") from error
 
 
 def difficulty_from(args: argparse.Namespace) -> Difficulty:
