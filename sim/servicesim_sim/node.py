@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import array
 import math
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -545,12 +546,25 @@ def simulator_ros_node(name: str = "servicesim") -> Node:
         Parameter("start_type_description_service", value=False)])
 
 
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+"""The signals that stop the simulator, Ctrl-C's among them."""
+
+
 def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> int:
-    """Run until Ctrl-C or SIGTERM; returns the process exit status."""
-    import signal
+    """Run until Ctrl-C, SIGTERM or SIGHUP; returns the process exit status.
+
+    The first stop signal ends the loop; from then on further ones are ignored, so that the
+    shut-down (which deletes the DDS participant and its shared-memory segment) is not cut
+    short: a run that dies sends one SIGTERM per thread it had (``PR_SET_PDEATHSIG``).
+    """
+    def stop(_number: int, _frame: object) -> None:
+        for number in STOP_SIGNALS:
+            signal.signal(number, signal.SIG_IGN)
+        raise KeyboardInterrupt
 
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    for number in STOP_SIGNALS:
+        signal.signal(number, stop)
     node = simulator_ros_node()
     simulator = SimulatorNode(settings, node=node, engine=engine)
     executor = DrainingExecutor()
@@ -564,6 +578,8 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     except KeyboardInterrupt:
         pass
     finally:
+        for number in STOP_SIGNALS:  # a stop that came before the handler ran: clean up anyway
+            signal.signal(number, signal.SIG_IGN)
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()

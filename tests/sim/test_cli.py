@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -44,3 +46,26 @@ def test_a_broken_world_file_is_named_in_one_line(tmp_path: Path) -> None:
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "world.yaml" in lines[0] and "missing_map.yaml" in lines[0]
+
+
+@pytest.mark.parametrize("stops", [[signal.SIGHUP], [signal.SIGTERM] * 4, [signal.SIGINT]])
+def test_stop_signals_end_the_simulator_cleanly_even_when_repeated(
+        tmp_path: Path, stops: list[signal.Signals]) -> None:
+    """A stop signal ends it with status 0; the ones after it (a dying run sends one per
+    thread) do not cut its shut-down short."""
+    log = tmp_path / "sim.log"
+    with log.open("wb") as stream:
+        process = subprocess.Popen([sys.executable, "-m", "servicesim_sim", "--speed", "1"],
+                                   stdout=stream, stderr=subprocess.STDOUT)
+    try:
+        deadline = time.monotonic() + 60
+        while b"world " not in log.read_bytes():
+            assert time.monotonic() < deadline and process.poll() is None, log.read_text()
+            time.sleep(0.1)
+        for stop in stops:
+            process.send_signal(stop)
+        assert process.wait(timeout=30) == 0, log.read_text()[-2000:]
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
