@@ -33,6 +33,8 @@ from rclpy.node import Node
 
 __all__ = ["SimTicker"]
 
+_LIVE: dict[int, set[SimTicker]] = {}
+"""Tickers registered on a clock, by node, kept alive until cancelled."""
 DUE_TOLERANCE = 0.1
 """How early, as a share of the period, a clock update may be and still count as due."""
 
@@ -64,6 +66,9 @@ class SimTicker:
                                       on_clock_change=False)
             self._jump_handle = self._clock.create_jump_callback(
                 threshold, post_callback=self._on_clock)
+            # rclpy's clock keeps only a raw pointer to the handle: a ticker nobody holds on to
+            # would be collected while registered, and the clock would call freed memory
+            _LIVE.setdefault(id(node), set()).add(self)
         else:
             self._timer = node.create_timer(period_s, self._tick)
 
@@ -73,6 +78,7 @@ class SimTicker:
         if self._jump_handle is not None:
             self._jump_handle.unregister()
             self._jump_handle = None
+            _LIVE.get(id(self.node), set()).discard(self)
         if self._timer is not None:
             self.node.destroy_timer(self._timer)
             self._timer = None
