@@ -61,15 +61,32 @@ def _ascii_symbols() -> Iterator[None]:
         py_trees.console.has_unicode = original
 
 
+PY_TREES_COMPOSITES = (py_trees.composites.Sequence, py_trees.composites.Selector,
+                       py_trees.composites.Parallel)
+CONTROL_COLOUR = "#f4a261"
+"""Fill of a control py_trees has no symbol for, in graphs."""
+
+
 def dot_source(root: py_trees.behaviour.Behaviour) -> str:
-    """py_trees' dot graph of the tree, nodes labelled with short names; deterministic."""
+    """py_trees' dot graph of the tree, nodes labelled with short names; deterministic.
+
+    py_trees draws a control it has no symbol for (this project's ``RecoveryNode``) as a grey
+    ellipse, like a leaf; here it is a box of its own colour, labelled with its class too.
+    """
     with _ascii_symbols():
         graph = py_trees.display.dot_tree(root)
     graph.set_name(py_trees.utilities.get_valid_filename(short_label(root.name)) or "tree")
+    controls = {behaviour.name: type(behaviour).__name__ for behaviour in root.iterate()
+                if isinstance(behaviour, py_trees.composites.Composite)
+                and not isinstance(behaviour, PY_TREES_COMPOSITES)}
     for node in graph.get_nodes():
         name, label = node.get_name().strip('"'), node.get("label")
         if label is not None and name:
             node.set("label", label.replace(name, short_label(name), 1))
+        if name in controls:
+            node.set("label", f'"{short_label(name)}\\n({controls[name]})"')
+            node.set("shape", "box")
+            node.set("fillcolor", CONTROL_COLOUR)
     return graph.to_string()
 
 

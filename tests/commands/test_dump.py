@@ -204,3 +204,17 @@ def svg_graph(path: Path) -> tuple[set[str], set[tuple[str, str]]]:
             source, _, destination = (title.text or "").partition("->")
             edges.add((source, destination))
     return nodes, edges
+
+
+def test_a_control_py_trees_has_no_symbol_for_is_drawn_as_itself(tmp_path: Path) -> None:
+    tree = tmp_path / "recovery.xml"
+    tree.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="M"><BehaviorTree ID="M">'
+        '<RecoveryNode name="Retrying" number_of_retries="2">'
+        '<ClearCostmaps name="Act"/><ClearCostmaps name="Recover"/>'
+        '</RecoveryNode></BehaviorTree></root>')
+    source = dump.dot_source(load_mission_tree(tree))
+    retrying = next(line for line in source.splitlines() if "label=\"Retrying" in line)
+    assert "(RecoveryNode)" in retrying and "shape=box" in retrying
+    act = next(line for line in source.splitlines() if "label=Act" in line)
+    assert "shape=ellipse" in act  # leaves stay as py_trees draws them
