@@ -66,10 +66,10 @@ class Client:
     """The timing client: a node, its executor and the handles it times."""
 
     def __init__(self, simulator: Simulator) -> None:
+        from nav2_msgs.action import NavigateToPose
         from rclpy.action import ActionClient
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
-        from servicesim_competition.action import NavigateToPose
         from servicesim_competition.srv import RoomInfo
         from std_srvs.srv import Empty
 

@@ -38,6 +38,7 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 import py_trees
 from builtin_interfaces.msg import Time
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.blackboard import Blackboard
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
@@ -49,7 +50,6 @@ from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
 from rosgraph_msgs.msg import Clock
 from servicesim_competition import srv
-from servicesim_competition.action import NavigateToPose
 from servicesim_competition.msg import ActorNames
 from std_srvs.srv import Empty
 

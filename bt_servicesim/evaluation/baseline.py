@@ -38,6 +38,7 @@ from typing import Any
 import py_trees
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav2_msgs.action import NavigateToPose
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.client import Client
@@ -45,7 +46,6 @@ from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.task import Future
 from servicesim_competition import srv
-from servicesim_competition.action import NavigateToPose
 from std_srvs.srv import Empty
 
 from bt_servicesim.planning.geometry import Box, Pose2D

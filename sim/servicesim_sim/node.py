@@ -34,6 +34,7 @@ from typing import Any
 import rclpy
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
@@ -46,7 +47,6 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image
-from servicesim_competition.action import NavigateToPose
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import (
     Drift,

@@ -39,7 +39,7 @@ defaults()
 import rclpy
 from rclpy.action import ActionClient
 from rclpy.node import Node
-from servicesim_competition.action import NavigateToPose
+from nav2_msgs.action import NavigateToPose
 rclpy.init()
 node = Node("kept_alive")
 client = ActionClient(node, NavigateToPose, "/kept_alive")  # destroy_node() leaves it

@@ -8,11 +8,11 @@ from typing import Any
 
 import pytest
 import rclpy
+from nav2_msgs.action import NavigateToPose
 from rclpy.action import ActionClient
 from rclpy.client import Client
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
-from servicesim_competition.action import NavigateToPose
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 
 from bt_servicesim.ros.environment import apply_localhost_defaults

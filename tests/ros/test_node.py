@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from nav2_msgs.action import NavigateToPose
 from rclpy.event_handler import SubscriptionEventCallbacks
-from servicesim_competition.action import NavigateToPose
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 from std_msgs.msg import String
 

@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid
 from rclpy.action import ActionClient
 from rclpy.context import Context
@@ -19,7 +20,6 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from servicesim_competition.action import NavigateToPose
 from servicesim_competition.msg import RefereeState, Score
 from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, TaskInfo
 

@@ -18,12 +18,12 @@ sees sim time jump before it has read the feedback that came with it.
 from typing import Any, ClassVar
 
 from action_msgs.msg import GoalStatus
+from nav2_msgs.action import NavigateToPose as NavigateToPoseAction
 from py_trees.ports import NoDataAvailable, PortInformation
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.node import Node
 from rclpy.task import Future
-from servicesim_competition.action import NavigateToPose as NavigateToPoseAction
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.planning.geometry import Pose2D

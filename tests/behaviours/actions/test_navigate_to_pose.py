@@ -12,8 +12,8 @@ from typing import Any
 
 import py_trees
 import pytest
+from nav2_msgs.action import NavigateToPose as NavigateToPoseAction
 from py_trees.blackboard import Blackboard
-from servicesim_competition.action import NavigateToPose as NavigateToPoseAction
 
 from bt_servicesim.behaviours.actions.navigate_to_pose import NavigateToPose
 from bt_servicesim.planning.geometry import Pose2D
