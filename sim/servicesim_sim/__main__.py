@@ -39,6 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--rfid-dropout", type=float, help="probability an RFID message is lost")
     parser.add_argument("--service-latency", type=float,
                         help="sim seconds before a referee service answers")
+    parser.add_argument("--odom-drift", type=float,
+                        help="encoder calibration error of odometry (default 0: exact)")
+    parser.add_argument("--localisation-noise", type=float,
+                        help="metres (and radians) of noise on the localisation estimate")
     parser.add_argument("--camera-rate", type=float, default=2.0,
                         help="camera frames per sim second (0 = off)")
     return parser

@@ -21,10 +21,20 @@ import numpy as np
 from servicesim_sim import referee as rules
 from servicesim_sim.camera import render_front_camera
 from servicesim_sim.guest import LOST_DISTANCE, Guest, GuestState
+from servicesim_sim.localisation import (
+    IDENTITY,
+    AmclModel,
+    Estimate,
+    Pose,
+    WheelOdometry,
+    between,
+    compose,
+)
 from servicesim_sim.navigation import Navigator
 from servicesim_sim.people import Crowd
 from servicesim_sim.referee import Referee
 from servicesim_sim.robot import BODY_RADIUS, Robot, WallClearance
+from servicesim_sim.scan import Scanner, surface_clearance
 from servicesim_sim.scenario import Scenario
 from servicesim_sim.world import World
 
@@ -70,6 +80,16 @@ class SimEngine:
                            walkers=world.people.walkers, idlers=world.people.idlers,
                            taken_names={task.guest_name}, keep_clear=self._keep_clear())
         self._knobs = np.random.default_rng(scenario.knob_seed)
+        difficulty = scenario.difficulty
+        self.odometry = WheelOdometry(drift=difficulty.odom_drift,
+                                      rng=np.random.default_rng([scenario.knob_seed, 2]))
+        self.localisation = AmclModel(noise=difficulty.localisation_noise,
+                                      rng=np.random.default_rng([scenario.knob_seed, 3]))
+        self._estimate_due = False
+        self.scanner = Scanner(clearance=surface_clearance(
+            walls.grid, origin=(world.map.origin_x, world.map.origin_y),
+            resolution=world.map.resolution), person_radius=PERSON_BODY_RADIUS)
+        self._scan_noise = np.random.default_rng([scenario.knob_seed, 4])
         self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
         self._ticket = 0
         self._localised = False
@@ -167,8 +187,11 @@ class SimEngine:
 
     # ---------------------------------------------------------------- the robot
     def set_initial_pose(self, x: float, y: float, yaw: float) -> None:
-        """Localisation input. The robot's true pose is the world's; this makes it localised."""
+        """Localisation input: the estimate starts at (x, y, yaw) in map (AMCL's initialpose)."""
         self._localised = True
+        self.localisation.set_initial_pose((x, y, yaw), odom=self.odometry.pose,
+                                           truth=self.robot.pose)
+        self._estimate_due = True
 
     def command_velocity(self, v: float, w: float) -> None:
         """Drive with (v, w) for the next half second; a non-finite twist stops the robot.
@@ -180,17 +203,31 @@ class SimEngine:
         self._cmd_vel = (v, w, self.sim_time)
 
     def robot_pose(self) -> tuple[float, float, float]:
+        """The true pose in map: ground truth, for the referee, records and tests only."""
         return self.robot.pose
+
+    def odometry_pose(self) -> Pose:
+        """The wheel odometry: the pose in ``odom``, zero at the spawn pose."""
+        return self.odometry.pose
+
+    def estimated_pose(self) -> Pose | None:
+        """The localisation's map pose now (map -> odom -> base), None before an initial pose."""
+        return self.localisation.pose(self.odometry.pose)
+
+    def new_estimate(self) -> Estimate | None:
+        """The estimate AMCL would publish on ``amcl_pose`` since the last call, if any."""
+        due, self._estimate_due = self._estimate_due, False
+        return self.localisation.estimate if due else None
 
     def map_to_odom(self) -> tuple[float, float, float]:
         """The odom frame's pose (x, y, yaw) in map: the transform map -> odom.
 
         The one place that knows where odometry's origin lies; everything given in ``odom``
-        (navigation goals) reaches ``map`` through it. Odometry is reported in ``map`` today,
-        so this is the identity; odometry that starts at zero at the spawn pose changes only
-        this function (it then returns the spawn pose).
+        (navigation goals) reaches ``map`` through it. It is the localisation's, as AMCL
+        broadcasts it; the identity before an initial pose (nothing is localised then, and
+        navigation refuses every goal).
         """
-        return 0.0, 0.0, 0.0
+        return self.localisation.map_to_odom or IDENTITY
 
     def robot_velocity(self) -> tuple[float, float]:
         return self.robot.v, self.robot.w
@@ -203,12 +240,24 @@ class SimEngine:
                 status="aborted", error_code=TF_ERROR,
                 error_msg="robot not localised: publish /servicebot/initialpose first")
             return self._ticket
+        x, y, yaw = self._true_goal((x, y, yaw))
         abort_after = None
         if self._knobs.random() < self.scenario.difficulty.nav_abort_probability:
             abort_after = float(self._knobs.uniform(*NAV_ABORT_WINDOW_S))
         self.navigator.start(x, y, yaw, now=self.sim_time, abort_after_s=abort_after)
         self._next_control = self.sim_time
         return self._ticket
+
+    def _true_goal(self, goal: Pose) -> Pose:
+        """Where the robot truly stands when its estimate reaches ``goal`` (in map).
+
+        Nav2 drives its estimate to the goal; the robot follows the truth here, so the goal is
+        moved by the estimate's error now (none when the estimate is the truth).
+        """
+        estimate = self.estimated_pose()
+        if estimate is None:
+            return goal
+        return compose(self.robot.pose, between(estimate, goal))
 
     def cancel_navigation(self, ticket: int) -> None:
         if ticket == self._ticket:
@@ -233,6 +282,9 @@ class SimEngine:
         dt = self.dt
         v, w = self._drive_command()
         self.robot.step(dt, v=v, w=w)
+        self.odometry.update(v=self.robot.v, w=self.robot.w, dt=dt)
+        if self.localisation.update(odom=self.odometry.pose, truth=self.robot.pose):
+            self._estimate_due = True
         self.guest.record_robot(self.robot.x, self.robot.y)
         self.guest.step(dt, robot_x=self.robot.x, robot_y=self.robot.y)
         self._steps += 1
@@ -349,6 +401,11 @@ class SimEngine:
 
     def guest_state(self) -> str:
         return self.guest.state.value
+
+    def scan_ranges(self) -> np.ndarray:
+        """One lidar sweep from the true pose (:mod:`servicesim_sim.scan`)."""
+        people = [(x, y) for _, _, x, y in self.people_states()]
+        return self.scanner.ranges(self.robot.pose, people, rng=self._scan_noise)
 
     def camera_image(self) -> np.ndarray:
         return render_front_camera(robot=self.robot.pose, people=self.people_states(),

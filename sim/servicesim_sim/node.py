@@ -33,7 +33,7 @@ from typing import Any
 
 import rclpy
 from builtin_interfaces.msg import Duration, Time
-from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped, Twist
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -46,7 +46,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import Image, LaserScan
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import (
     Drift,
@@ -57,11 +57,14 @@ from servicesim_competition.srv import (
     TaskInfo,
 )
 from std_srvs.srv import Empty
+from tf2_msgs.msg import TFMessage
 
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
+from servicesim_sim.localisation import Estimate, Pose
 from servicesim_sim.pacing import Pacer
+from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
 
@@ -88,6 +91,12 @@ EVERY_REQUEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=REQUEST_DEPTH,
                            reliability=ReliabilityPolicy.RELIABLE,
                            durability=DurabilityPolicy.VOLATILE)
 ROBOT_NAME = "servicebot"
+MAP_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"  # as the original's AMCL
+BASE_LINK_HEIGHT_M = 0.749  # servicebot.urdf: base_footprint -> base_link
+LIDAR_FRAME = "lidar_frame"
+GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
+"""The robot's true pose in map, as Gazebo's model state would give it: for records and
+tests, never for an executive (a real robot has no such topic)."""
 
 
 def stamp(seconds: float) -> Time:
@@ -143,6 +152,11 @@ class SimulatorNode:
 
         self._clock = publisher(Clock, "/clock", 10)
         self._odom = publisher(Odometry, "/servicebot/odom", 10)
+        self._truth = publisher(Odometry, GROUND_TRUTH_TOPIC, 10)
+        self._amcl_pose = publisher(PoseWithCovarianceStamped, "/servicebot/amcl_pose", LATCHED)
+        self._tf = publisher(TFMessage, "/tf", 100)
+        self._tf_static = publisher(TFMessage, "/tf_static", LATCHED)
+        self._scan = publisher(LaserScan, "/servicebot/scan", 2)
         self._rfid = publisher(ActorNames, "/servicebot/rfid", 10)
         self._score = publisher(Score, "/servicesim/score", 10)
         self._referee = publisher(RefereeState, "/servicesim/referee", LATCHED)
@@ -153,7 +167,16 @@ class SimulatorNode:
         self._clock_message = Clock()
         self._score_message = Score()
         self._odom_message = Odometry()
-        self._odom_message.header.frame_id, self._odom_message.child_frame_id = "map", "base_link"
+        self._odom_message.header.frame_id = ODOM_FRAME
+        self._odom_message.child_frame_id = BASE_FRAME
+        self._truth_message = Odometry()
+        self._truth_message.header.frame_id = MAP_FRAME
+        self._truth_message.child_frame_id = BASE_FRAME
+        self._scan_next = 0.0
+        self._tf_static.publish(TFMessage(transforms=[
+            transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
+            transform("base_link", LIDAR_FRAME, LIDAR_OFFSET,
+                      z=LIDAR_HEIGHT_M - BASE_LINK_HEIGHT_M)]))
 
     def _make_services(self) -> None:
         services: list[tuple[Any, str, Callable[..., Any]]] = [
@@ -351,6 +374,11 @@ class SimulatorNode:
         return feedback
 
     def _on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
+        """AMCL's initialpose: taken in the global frame only, as Nav2's AMCL does."""
+        if message.header.frame_id != MAP_FRAME:
+            self.node.get_logger().warning(
+                f"initial pose ignored: frame {message.header.frame_id!r}, must be {MAP_FRAME!r}")
+            return
         pose = message.pose.pose
         yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
         self.engine.set_initial_pose(pose.position.x, pose.position.y, yaw)
@@ -360,9 +388,10 @@ class SimulatorNode:
 
     # ------------------------------------------------------------- messages
     def _pose_stamped(self) -> Any:
+        """The robot's pose as Nav2's feedback gives it: the localisation's map pose."""
         from geometry_msgs.msg import PoseStamped
 
-        x, y, yaw = self.engine.robot_pose()
+        x, y, yaw = self.engine.estimated_pose() or self.engine.robot_pose()
         message = PoseStamped()
         message.header.stamp = stamp(self.engine.sim_time)
         message.header.frame_id = "map"
@@ -388,6 +417,8 @@ class SimulatorNode:
         self._clock_message.clock = stamp(now)
         self._send(self._clock, self._clock_message)
         self._publish_odom()
+        self._publish_localisation()
+        self._publish_scan()
         names = self.engine.rfid_names()
         if names is not None:  # silent when nobody is near, or when a reading is dropped
             self._send(self._rfid, ActorNames(actor_names=names))
@@ -426,15 +457,44 @@ class SimulatorNode:
                     f"{str(error).splitlines()[0]}")
 
     def _publish_odom(self) -> None:
-        x, y, yaw = self.engine.robot_pose()
-        v, w = self.engine.robot_velocity()
-        odom = self._odom_message
-        odom.header.stamp = stamp(self.engine.sim_time)
-        odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
-        odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = (
-            math.sin(yaw / 2.0), math.cos(yaw / 2.0))
-        odom.twist.twist.linear.x, odom.twist.twist.angular.z = v, w
-        self._send(self._odom, odom)
+        """Odometry (in ``odom``, zero at spawn) and the ground truth (in ``map``)."""
+        now = stamp(self.engine.sim_time)
+        twist = self.engine.robot_velocity()
+        for publisher, message, pose in ((self._odom, self._odom_message,
+                                          self.engine.odometry_pose()),
+                                         (self._truth, self._truth_message,
+                                          self.engine.robot_pose())):
+            fill_odometry(message, pose, twist, now)
+            self._send(publisher, message)
+
+    def _publish_localisation(self) -> None:
+        """/tf every period (odom -> base as the diff drive does, map -> odom once AMCL is
+        running), and ``amcl_pose`` when the filter updated."""
+        now = stamp(self.engine.sim_time)
+        transforms = [transform(ODOM_FRAME, BASE_FRAME, self.engine.odometry_pose(), now)]
+        if self.engine.localisation.localised:
+            transforms.append(transform(MAP_FRAME, ODOM_FRAME, self.engine.map_to_odom(), now))
+        self._send(self._tf, TFMessage(transforms=transforms))
+        estimate = self.engine.new_estimate()
+        if estimate is not None:
+            self._send(self._amcl_pose, amcl_pose(estimate, now))
+
+    def _publish_scan(self) -> None:
+        """A sweep every 0.1 sim s (the original's 10 Hz), only while someone listens."""
+        spec = self.engine.scanner.spec
+        if self.engine.sim_time < self._scan_next - 1e-9:
+            return
+        self._scan_next = self.engine.sim_time + 1.0 / spec.rate_hz
+        if self._scan.get_subscription_count() == 0:
+            return
+        scan = LaserScan(angle_min=spec.angle_min, angle_max=spec.angle_max,
+                         angle_increment=spec.angle_increment, time_increment=0.0,
+                         scan_time=1.0 / spec.rate_hz, range_min=spec.range_min,
+                         range_max=spec.range_max)
+        scan.header.stamp = stamp(self.engine.sim_time)
+        scan.header.frame_id = LIDAR_FRAME
+        scan.ranges = array.array("f", self.engine.scan_ranges().tobytes())
+        self._send(self._scan, scan)
 
     def _publish_camera(self) -> None:
         rate = self.settings.camera_rate_hz
@@ -518,6 +578,42 @@ class SimulatorNode:
         if self.engine.task_started or 0.0 < speed <= 1.0:
             return speed
         return 1.0
+
+
+def fill_odometry(message: Odometry, pose: Pose, twist: tuple[float, float], now: Time) -> None:
+    message.header.stamp = now
+    message.pose.pose.position.x, message.pose.pose.position.y = pose[0], pose[1]
+    message.pose.pose.orientation.z = math.sin(pose[2] / 2.0)
+    message.pose.pose.orientation.w = math.cos(pose[2] / 2.0)
+    message.twist.twist.linear.x, message.twist.twist.angular.z = twist
+
+
+def transform(parent: str, child: str, pose: Pose, now: Time | None = None, *,
+              z: float = 0.0) -> TransformStamped:
+    """The planar transform parent -> child (``pose``: the child's origin in the parent)."""
+    message = TransformStamped()
+    if now is not None:
+        message.header.stamp = now
+    message.header.frame_id, message.child_frame_id = parent, child
+    translation, rotation = message.transform.translation, message.transform.rotation
+    translation.x, translation.y, translation.z = float(pose[0]), float(pose[1]), z
+    rotation.z, rotation.w = math.sin(pose[2] / 2.0), math.cos(pose[2] / 2.0)
+    return message
+
+
+def amcl_pose(estimate: Estimate, now: Time) -> PoseWithCovarianceStamped:
+    """The estimate as AMCL publishes it: in ``map``, with a diagonal covariance."""
+    message = PoseWithCovarianceStamped()
+    message.header.stamp, message.header.frame_id = now, MAP_FRAME
+    x, y, yaw = estimate.pose
+    message.pose.pose.position.x, message.pose.pose.position.y = x, y
+    message.pose.pose.orientation.z = math.sin(yaw / 2.0)
+    message.pose.pose.orientation.w = math.cos(yaw / 2.0)
+    covariance = [0.0] * 36
+    covariance[0] = covariance[7] = estimate.std_m ** 2
+    covariance[35] = estimate.std_rad ** 2
+    message.pose.covariance = covariance
+    return message
 
 
 def _preemption_result() -> NavigateToPose.Result:

@@ -43,6 +43,8 @@ class Difficulty:
     nav_abort_probability: float = 0.0
     rfid_dropout: float = 0.0  # probability that one RFID message is lost
     service_latency_s: float = 0.0  # sim seconds before a referee service answers
+    odom_drift: float = 0.0  # encoder calibration error (std of the scale factors' offsets)
+    localisation_noise: float = 0.0  # m (and rad): std of the noise on a converged estimate
 
     @classmethod
     def default(cls) -> Difficulty:

@@ -41,6 +41,8 @@ _KNOBS = {
     "nav_abort_probability": ("nav_abort_probability", 0.0, 1.0),
     "rfid_dropout": ("rfid_dropout", 0.0, 1.0),
     "service_latency": ("service_latency_s", 0.0, 60.0),
+    "odom_drift": ("odom_drift", 0.0, 0.5),
+    "localisation_noise": ("localisation_noise", 0.0, 1.0),
 }
 
 
