@@ -52,6 +52,7 @@ from rosgraph_msgs.msg import Clock
 from servicesim_competition import srv
 from servicesim_competition.msg import ActorNames
 from std_srvs.srv import Empty
+from tf2_msgs.msg import TFMessage
 
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.guest_localisation import RfidHistory, RfidReading
@@ -180,12 +181,14 @@ class SimTimeGraph:
 
 
 class SensorWorld(SimTimeGraph):
-    """A :class:`SimTimeGraph` whose simulator also publishes the robot's RFID and odometry."""
+    """A :class:`SimTimeGraph` whose simulator also publishes the robot's RFID, odometry and
+    transforms."""
 
     def __init__(self, context: object) -> None:
         super().__init__(context)
         self.rfid = self.simulator.create_publisher(ActorNames, "/servicebot/rfid", 10)
         self.odom = self.simulator.create_publisher(Odometry, "/servicebot/odom", 10)
+        self.tf = self.simulator.create_publisher(TFMessage, "/tf", 100)
 
 
 # ============================================================================ fake servers

@@ -26,6 +26,19 @@ class Pose2D:
         return math.hypot(other.x - self.x, other.y - self.y)
 
 
+def compose(frame: Pose2D, pose: Pose2D) -> Pose2D:
+    """``pose``, given in a frame whose origin lies at ``frame``, in the frame ``frame`` is
+    given in: the planar transform product frame * pose.
+
+    How tf2 chains transforms: map -> odom (from localisation) composed with odom -> base
+    (odometry) is the robot's pose in map.
+    """
+    cos, sin = math.cos(frame.yaw), math.sin(frame.yaw)
+    yaw = math.atan2(math.sin(frame.yaw + pose.yaw), math.cos(frame.yaw + pose.yaw))
+    return Pose2D(x=frame.x + cos * pose.x - sin * pose.y,
+                  y=frame.y + sin * pose.x + cos * pose.y, yaw=yaw)
+
+
 @dataclass(frozen=True)
 class Box:
     """An axis-aligned target area, as the referee's RoomInfo service gives it."""

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 import yaml
+from geometry_msgs.msg import PoseWithCovarianceStamped
 from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
@@ -42,6 +43,7 @@ from rclpy.task import Future
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
 
 from bt_servicesim.records.tree_log import TickRecord, TreeState
 from bt_servicesim.ros.messages import pose_from_msg
@@ -50,6 +52,9 @@ from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 MCAP_NAME = "run.mcap"
 TASK_TOPIC = "/bt_servicesim/task"
 TREE_TOPIC = "/bt_servicesim/tree"
+GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
+"""The simulator's true robot pose (``nav_msgs/Odometry`` in ``map``): records may draw from it,
+the executive never reads it (a real robot has no such topic)."""
 SNAPSHOT_PERIOD_S = 0.5  # sim s between tree snapshots while the tip stays put
 DEFINITION_SEPARATOR = "=" * 80
 PRIMITIVE_TYPES = frozenset({
@@ -81,6 +86,10 @@ class RecordedTopic:
 
 RECORDED_TOPICS = (
     RecordedTopic("/servicebot/odom", Odometry),
+    RecordedTopic(GROUND_TRUTH_TOPIC, Odometry),
+    RecordedTopic("/servicebot/amcl_pose", PoseWithCovarianceStamped, latched=True),
+    RecordedTopic("/tf", TFMessage),
+    RecordedTopic("/tf_static", TFMessage, latched=True),
     RecordedTopic("/servicebot/rfid", ActorNames),
     RecordedTopic("/servicesim/score", Score),
     RecordedTopic("/servicesim/referee", RefereeState, latched=True),

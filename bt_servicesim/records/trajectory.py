@@ -1,7 +1,8 @@
 """Where everyone went: the run's trajectory picture, ``trajectory.png``.
 
 :class:`TrajectoryRecorder` listens, during a run, to the map (``/servicebot/map``), the
-robot's odometry, the people's ground truth (``/servicesim/actors``) and the referee's state
+robot's and the people's ground truth (``/servicesim/ground_truth/odom``,
+``/servicesim/actors``) and the referee's state
 (``/servicesim/referee``). These are records, never inputs to the mission: the executive
 decides from its own sensors. From them it keeps the robot's path, the guest's path, every
 other person's path, and the moments worth marking, each where it happened:
@@ -45,7 +46,7 @@ from servicesim_competition.msg import ActorStates, RefereeState
 from std_msgs.msg import String
 
 from bt_servicesim.planning.geometry import Box
-from bt_servicesim.records.mcap import RECORDED_TOPICS, TREE_TOPIC
+from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, RECORDED_TOPICS, TREE_TOPIC
 from bt_servicesim.records.tree_log import read_tree_log
 
 TRAJECTORY_NAME = "trajectory.png"
@@ -150,8 +151,9 @@ class TraceBuilder:
         self.received["/servicebot/map"] += 1
         self.trace.map_image = MapImage.from_message(message)
 
-    def on_odom(self, message: Odometry) -> None:
-        self.received["/servicebot/odom"] += 1
+    def on_robot(self, message: Odometry) -> None:
+        """The robot's true pose in map (the simulator's ground truth, not its odometry)."""
+        self.received[GROUND_TRUTH_TOPIC] += 1
         position = message.pose.pose.position
         _append_moved(self.trace.robot, (position.x, position.y), self.min_step_m)
         if self.trace.start is None:
@@ -226,7 +228,7 @@ class TrajectoryRecorder(TraceBuilder):
         self.node = node
         self._subscriptions = [
             node.create_subscription(OccupancyGrid, "/servicebot/map", self.on_map, LATCHED),
-            node.create_subscription(Odometry, "/servicebot/odom", self.on_odom, 50),
+            node.create_subscription(Odometry, GROUND_TRUTH_TOPIC, self.on_robot, 50),
             node.create_subscription(ActorStates, "/servicesim/actors", self.on_actors, 10),
             node.create_subscription(RefereeState, "/servicesim/referee", self.on_referee,
                                      LATCHED),
@@ -362,7 +364,7 @@ def trace_from_recording(mcap_path: Path,
     builder = TraceBuilder(now_s=lambda: now_ns[0] / 1e9)
     noted = deque(phases or ())
     handlers: dict[str, Callable[[Any], None]] = {
-        "/servicebot/map": builder.on_map, "/servicebot/odom": builder.on_odom,
+        "/servicebot/map": builder.on_map, GROUND_TRUTH_TOPIC: builder.on_robot,
         "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
     }
     with mcap_path.open("rb") as stream:

@@ -14,14 +14,23 @@ from geometry_msgs.msg import Pose
 
 from bt_servicesim.planning.geometry import Pose2D
 
-__all__ = ["pose_from_msg", "pose_to_msg"]
+__all__ = ["pose_from_msg", "pose_from_transform", "pose_to_msg"]
+
+
+def _yaw(q: Any) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def pose_from_msg(pose: Any) -> Pose2D:
     """The planar pose of a ``geometry_msgs/Pose``: x, y and the yaw of its quaternion."""
-    q = pose.orientation
-    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-    return Pose2D(x=pose.position.x, y=pose.position.y, yaw=yaw)
+    return Pose2D(x=pose.position.x, y=pose.position.y, yaw=_yaw(pose.orientation))
+
+
+def pose_from_transform(transform: Any) -> Pose2D:
+    """The planar part of a ``geometry_msgs/Transform``: the child frame's origin in the
+    parent's, x, y and yaw."""
+    translation = transform.translation
+    return Pose2D(x=translation.x, y=translation.y, yaw=_yaw(transform.rotation))
 
 
 def pose_to_msg(pose: Pose2D) -> Pose:

@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 import yaml
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point
+from geometry_msgs.msg import Point, PoseWithCovarianceStamped, TransformStamped
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nav_msgs.msg import OccupancyGrid, Odometry
@@ -26,6 +26,7 @@ from py_trees.common import Status
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
 
 from bt_servicesim.records.mcap import (
     RECORDED_TOPICS,
@@ -47,7 +48,7 @@ SIM_NS = 42_500_000_000
 def sample_messages() -> dict[str, Any]:
     odom = Odometry()
     odom.header.stamp = Time(sec=42, nanosec=500_000_000)
-    odom.header.frame_id, odom.child_frame_id = "map", "base_link"
+    odom.header.frame_id, odom.child_frame_id = "odom", "base_footprint"
     odom.pose.pose.position.x, odom.pose.pose.position.y = 1.25, -3.5
     odom.pose.pose.orientation.z, odom.pose.pose.orientation.w = 0.6, 0.8
     odom.pose.covariance[0] = 0.01
@@ -65,8 +66,16 @@ def sample_messages() -> dict[str, Any]:
     actors = ActorStates(names=["human_20843", "human_00001"], roles=["guest", "walker"],
                          positions=[Point(x=1.0, y=2.0), Point(x=-4.0, y=0.5)],
                          guest_state="following")
+    transform = TransformStamped(child_frame_id="odom")
+    transform.header.frame_id = "map"
+    transform.transform.translation.x, transform.transform.rotation.z = 10.975, 1.0
+    estimate = PoseWithCovarianceStamped()
+    estimate.header.frame_id = "map"
+    estimate.pose.pose.position.x, estimate.pose.covariance[35] = 9.5, 0.0025
     return {
         "/servicebot/odom": odom,
+        "/tf": TFMessage(transforms=[transform]),
+        "/servicebot/amcl_pose": estimate,
         "/servicebot/rfid": ActorNames(actor_names=["human_20843"]),
         "/servicesim/score": Score(score=12.5),
         "/servicesim/referee": referee,

@@ -23,7 +23,7 @@ from servicesim_competition.msg import ActorStates, RefereeState
 
 from bt_servicesim import trajectory
 from bt_servicesim.planning.geometry import Box
-from bt_servicesim.records.mcap import TREE_TOPIC, McapRecorder, TreeTopic
+from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, TREE_TOPIC, McapRecorder, TreeTopic
 from bt_servicesim.records.trajectory import (
     LATCHED,
     ROBOT_COLOUR,
@@ -77,7 +77,7 @@ class Story(SimTimeGraph):
     def __init__(self, context: Any) -> None:
         super().__init__(context, node_name="test_executive", simulator_name="test_world")
         self.map = self.simulator.create_publisher(OccupancyGrid, "/servicebot/map", LATCHED)
-        self.odom = self.simulator.create_publisher(Odometry, "/servicebot/odom", 50)
+        self.odom = self.simulator.create_publisher(Odometry, GROUND_TRUTH_TOPIC, 50)
         self.actors = self.simulator.create_publisher(ActorStates, "/servicesim/actors", 10)
         self.referee = self.simulator.create_publisher(RefereeState, "/servicesim/referee",
                                                        LATCHED)

@@ -20,7 +20,7 @@ range for longer than its ``grace`` period. All times are sim time.
 import math
 from typing import Any, ClassVar
 
-from nav_msgs.msg import OccupancyGrid, Odometry
+from nav_msgs.msg import OccupancyGrid
 from py_trees.ports import PortInformation
 from rclpy.node import Node
 from rclpy.qos import (
@@ -32,8 +32,6 @@ from rclpy.qos import (
 from servicesim_competition.msg import ActorNames
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
-from bt_servicesim.planning.geometry import Pose2D
-from bt_servicesim.ros.messages import pose_from_msg
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
 
@@ -46,7 +44,6 @@ except ModuleNotFoundError as _missing:
 
 __all__ = [
     "MapToBlackboard",
-    "OdomToBlackboard",
     "RfidToBlackboard",
 ]
 
@@ -153,35 +150,6 @@ class RfidToBlackboard(_TopicReader):
     def _write(self, names: list[str], age: float) -> None:
         self._set_output("actors_in_range", names)
         self._set_output("rfid_age", float(age))
-
-
-class OdomToBlackboard(_TopicReader):
-    """The robot's pose from odometry (``robot_pose``); RUNNING until the first message.
-
-    Args:
-        name: the behaviour's name
-        topic: the odometry topic
-    """
-
-    MESSAGE_TYPE = Odometry
-    OUTPUT_PORTS: ClassVar[Ports] = {
-        "robot_pose": PortInformation(data_type=Pose2D, required=False),
-    }
-
-    def __init__(
-        self, name: str = "OdomToBlackboard", topic: str = "/servicebot/odom", **kwargs: Any
-    ) -> None:
-        super().__init__(name=name, topic=topic, **kwargs)
-
-    def update(self) -> Status:
-        """Write the latest pose."""
-        message = self._message
-        if message is None:
-            return self._waiting()
-        pose = pose_from_msg(message.pose.pose)
-        self._set_output("robot_pose", pose)
-        self.feedback_message = f"robot at ({pose.x:.2f}, {pose.y:.2f}, {pose.yaw:.2f})"
-        return Status.SUCCESS
 
 
 class MapToBlackboard(_TopicReader):

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import py_trees
 import pytest
-from nav_msgs.msg import OccupancyGrid, Odometry
+from nav_msgs.msg import OccupancyGrid
 from py_trees.blackboard import Blackboard
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from servicesim_competition.msg import ActorNames
@@ -19,11 +19,8 @@ from servicesim_competition.msg import ActorNames
 from bt_servicesim.behaviours.actions.topic_readers import (
     MAP_QOS,
     MapToBlackboard,
-    OdomToBlackboard,
     RfidToBlackboard,
 )
-from bt_servicesim.planning.geometry import Pose2D
-from bt_servicesim.ros.messages import pose_to_msg
 from tests.fakes import GUEST, SensorWorld, ready
 
 Status = py_trees.common.Status
@@ -65,20 +62,6 @@ def test_rfid_list_goes_stale_when_the_sensor_falls_silent(world: SensorWorld) -
     assert "silent for 2.5 sim s" in rfid.feedback_message
 
 
-def test_odom_waits_for_the_first_message(world: SensorWorld) -> None:
-    odom = ready(OdomToBlackboard(name="odom"), world.node, robot_pose="/pose")
-    odom.tick_once()
-    assert odom.status == Status.RUNNING
-    assert "waiting for the first message" in odom.feedback_message
-    message = Odometry()
-    message.pose.pose = pose_to_msg(Pose2D(1.0, 2.0, 0.5))
-    world.spin_until(lambda: odom._message is not None, before=lambda: world.odom.publish(message))
-    odom.tick_once()
-    assert odom.status == Status.SUCCESS
-    pose = Blackboard.get("/pose")
-    assert (pose.x, pose.y, pose.yaw) == pytest.approx((1.0, 2.0, 0.5))
-
-
 def test_map_reaches_a_late_joining_reader(world: SensorWorld) -> None:
     latched = world.simulator.create_publisher(OccupancyGrid, "/servicebot/map", MAP_QOS)
     grid = OccupancyGrid()
@@ -104,7 +87,7 @@ XML = """
     <Sequence name="executive" memory="false">
       <Sequence name="topics2bb" memory="false">
         <RfidToBlackboard name="rfid" actors_in_range="{actors}" stale_after="1.5"/>
-        <OdomToBlackboard name="odom" robot_pose="{pose}"/>
+        <LocalisedPoseToBlackboard name="pose" robot_pose="{pose}"/>
         <MapToBlackboard name="map" occupancy="{occupancy}"/>
       </Sequence>
       <PublishInitialPose name="initial_pose" pose="{start}"/>
@@ -134,7 +117,7 @@ def test_robot_state_and_navigation_tags_build_from_xml(world: SensorWorld, tmp_
     assert (navigate.action, navigate.server_timeout, navigate.timeout) == (
         "/xml/navigate_to_pose", 2.5, 60.0,
     )
-    tree.tick()  # no odometry yet: the topics2bb sequence waits
+    tree.tick()  # not localised yet: the topics2bb sequence waits
     assert nodes["RfidToBlackboard"].status == Status.SUCCESS
-    assert nodes["OdomToBlackboard"].status == Status.RUNNING
+    assert nodes["LocalisedPoseToBlackboard"].status == Status.RUNNING
     assert Blackboard.get("/actors") == []
