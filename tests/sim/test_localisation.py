@@ -8,17 +8,19 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from functools import cache
+from typing import Any
 
 import numpy as np
 import pytest
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
+from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
-from servicesim_sim.engine import SimEngine
+from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.localisation import (
     CONVERGENCE_RADIUS_M,
     AmclModel,
@@ -27,9 +29,10 @@ from servicesim_sim.localisation import (
     compose,
     inverse,
 )
-from servicesim_sim.node import LATCHED
+from servicesim_sim.node import LATCHED, SimulatorNode
 from servicesim_sim.scan import LidarSpec, Scanner
 from servicesim_sim.scenario import Difficulty, make_scenario
+from servicesim_sim.settings import SimSettings
 from servicesim_sim.world import DEFAULT_WORLD, World, load_world
 from tests.sim.test_node import Graph
 
@@ -241,3 +244,39 @@ def test_odometry_tf_and_amcl_pose_over_ros_give_the_map_pose_after_initialpose(
     assert transform.transform.translation.y == pytest.approx(SPAWN[1])
     assert 2.0 * math.atan2(transform.transform.rotation.z,
                             transform.transform.rotation.w) == pytest.approx(SPAWN[2])
+
+
+# ------------------------------------------------------------------ the node's side
+def initial_pose(pose: tuple[float, float, float], frame: str = "map") -> Any:
+    message = PoseWithCovarianceStamped()
+    message.header.frame_id = frame
+    message.pose.pose.position.x, message.pose.pose.position.y = pose[0], pose[1]
+    message.pose.pose.orientation.z = math.sin(pose[2] / 2.0)
+    message.pose.pose.orientation.w = math.cos(pose[2] / 2.0)
+    return message
+
+
+@pytest.fixture
+def simulator(ros_context: Context) -> Iterator[SimulatorNode]:
+    settings = SimSettings(world=office(), seed=None, speed=0.0,
+                           difficulty=Difficulty.default(), camera_rate_hz=0.0)
+    node = Node("servicesim", context=ros_context)
+    yield SimulatorNode(settings, node=node)
+    node.destroy_node()
+
+
+def test_an_initial_pose_outside_the_map_frame_is_ignored_as_amcl_ignores_it(
+        simulator: SimulatorNode) -> None:
+    simulator._on_initial_pose(initial_pose(SPAWN, frame="odom"))
+    assert simulator.engine.estimated_pose() is None
+    simulator._on_initial_pose(initial_pose(SPAWN))
+    assert close(simulator.engine.estimated_pose() or (), SPAWN)
+
+
+def test_navigation_feedback_gives_the_estimate_not_the_truth(simulator: SimulatorNode) -> None:
+    guess = (SPAWN[0] + 0.5, SPAWN[1], SPAWN[2])  # off by half a metre: not converged yet
+    simulator._on_initial_pose(initial_pose(guess))
+    feedback = simulator._feedback(NavigationState(status="running"), started=0.0)
+    position = feedback.current_pose.pose.position
+    assert feedback.current_pose.header.frame_id == "map"
+    assert (position.x, position.y) == pytest.approx(guess[:2])
