@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+import reprlib
 import struct
 import uuid
 from collections.abc import Callable, Mapping, Sequence
@@ -44,6 +45,8 @@ PROTOCOL_ID = 2
 REQUEST_HEADER_SIZE = 6
 REPLY_HEADER_SIZE = REQUEST_HEADER_SIZE + 16
 ERROR_FRAME = b"error"
+MAX_DEPTH = 8
+"""Levels of containers a blackboard value is walked into before it is shown as a repr."""
 _HEADER = struct.Struct("<BBI")
 _STATUS_ENTRY = struct.Struct("<HB")
 
@@ -176,22 +179,26 @@ def blackboard_payload(names: str, blackboards: Mapping[str, Mapping[str, Any]])
     return msgpack.packb(dump or None, default=str, use_single_float=False)
 
 
-def jsonable(value: Any) -> Any:
+def jsonable(value: Any, *, depth: int = 0) -> Any:
     """``value`` as JSON can hold it: containers walked, dataclasses as dicts (with their type
     under ``__type``, as BehaviorTree.CPP's JSON exporter marks its own types), enums by
-    name, non-finite floats as ``null``; anything else as its ``str``."""
+    name, non-finite floats as ``null``; anything else as its ``str``. Below
+    :data:`MAX_DEPTH` levels a value is its bounded ``repr`` (a cycle ends there too)."""
     if value is None or isinstance(value, bool | int | str):
         return value
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, enum.Enum):
         return value.name
+    if depth >= MAX_DEPTH:
+        return reprlib.repr(value)
+    inner = depth + 1
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = {field.name: jsonable(getattr(value, field.name))
+        fields = {field.name: jsonable(getattr(value, field.name), depth=inner)
                   for field in dataclasses.fields(value)}
         return {"__type": type(value).__name__, **fields}
     if isinstance(value, Mapping):
-        return {str(key): jsonable(item) for key, item in value.items()}
+        return {str(key): jsonable(item, depth=inner) for key, item in value.items()}
     if isinstance(value, list | tuple | set | frozenset):
-        return [jsonable(item) for item in value]
+        return [jsonable(item, depth=inner) for item in value]
     return str(value)
