@@ -24,9 +24,11 @@ BTVIEW = Path(sys.executable).with_name("btview")
 #: py_trees' unicode status marks, as BehaviorTree.CPP names the statuses
 TERMINAL_MARKS = {"✓": "SUCCESS", "✕": "FAILURE", "*": "RUNNING", "-": "IDLE"}
 TERMINAL_LINE = re.compile(r"^\s*\S+ (?P<name>.+?) \[(?P<mark>[✓✕*-])\]")
+#: a node in ``btview snapshot``: its glyph, name, tag (left out when it is the name), uid (with
+#: ``--uid``), then its status, or "was" a status when it is idle after one
 SNAPSHOT_LINE = re.compile(
-    r"^[\s│├└─]*\S+ (?P<name>.+?) \[(?P<tag>[^\]]+)\] #(?P<uid>\d+)\s+.*?"
-    r"(?P<status>RUNNING|SUCCESS|FAILURE|IDLE|SKIPPED)\s*$")
+    r"^[\s│├└─]*\S+ (?P<name>\S+)(?: \[[^\]]+\])?(?: #\d+)?\s+\S+ "
+    r"(?P<was>was )?(?P<status>RUNNING|SUCCESS|FAILURE|IDLE|SKIPPED)\s*$")
 WAIT_LIMIT_S = 30.0
 
 
@@ -45,7 +47,7 @@ def terminal_view(root: py_trees.behaviour.Behaviour) -> list[tuple[str, str]]:
 
 def snapshot_rows(output: str) -> list[tuple[str, str]]:
     rows = [SNAPSHOT_LINE.match(line) for line in output.splitlines()]
-    return [(row["name"], row["status"]) for row in rows if row]
+    return [(row["name"], "IDLE" if row["was"] else row["status"]) for row in rows if row]
 
 
 @pytest.fixture
