@@ -180,22 +180,25 @@ def blackboard_payload(names: str, blackboards: Mapping[str, Mapping[str, Any]])
 
 
 def jsonable(value: Any, *, depth: int = 0) -> Any:
-    """``value`` as JSON can hold it: containers walked, dataclasses as dicts (with their type
-    under ``__type``, as BehaviorTree.CPP's JSON exporter marks its own types), enums by
-    name, non-finite floats as ``null``; anything else as its ``str``. Below
-    :data:`MAX_DEPTH` levels a value is its bounded ``repr`` (a cycle ends there too)."""
+    """``value`` as JSON can hold it: containers walked, dataclasses as dicts of their public
+    fields (with their type under ``__type``, as BehaviorTree.CPP's JSON exporter marks its own
+    types; ``_`` fields are caches), arrays as their type, dtype and shape, enums by name,
+    non-finite floats as ``null``; anything else as its ``str``. Below :data:`MAX_DEPTH`
+    levels a value is its bounded ``repr`` (a cycle ends there too)."""
     if value is None or isinstance(value, bool | int | str):
         return value
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, enum.Enum):
         return value.name
+    if hasattr(value, "shape") and hasattr(value, "dtype"):  # numpy's, without importing it
+        return f"{type(value).__name__} {value.dtype} {tuple(value.shape)}"
     if depth >= MAX_DEPTH:
         return reprlib.repr(value)
     inner = depth + 1
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = {field.name: jsonable(getattr(value, field.name), depth=inner)
-                  for field in dataclasses.fields(value)}
+                  for field in dataclasses.fields(value) if not field.name.startswith("_")}
         return {"__type": type(value).__name__, **fields}
     if isinstance(value, Mapping):
         return {str(key): jsonable(item, depth=inner) for key, item in value.items()}

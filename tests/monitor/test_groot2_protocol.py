@@ -7,6 +7,7 @@ import enum
 import struct
 
 import msgpack
+import numpy as np
 import pytest
 
 from bt_servicesim.monitor.groot2_protocol import (
@@ -103,10 +104,12 @@ class Colour(enum.Enum):
 class Pose:
     x: float
     y: float
+    _cache: dict[str, object] = dataclasses.field(default_factory=dict)
 
 
 def test_values_json_cannot_hold_are_made_readable() -> None:
-    assert jsonable(Pose(1.0, 2.0)) == {"__type": "Pose", "x": 1.0, "y": 2.0}
+    assert jsonable(Pose(1.0, 2.0, {"big": "cache"})) == {"__type": "Pose", "x": 1.0, "y": 2.0}
+    assert jsonable(np.zeros((600, 400), dtype=np.int8)) == "ndarray int8 (600, 400)"
     assert jsonable({"c": Colour.RED, 2: (1, {3})}) == {"c": "RED", "2": [1, [3]]}
     assert jsonable(float("nan")) is None
     assert jsonable(object()).startswith("<object object")
