@@ -19,6 +19,9 @@ Everything is plain data, so the building can be read and changed like a drawing
 * ``CUBICLE_CLUSTERS`` - the private cubicles: two rows of booths back to back, each booth with
   a 0.55 m entrance (too narrow for the robot; the target strips lie in front of them).
 * ``TARGET_AREAS`` - the 70 target areas, exactly as the competition defines them.
+* ``IDLING_AREAS`` - the 19 boxes where the competition's idlers stand, each with the way they
+  face (facts of its ``worlds/idling_humans.erb``; one box there has min and max x swapped,
+  written here low to high).
 
 Doors are 1.2 m wide (the original's are about 1.05 m) so that a robot whose planner inflates
 obstacles by 0.35-0.4 m still fits through. ``python -m servicesim_sim.office`` rasterises the
@@ -274,6 +277,30 @@ TARGET_AREAS: tuple[tuple[str, Point, Point], ...] = (
     ("FrontCouchB", (3.75, 0.0), (6.0, 2.25)),
 )
 
+# Where the idlers stand: (min corner, max corner, yaw). North-facing is pi/2.
+HALF_PI, QUARTER_PI = math.pi / 2.0, math.pi / 4.0
+IDLING_AREAS: tuple[tuple[Point, Point, float], ...] = (
+    ((-3.97, 0.26), (-2.12, 0.40), math.pi),  # lobby, by FrontCouchA
+    ((-3.16, 3.32), (-2.52, 3.88), 0.0),
+    ((-0.39, 17.0), (0.26, 17.61), math.pi),  # south of BackEntrance
+    ((1.69, 20.54), (2.31, 20.96), -HALF_PI),
+    ((19.82, 14.23), (20.49, 15.84), -HALF_PI),  # east, by PublicCubicle_30
+    ((17.11, 7.15), (18.98, 7.86), -QUARTER_PI),  # in the PublicCafe
+    ((17.5, 4.07), (18.73, 4.70), 0.0),
+    ((16.81, 1.11), (20.42, 1.74), 0.0),
+    ((5.55, 2.48), (5.92, 2.88), 0.0),  # by FrontCouchB
+    ((1.82, 0.29), (2.35, 1.62), -HALF_PI),  # lobby, east of FrontElevator
+    ((-26.2, 5.01), (-25.74, 6.85), HALF_PI),  # PrivateCafe
+    ((-26.6, 11.17), (-26.4, 14.49), -HALF_PI),  # west wall
+    ((-25.3, 15.28), (-25.1, 15.56), math.pi),
+    ((-27.26, 17.31), (-27.24, 19.59), HALF_PI),  # PrivateOfficeD
+    ((-2.56, 21.54), (-1.68, 22.16), 0.0),  # BackEntrance
+    ((5.98, 18.75), (8.7, 19.2), 0.0),  # north corridor
+    ((10.63, 18.36), (11.45, 19.14), -QUARTER_PI),
+    ((12.57, 16.88), (16.95, 17.64), math.pi),
+    ((12.46, 21.22), (17.82, 22.25), 0.0),  # PublicMeetingRoomA
+)
+
 # The competition's shipped task. The guest's yaw is ours (the original's is random).
 SHIPPED_PICK_UP, SHIPPED_DROP_OFF = "FrontElevator", "PrivateCubicle_32_1"
 SHIPPED_GUEST = {"name": "human_20843", "x": -0.043, "y": 1.512, "yaw": 1.5708}
@@ -371,6 +398,9 @@ def world_yaml() -> str:
         f"  guest: {_flow(SHIPPED_GUEST)}",
         f"  start: {_flow(SHIPPED_START)}",
         f"people: {_flow(PEOPLE)}",
+        "idling_areas:",
+        *(f"  - {{min: [{low[0]!r}, {low[1]!r}], max: [{high[0]!r}, {high[1]!r}], "
+          f"yaw: {round(yaw, 5)!r}}}" for low, high, yaw in IDLING_AREAS),
         f"drift: {_flow(DRIFT)}",
     ]
     return "\n".join(lines) + "\n"
