@@ -23,6 +23,8 @@ class OneLineArgumentParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from servicesim_sim.camera import RATE_HZ
+
     parser = OneLineArgumentParser(prog=PROG, description="The ServiceSim simulator node.")
     parser.add_argument("--world", help="world file (default: the ServiceSim office)")
     parser.add_argument("--seed", type=int, help="randomise the task (default: the shipped task)")
@@ -39,8 +41,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--rfid-dropout", type=float, help="probability an RFID message is lost")
     parser.add_argument("--service-latency", type=float,
                         help="sim seconds before a referee service answers")
-    parser.add_argument("--camera-rate", type=float, default=2.0,
-                        help="camera frames per sim second (0 = off)")
+    parser.add_argument("--camera-rate", type=float, default=RATE_HZ,
+                        help=f"camera frames per sim second while someone subscribes "
+                             f"(0 = off; default {RATE_HZ:g}, the original's)")
     return parser
 
 
