@@ -129,6 +129,32 @@ def test_a_door_is_a_gap_of_door_width_in_its_wall() -> None:
         assert occupancy.is_free(*door), room.name
 
 
+def test_the_closed_doors_variant_shuts_the_shipped_worlds_closed_rooms_and_plays(
+        tmp_path: Path) -> None:
+    # service.world.erb / room.erb: a room whose door is shut gets no target area; the shipped
+    # world's rooms without one are the eight shut here, and everything else stays reachable
+    assert office.main(["--closed-doors", "--out", str(tmp_path)]) == 0
+    closed = load_world(tmp_path / "world.yaml")
+    assert closed.name == "office_closed_doors"
+    assert len(office.CLOSED_IN_SHIPPED) == 8
+    assert not office.CLOSED_IN_SHIPPED & set(closed.areas)
+    labels = reachable_regions(closed.map, ROBOT_CLEARANCE_M)
+    hall = region_at(closed.map, labels, *closed.areas["FrontElevator"].centre)
+    for room in office.ROOMS:
+        (x0, y0), (x1, y1) = room.low, room.high
+        door = {"south": (room.door_at, y0), "north": (room.door_at, y1),
+                "west": (x0, room.door_at), "east": (x1, room.door_at)}[room.door_side]
+        shut = room.name in office.CLOSED_IN_SHIPPED
+        assert closed.map.is_free(*door) is not shut, room.name
+        inside = region_at(closed.map, labels, (x0 + x1) / 2, (y0 + y1) / 2)
+        assert (inside == hall) is not shut, room.name
+    assert {region_at(closed.map, labels, *box.centre) for box in closed.areas.values()} == {hall}
+    task = closed.task
+    assert task is not None
+    assert region_at(closed.map, labels, task.start_x, task.start_y) == hall
+    assert region_at(closed.map, labels, task.guest_x, task.guest_y) == hall
+
+
 def test_office_has_the_shipped_task(world: World) -> None:
     task = world.task
     assert task is not None
