@@ -149,7 +149,8 @@ class SimulatorNode:
         self._score = publisher(Score, "/servicesim/score", 10)
         self._referee = publisher(RefereeState, "/servicesim/referee", LATCHED)
         self._actors = publisher(ActorStates, "/servicesim/actors", 10)
-        self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 2)
+        # a period sends up to three frames at once (at most 30 a sim second): keep them all
+        self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 4)
         self._map_publisher = publisher(OccupancyGrid, "/servicebot/map", LATCHED)
         # the high-rate messages are built once and refilled: publish serialises at the call
         self._clock_message = Clock()
