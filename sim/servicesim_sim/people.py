@@ -504,7 +504,6 @@ class Crowd:
             self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
                              for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
-        self._standing = [(p.x, p.y) for p in standing]
 
     @staticmethod
     def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
@@ -532,7 +531,8 @@ class Crowd:
         for walkers alone :data:`WALKER_STANDOFF_S`; then it turns back."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
-        fixed = [(robot[0], robot[1]), *others, *self._standing]
+        # idlers are left out: routes are drawn so that none ever stands in a walker's lane
+        fixed = [(robot[0], robot[1]), *others]
         moving = [(w.person.x, w.person.y) for w in self._walkers]
         stops = [(w.blocked(fixed), w.blocked(moving)) for w in self._walkers]
         for walker, (by_people, by_walkers) in zip(self._walkers, stops, strict=True):
