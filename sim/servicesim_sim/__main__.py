@@ -23,6 +23,8 @@ class OneLineArgumentParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from servicesim_sim.camera import RATE_HZ
+
     parser = OneLineArgumentParser(prog=PROG, description="The ServiceSim simulator node.")
     parser.add_argument("--world", help="world file (default: the ServiceSim office)")
     parser.add_argument("--seed", type=int, help="randomise the task (default: the shipped task)")
@@ -43,8 +45,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="encoder calibration error of odometry (default 0: exact)")
     parser.add_argument("--localisation-noise", type=float,
                         help="metres (and radians) of noise on the localisation estimate")
-    parser.add_argument("--camera-rate", type=float, default=2.0,
-                        help="camera frames per sim second (0 = off)")
+    parser.add_argument("--camera-rate", type=float, default=RATE_HZ,
+                        help=f"camera frames per sim second while someone subscribes "
+                             f"(0 = off; default {RATE_HZ:g}, the original's)")
     return parser
 
 

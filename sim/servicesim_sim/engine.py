@@ -78,7 +78,11 @@ class SimEngine:
                            yaw=task.guest_yaw, wall_clearance=walls.at)
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
-                           taken_names={task.guest_name}, keep_clear=self._keep_clear())
+                           taken_names={task.guest_name}, keep_clear=self._keep_clear(),
+                           occupied=[(task.guest_x, task.guest_y, PERSON_BODY_RADIUS),
+                                     (task.start_x, task.start_y, BODY_RADIUS)],
+                           idling_areas=world.idling_areas,
+                           walker_patience_s=world.people.walker_patience_s)
         self._knobs = np.random.default_rng(scenario.knob_seed)
         difficulty = scenario.difficulty
         self.odometry = WheelOdometry(drift=difficulty.odom_drift,
@@ -103,6 +107,7 @@ class SimEngine:
         self._nobody_near_until = -math.inf
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
+        """Where walker routes do not go (idlers may stand there, as in the original)."""
         task, areas = self.scenario.task, self.world.areas
         discs = [(task.start_x, task.start_y, 1.5), (task.guest_x, task.guest_y, 1.5)]
         for name in (task.pick_up, task.drop_off, task.start_area):
@@ -289,7 +294,8 @@ class SimEngine:
         self.guest.step(dt, robot_x=self.robot.x, robot_y=self.robot.y)
         self._steps += 1
         if self._steps % CROWD_PERIOD_STEPS == 0:
-            self.crowd.step(dt * CROWD_PERIOD_STEPS, robot=self.robot.pose)
+            self.crowd.step(dt * CROWD_PERIOD_STEPS, robot=self.robot.pose,
+                            others=[(self.guest.x, self.guest.y)])
         self.sim_time += dt
         self.referee.advance(dt)
         if self.referee.running:
