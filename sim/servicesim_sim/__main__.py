@@ -39,6 +39,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--rfid-dropout", type=float, help="probability an RFID message is lost")
     parser.add_argument("--service-latency", type=float,
                         help="sim seconds before a referee service answers")
+    parser.add_argument("--guest-path", choices=("trail", "straight"),
+                        help="how the guest follows: along the robot's trail (default) or "
+                             "straight at the robot through walls (the original)")
     parser.add_argument("--camera-rate", type=float, default=2.0,
                         help="camera frames per sim second (0 = off)")
     return parser
