@@ -290,6 +290,21 @@ def test_cmd_vel_persists_until_the_next_command() -> None:
     assert sim.robot_velocity() == (0.0, 0.0)
 
 
+def test_a_goal_cancelled_mid_drive_leaves_the_robot_stopped() -> None:
+    sim = engine()  # the shipped start, facing -x along PublicBathroomB
+    sim.set_initial_pose(*sim.robot_pose())
+    ticket = sim.navigate(8.5, 3.75, 3.14)
+    for _ in range(int(2.0 / sim.dt)):
+        sim.step()
+    assert sim.robot_velocity()[0] > 0.1  # driving
+    sim.cancel_navigation(ticket)
+    sim.step()
+    pose = sim.robot_pose()
+    for _ in range(50):
+        sim.step()
+    assert sim.robot_pose() == pose  # the controller's last word was a stop, as Nav2's is
+
+
 def test_rfid_lists_names_in_the_worlds_order_walkers_idlers_then_the_guest() -> None:
     sim = engine()
     people = sim.crowd.people
