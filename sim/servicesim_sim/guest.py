@@ -87,7 +87,7 @@ class Guest:
 
     def record_robot(self, robot_x: float, robot_y: float) -> None:
         """Extend the trail with the robot's origin when it has moved far enough."""
-        if not self.following:
+        if not self.following or self.path == "straight":
             return
         last = self.trail[-1] if self.trail else (self.x, self.y)
         if math.hypot(robot_x - last[0], robot_y - last[1]) >= TRAIL_SPACING:
