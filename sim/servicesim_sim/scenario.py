@@ -39,7 +39,8 @@ SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed
 
 @dataclass(frozen=True)
 class Difficulty:
-    """Knobs that make the world harder for the executive; the defaults are the original."""
+    """Knobs that make the world harder for the executive; the defaults are the original's,
+    but for ``guest_path`` (see the module docstring)."""
 
     guest_out_of_range: bool = False
     drift_scale: float = 1.0  # < 1: earlier and more frequent drifts
