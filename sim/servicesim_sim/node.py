@@ -227,9 +227,10 @@ class SimulatorNode:
 
     async def _task_info(self, request: TaskInfo.Request, response: TaskInfo.Response) -> Any:
         await self._latency()
-        if not self.engine.task_started:
-            self.node.get_logger().warning("task_info refused: no task has been started")
-            return response
+        if not self.engine.task_running():  # the original fails it before and after the task
+            state = "has completed" if self.engine.task_started else "has been started"
+            self.node.get_logger().warning(f"task_info refused: no task {state}")
+            return response  # the documented error answer: every field empty
         return self._fill_task(response)
 
     def _fill_task(self, response: Any) -> Any:
