@@ -290,6 +290,13 @@ def test_cmd_vel_persists_until_the_next_command() -> None:
     assert sim.robot_velocity() == (0.0, 0.0)
 
 
+def test_a_command_beyond_the_robots_limits_drives_at_the_limits() -> None:
+    sim = engine()
+    sim.command_velocity(5.0, -4.0)
+    sim.step()
+    assert sim.robot_velocity() == (0.5, -1.0)
+
+
 def test_a_goal_cancelled_mid_drive_leaves_the_robot_stopped() -> None:
     sim = engine()  # the shipped start, facing -x along PublicBathroomB
     sim.set_initial_pose(*sim.robot_pose())

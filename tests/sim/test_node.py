@@ -108,6 +108,8 @@ def test_task_info_new_task_and_a_second_new_task(graph: Graph) -> None:
     referee.running, referee.completed = False, True  # as if checkpoint 4 were reached
     after = graph.call(TaskInfo, "/servicesim/task_info", TaskInfo.Request())
     assert after.guest_name == ""  # the error answer: the task has completed
+    once_more = graph.call(NewTask, "/servicesim/new_task", NewTask.Request())
+    assert once_more.pick_up_location == ""  # one task per simulator run
 
 
 def test_a_refused_pickup_is_booked_and_the_score_runs_with_the_task(graph: Graph) -> None:
