@@ -342,11 +342,11 @@ class SimEngine:
         return self._cmd_vel
 
     def _obstacles(self) -> list[tuple[float, float]]:
-        """People navigation must avoid: everyone but a guest walking behind the robot."""
-        people = [(person.x, person.y) for person in self.crowd.people]
-        if not self.guest.following:
-            people.append((self.guest.x, self.guest.y))
-        return people
+        """Everyone, the guest included, following or not: the costmap marks those the lidar
+        sees (±120°), as Nav2's would. A guest walking behind the robot is out of its view; a
+        robot that turns back towards them sees them and does not drive into them."""
+        return [(person.x, person.y) for person in self.crowd.people] + [
+            (self.guest.x, self.guest.y)]
 
     def _check_area_checkpoints(self) -> None:
         referee, areas = self.referee, self.world.areas
