@@ -28,6 +28,14 @@ from bt_servicesim.mission.settings import (
     REPORT_NAME,
     RunSettings,
 )
+from bt_servicesim.monitor.live_server import (
+    DEFAULT_PORT,
+    LiveAddress,
+    LiveServer,
+    LiveServerError,
+    describe,
+    open_live_server,
+)
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
 from bt_servicesim.tree.loading import (
@@ -74,6 +82,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--attach", action="store_true",
                         help="start no simulator: run against the backend already on this "
                         "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
+    parser.add_argument("--foxglove", nargs="?", const=str(DEFAULT_PORT), metavar="[ADDR:]PORT",
+                        help="serve the live topics to Foxglove over WebSocket on "
+                        f"127.0.0.1:PORT (default {DEFAULT_PORT}), or on ADDR:PORT")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -102,7 +113,17 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         out=_run_directory(args.out, overwrite=args.overwrite),
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach,
+        foxglove=_live_address(args.foxglove),
     )
+
+
+def _live_address(argument: str | None) -> LiveAddress | None:
+    if argument is None:
+        return None
+    try:
+        return LiveAddress.parse(argument)
+    except ValueError as error:
+        raise UsageError(f"--foxglove {error}") from None
 
 
 def _check_backend(args: argparse.Namespace) -> None:
@@ -140,12 +161,28 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    live: LiveServer | None = None
     try:
         settings = settings_from(args)
         make_executive = executive_factory(settings)
+        live = open_live_server(settings.foxglove) if settings.foxglove else None
         settings.out.mkdir(parents=True, exist_ok=True)
-    except (UsageError, MissionTreeError, OSError) as error:
+    except (UsageError, MissionTreeError, LiveServerError, OSError) as error:
+        if live is not None:
+            live.stop()
         return error_line(PROG, error)
+    try:
+        return _run(settings, make_executive, tuple(args.sim_arg), live)
+    finally:
+        if live is not None:
+            live.stop()
+
+
+def _run(settings: RunSettings, make_executive: ExecutiveFactory, sim_args: tuple[str, ...],
+         live: LiveServer | None) -> int:
+    """The mission on a ROS domain of its own (unless attached), its input checked."""
+    if live is not None:
+        print(describe(live), flush=True)
     apply_localhost_defaults()
     claim = None
     if not settings.attach:  # a domain of its own: it only ever talks to its own simulator
@@ -159,7 +196,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return MissionRun(
             settings=settings, make_executive=make_executive,
-            extra_sim_args=tuple(args.sim_arg),
+            extra_sim_args=sim_args, live_server=live,
         ).execute()
     finally:
         if claim is not None:

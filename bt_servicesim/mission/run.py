@@ -51,6 +51,7 @@ from bt_servicesim.mission.stopping import (
     Terminated,
     exit_code_for,
 )
+from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
@@ -72,8 +73,11 @@ class MissionRun:
         settings: RunSettings,
         make_executive: Callable[[Node], Executive],
         extra_sim_args: tuple[str, ...] = (),
+        live_server: LiveServer | None = None,
     ) -> None:
+        """``live_server``: Foxglove's server, open, to forward the run's topics to."""
         self.settings = settings
+        self.live_server = live_server
         self.make_executive = make_executive
         self.simulator = None if settings.attach else SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
@@ -110,7 +114,7 @@ class MissionRun:
         monitor = RefereeMonitor(node)
         executive = self.make_executive(node)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
-                             tree_file=self.settings.tree)
+                             tree_file=self.settings.tree, live_server=self.live_server)
         try:
             code = self._run(node, executor, monitor, executive, records)
         except (KeyboardInterrupt, Terminated) as stop:
