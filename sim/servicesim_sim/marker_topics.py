@@ -29,12 +29,14 @@ MARKERS_TOPIC = "/servicesim/markers"
 AREA_MARKERS_TOPIC = "/servicesim/markers/areas"
 
 
-def marker_array(update: Update, *, now: Time) -> MarkerArray:
-    """The message for ``update``: a DELETEALL per cleared namespace, DELETEs, then ADDs."""
+def marker_array(update: Update, *, now: Time, built: MarkerCache | None = None) -> MarkerArray:
+    """The message for ``update``: a DELETEALL per cleared namespace, DELETEs, then ADDs;
+    ``built`` keeps the markers made before, to refill rather than make again."""
+    cache = built if built is not None else MarkerCache()
     markers = [_bare(namespace, 0, Marker.DELETEALL, now) for namespace in update.clear]
     markers += [_bare(namespace, number, Marker.DELETE, now)
                 for namespace, number in update.delete]
-    markers += [_marker(shape, now) for shape in update.add]
+    markers += [cache.marker(shape, now) for shape in update.add]
     return MarkerArray(markers=markers)
 
 
@@ -42,6 +44,37 @@ def _bare(namespace: str, number: int, action: int, now: Time) -> Marker:
     marker = Marker(ns=namespace, id=number, action=action)
     marker.header.frame_id, marker.header.stamp = MAP_FRAME, now
     return marker
+
+
+class MarkerCache:
+    """The marker last made for each namespace and id, refilled when only its place changed.
+
+    A person moves every update and looks the same: setting two numbers of the marker made
+    before takes a fraction of making a ``Marker`` again (rclpy checks every field it is given).
+    Publishing serialises at the call, so refilling a marker sent before changes nothing sent.
+    """
+
+    def __init__(self) -> None:
+        self._made: dict[tuple[str, int], tuple[Shape, Marker]] = {}
+
+    def marker(self, shape: Shape, now: Time) -> Marker:
+        key = (shape.namespace, shape.id)
+        made = self._made.get(key)
+        if made is not None and _looks_alike(made[0], shape):
+            marker = made[1]
+            marker.header.stamp = now
+            position = marker.pose.position
+            position.x, position.y, position.z = shape.position
+        else:
+            marker = _marker(shape, now)
+        self._made[key] = (shape, marker)
+        return marker
+
+
+def _looks_alike(old: Shape, new: Shape) -> bool:
+    """Whether ``new`` is ``old`` moved: everything but the position alike."""
+    return (old.kind == new.kind and old.scale == new.scale and old.colour == new.colour
+            and old.text == new.text and old.points == new.points and old.z == new.z)
 
 
 def _marker(shape: Shape, now: Time) -> Marker:
@@ -72,6 +105,7 @@ class MarkerTopics:
         self._scene = make_publisher(MarkerArray, MARKERS_TOPIC, 10)
         self._areas = make_publisher(MarkerArray, AREA_MARKERS_TOPIC, latched)
         self._tracker = SceneTracker()
+        self._built = MarkerCache()
         task = engine.scenario.task
         roles = {task.pick_up: "pick-up", task.drop_off: "drop-off", task.start_area: "start"}
         send(self._areas, marker_array(areas_update(engine.world.areas, roles=roles), now=now))
@@ -81,4 +115,4 @@ class MarkerTopics:
         navigator = self.engine.navigator
         plan = navigator.path if navigator.status == "running" else []
         update = self._tracker.update(self.engine.people_states(), plan)
-        self._send(self._scene, marker_array(update, now=now))
+        self._send(self._scene, marker_array(update, now=now, built=self._built))

@@ -41,7 +41,7 @@ URL = re.compile(r"ws://127\.0\.0\.1:\d+")
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
 BINARY_MESSAGE_DATA = 0x01
 WAIT_LIMIT_S = 120.0  # wall seconds any one wait may take on a loaded machine
-ADD, DELETEALL, TEXT_VIEW_FACING = 0, 3, 9
+ADD, DELETE, DELETEALL, TEXT_VIEW_FACING = 0, 2, 3, 9
 
 
 # ------------------------------------------------------------------------------ the run
@@ -149,6 +149,7 @@ class Scene:
     markers_at: dict[int, list[tuple[float, float]]] = field(default_factory=dict)
     actors_at: dict[int, list[tuple[float, float]]] = field(default_factory=dict)
     task: dict[str, Any] = field(default_factory=dict)
+    shown: dict[tuple[str, int], tuple[float, float]] = field(default_factory=dict)
 
 
 def nanoseconds(stamp: Any) -> int:
@@ -181,14 +182,24 @@ def scene_of(messages: Iterable[tuple[str, Any]]) -> Scene:
 
 
 def _add_scene_markers(scene: Scene, message: Any) -> None:
-    added = [m for m in message.markers if m.action == ADD]
-    scene.people_seen |= {m.id for m in added if m.ns == "people"}
-    scene.guest_labels |= {m.text for m in added if m.ns == "guest_name"}
-    scene.plans += sum(1 for m in added if m.ns == "plan" and len(m.points) >= 2)
-    bodies = [m for m in added if m.ns in ("people", "guest")]
-    if bodies:
-        scene.markers_at[nanoseconds(bodies[0].header.stamp)] = sorted(
-            (round(m.pose.position.x, 6), round(m.pose.position.y, 6)) for m in bodies)
+    """Apply the markers as a viewer does; note where everyone stands then."""
+    for marker in message.markers:
+        key = (marker.ns, marker.id)
+        if marker.action == DELETEALL:
+            scene.shown = {shown: value for shown, value in scene.shown.items()
+                           if shown[0] != marker.ns}
+        elif marker.action == DELETE:
+            scene.shown.pop(key, None)
+        elif marker.action == ADD:
+            scene.shown[key] = (round(marker.pose.position.x, 6),
+                                round(marker.pose.position.y, 6))
+            scene.people_seen |= {marker.id} if marker.ns == "people" else set()
+            scene.guest_labels |= {marker.text} if marker.ns == "guest_name" else set()
+            scene.plans += int(marker.ns == "plan" and len(marker.points) >= 2)
+    if message.markers:
+        scene.markers_at[nanoseconds(message.markers[0].header.stamp)] = sorted(
+            place for (namespace, _), place in scene.shown.items()
+            if namespace in ("people", "guest"))
 
 
 def _add_transforms(scene: Scene, message: Any, *, static: bool) -> None:
@@ -227,7 +238,7 @@ def test_the_recording_shows_the_building_by_name_and_who_is_where(
     assert scene.plans >= 1, "the robot's plan was drawn"
     shared = sorted(set(scene.markers_at) & set(scene.actors_at))
     assert len(shared) >= 10
-    for stamp in shared:  # the markers stand where the actors are, the guest included
+    for stamp in shared:  # a viewer's markers stand where the actors are, the guest included
         assert scene.markers_at[stamp] == scene.actors_at[stamp], stamp
 
 

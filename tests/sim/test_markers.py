@@ -6,7 +6,7 @@ from __future__ import annotations
 from builtin_interfaces.msg import Time
 from visualization_msgs.msg import Marker
 
-from servicesim_sim.marker_topics import marker_array
+from servicesim_sim.marker_topics import MarkerCache, marker_array
 from servicesim_sim.markers import (
     AREA_NAMES_NS,
     AREAS_NS,
@@ -21,6 +21,7 @@ from servicesim_sim.markers import (
     Shape,
     Update,
     areas_update,
+    person_shape,
 )
 from servicesim_sim.world import AreaBox
 
@@ -58,10 +59,21 @@ def test_people_keep_their_ids_and_the_guest_is_drawn_apart_in_its_own_colour() 
     assert guest[0].position[:2] == (3.0, 3.0) and guest[0].kind == Kind.CYLINDER
     label = [shape for shape in first.add if shape.namespace == GUEST_NAME_NS]
     assert [shape.text for shape in label] == ["guest human_9"]
+    again = tracker.update(CROWD, plan=[])
+    assert again == Update(), "nobody moved: nothing to send"
     moved = tracker.update([CROWD[1], ("human_1", "walker", 1.5, 2.0), CROWD[2]], plan=[])
     assert not moved.clear and not moved.delete
-    ids = {shape.id: shape.position[:2] for shape in moved.add if shape.namespace == PEOPLE_NS}
-    assert ids == {0: (1.5, 2.0), 1: (-1.0, 0.5)}
+    assert [(shape.namespace, shape.id, shape.position[:2]) for shape in moved.add] == [
+        (PEOPLE_NS, 0, (1.5, 2.0))]
+
+
+def test_every_tenth_update_sends_everyone_for_viewers_that_joined_late() -> None:
+    tracker = SceneTracker(full_every=3)
+    path = [(0.0, 0.0), (1.0, 0.0)]
+    sent = [tracker.update(CROWD, plan=path) for _ in range(7)]
+    assert [len(update.add) for update in sent] == [5, 0, 0, 5, 0, 0, 5]
+    assert all(update.add[-1].namespace == PLAN_NS for update in sent[::3])
+    assert SceneTracker().full_every == 10
 
 
 def test_a_person_who_is_gone_is_deleted_and_a_newcomer_gets_a_new_id() -> None:
@@ -69,7 +81,7 @@ def test_a_person_who_is_gone_is_deleted_and_a_newcomer_gets_a_new_id() -> None:
     tracker.update(CROWD, plan=[])
     update = tracker.update([CROWD[1], ("human_7", "walker", 0.0, 0.0)], plan=[])
     assert update.delete == [(PEOPLE_NS, 0)]
-    assert sorted(shape.id for shape in update.add if shape.namespace == PEOPLE_NS) == [1, 2]
+    assert [shape.id for shape in update.add if shape.namespace == PEOPLE_NS] == [2]
 
 
 def test_the_plan_is_sent_when_it_changes_and_deleted_when_no_goal_runs() -> None:
@@ -91,7 +103,7 @@ def test_the_plan_is_sent_when_it_changes_and_deleted_when_no_goal_runs() -> Non
 
 
 def test_messages_clear_first_then_delete_then_add_in_the_map_frame() -> None:
-    tracker = SceneTracker()
+    tracker = SceneTracker(full_every=1)
     tracker.update(CROWD, plan=[(0.0, 0.0), (2.0, 0.0)])
     update = tracker.update(CROWD[1:], plan=[])
     update.clear = [PEOPLE_NS]
@@ -120,3 +132,16 @@ def test_a_plan_line_carries_its_points_and_width() -> None:
                 and marker.action == Marker.ADD)
     assert [(point.x, point.y) for point in line.points] == [(0.0, 0.0), (1.0, 1.0)]
     assert line.scale.x > 0.0
+
+
+def test_a_marker_made_before_is_refilled_when_only_its_place_changed() -> None:
+    cache = MarkerCache()
+    walker = person_shape(4, role="walker", x=1.0, y=2.0)
+    first = marker_array(Update(add=[walker]), now=Time(sec=1), built=cache).markers[0]
+    moved = marker_array(Update(add=[person_shape(4, role="walker", x=3.0, y=2.5)]),
+                         now=Time(sec=2), built=cache).markers[0]
+    assert moved is first
+    assert (moved.pose.position.x, moved.pose.position.y, moved.header.stamp.sec) == (3.0, 2.5, 2)
+    idler = marker_array(Update(add=[person_shape(4, role="idler", x=3.0, y=2.5)]),
+                         now=Time(sec=3), built=cache).markers[0]
+    assert idler is not first and idler.color.r != first.color.r
