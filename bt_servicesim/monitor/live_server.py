@@ -5,16 +5,19 @@ an address of the user's (:class:`LiveAddress`: 127.0.0.1 and Foxglove's port 87
 user names others) with a logging context of its own, so that only the run's bridge
 (:mod:`bt_servicesim.monitor.foxglove_bridge`) logs to it. It is opened while the run checks
 its input: an address in use is the user's error, one line and exit status 2, and no
-simulator has been started. No ROS here: the run opens it before rclpy is imported.
+simulator has been started. No ROS here: the run opens it before rclpy is imported, and
+foxglove-sdk (70 ms to import) only when a server is asked for.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import foxglove
-from foxglove.websocket import ChannelView, Client
+if TYPE_CHECKING:
+    from foxglove import Context
+    from foxglove.websocket import ChannelView, Client
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765  # Foxglove's convention
@@ -56,8 +59,10 @@ class LiveServer:
     """foxglove-sdk's WebSocket server on an address, with a context of its own."""
 
     def __init__(self, address: LiveAddress) -> None:
+        import foxglove
+
         self.address = address
-        self.context = foxglove.Context()
+        self.context: Context = foxglove.Context()
         self._replays: dict[int, Callable[[], None]] = {}
         try:
             self._server = foxglove.start_server(
