@@ -8,7 +8,11 @@
   it succeeds: the composites, decorators and blackboard ports at work, leaves almost free;
 * idle: the same file with the real leaves, set up on an rclpy node whose sim-time clock never
   runs and with no simulator, ticked ``--idle-ticks`` times: the mission waits in BeginTask while
-  the topic readers run, so this is the real leaves' cost of a tick in which nothing happens.
+  the topic readers run, so this is the real leaves' cost of a tick in which nothing happens;
+* Groot2 monitor: the scripted mission ticked ``--monitor-rounds`` times each without a monitor,
+  with ``run --groot``'s server watching and no client, and with ``btview echo`` polling it at
+  50 Hz (rounds interleaved, so load on the machine falls on all three alike); wall time and the
+  ticking thread's CPU time per tick, and the requests the server answered.
 
 Figures are wall-clock on this machine and vary with its load; nothing here is asserted. Bad
 arguments or a broken tree file give one line and exit status 2.
@@ -17,10 +21,13 @@ arguments or a broken tree file give one line and exit status 2.
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
 import sys
 import time
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from importlib.metadata import version
 from pathlib import Path
 from typing import Any
@@ -47,6 +54,8 @@ def build_parser() -> OneLineArgumentParser:
                         help="ticks every scripted navigation stays RUNNING (default 300)")
     parser.add_argument("--idle-ticks", type=int, default=3000,
                         help="ticks of the idle real tree (default 3000)")
+    parser.add_argument("--monitor-rounds", type=int, default=5,
+                        help="scripted missions per Groot2 monitor setting (default 5; 0: none)")
     return parser
 
 
@@ -78,13 +87,15 @@ def navigation_leaves(tree_file: Path) -> list[str]:
     return sorted({element.get("name", "") for element in root.iter(NAVIGATION_TAG)})
 
 
-def scripted(tree_file: Path, drive_ticks: int) -> None:
+def scripted_mission(tree_file: Path, drive_ticks: int) -> tuple[Any, Any, Any]:
+    """The tree file with scripted leaves, set up on a manual clock: (tree, clock, script)."""
     import py_trees
     from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
     from bt_servicesim.tree.lean_tree import LeanBehaviourTree
     from tests.mission_script import ManualClock, Script, scripted_registry
 
+    py_trees.blackboard.Blackboard.clear()
     drive = (py_trees.common.Status.SUCCESS, drive_ticks)
     outcomes: dict[str, list[Any]] = {name: [drive] * 1000
                                       for name in navigation_leaves(tree_file)}
@@ -95,11 +106,80 @@ def scripted(tree_file: Path, drive_ticks: int) -> None:
     tree = LeanBehaviourTree(root)
     clock = ManualClock()
     tree.setup(node=clock)
+    return tree, clock, script
+
+
+def scripted(tree_file: Path, drive_ticks: int) -> None:
+    tree, clock, script = scripted_mission(tree_file, drive_ticks)
     durations = timed_ticks(tree, None, lambda: clock.advance(0.1))
-    size = len(list(root.iterate()))
-    print(f"scripted mission ({size} behaviours, ended {root.status.name} after "
+    size = len(list(tree.root.iterate()))
+    print(f"scripted mission ({size} behaviours, ended {tree.root.status.name} after "
           f"{len(durations)} ticks, {len(script.calls)} leaf activations):")
     print(f"  {microseconds(durations)}")
+
+
+MONITOR_SETTINGS = ("no monitor", "Groot2 monitor, no client",
+                    "Groot2 monitor, btview echo polling at 50 Hz")
+
+
+@dataclass
+class MonitorFigures:
+    """One setting's ticks, pooled over the rounds."""
+
+    wall: list[float] = field(default_factory=list)
+    cpu_s: float = 0.0
+    requests: int = 0
+    seconds: float = 0.0
+
+
+def monitored(tree_file: Path, drive_ticks: int, rounds: int) -> None:
+    """The scripted mission's ticks under each of :data:`MONITOR_SETTINGS`, interleaved."""
+    from bt_servicesim.monitor.groot2_server import Groot2Server
+
+    figures = {setting: MonitorFigures() for setting in MONITOR_SETTINGS}
+    with Groot2Server(port=0) as server:
+        server.watch(scripted_mission(tree_file, drive_ticks)[0])  # btview quits on no tree
+        client = subprocess.Popen(
+            [str(Path(sys.executable).with_name("btview")), "echo", "--poll-hz", "50",
+             "-p", str(server.port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            wait_for_client(server, client)
+            for _ in range(rounds):
+                for setting in MONITOR_SETTINGS:
+                    quiet = setting == MONITOR_SETTINGS[1]
+                    client.send_signal(signal.SIGSTOP if quiet else signal.SIGCONT)
+                    monitor = None if setting == MONITOR_SETTINGS[0] else server
+                    monitored_round(tree_file, drive_ticks, monitor, figures[setting])
+        finally:
+            client.kill()
+            client.wait()
+    print(f"scripted mission, {rounds} rounds per setting (Groot2 monitor, run --groot):")
+    for setting, figure in figures.items():
+        print(f"  {setting}:\n    wall {microseconds(figure.wall)}\n"
+              f"    ticking thread's CPU {figure.cpu_s / len(figure.wall) * 1e6:7.1f} µs a tick;"
+              f" {figure.requests / figure.seconds:5.1f} requests answered a second")
+
+
+def wait_for_client(server: Any, client: subprocess.Popen[bytes]) -> None:
+    """Until the client polls (its tree request and two status polls), or exit if it quit."""
+    while server.requests < 3:
+        if client.poll() is not None:
+            sys.exit(f"benchmarks/tick_cost.py: error: btview echo exited ({client.returncode})")
+        time.sleep(0.05)
+
+
+def monitored_round(tree_file: Path, drive_ticks: int, server: Any,
+                    figures: MonitorFigures) -> None:
+    """One scripted mission, watched by ``server`` unless it is ``None``."""
+    tree, clock, _ = scripted_mission(tree_file, drive_ticks)
+    if server is not None:
+        server.watch(tree)
+    requests = 0 if server is None else server.requests
+    started, cpu_started = time.perf_counter(), time.thread_time()
+    figures.wall += timed_ticks(tree, None, lambda: clock.advance(0.1))
+    figures.cpu_s += time.thread_time() - cpu_started
+    figures.seconds += time.perf_counter() - started
+    figures.requests += 0 if server is None else server.requests - requests
 
 
 def idle(tree_file: Path, ticks: int) -> None:
@@ -130,8 +210,9 @@ def idle(tree_file: Path, ticks: int) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    if args.drive_ticks < 0 or args.idle_ticks < 1:
-        build_parser().error("--drive-ticks must be 0 or more and --idle-ticks 1 or more")
+    if args.drive_ticks < 0 or args.idle_ticks < 1 or args.monitor_rounds < 0:
+        build_parser().error("--drive-ticks and --monitor-rounds must be 0 or more and "
+                             "--idle-ticks 1 or more")
     domain = isolate()
     from bt_servicesim.tree.loading import MissionTreeError, load_mission_tree
 
@@ -143,6 +224,8 @@ def main(argv: Sequence[str] | None = None) -> int:
           f"discovery {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}")
     scripted(args.tree, args.drive_ticks)
     idle(args.tree, args.idle_ticks)
+    if args.monitor_rounds:
+        monitored(args.tree, args.drive_ticks, args.monitor_rounds)
     return 0
 
 

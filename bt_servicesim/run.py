@@ -4,6 +4,8 @@ It starts the simulator in its own process (real DDS between them), runs the mis
 sim time, shows progress in the terminal, stops both cleanly on Ctrl-C and writes
 ``report.json`` with the score, checkpoints and penalties *as the referee counted them*.
 
+With ``--groot`` it serves the live tree to Groot2 and ``btview`` (:mod:`bt_servicesim.monitor`).
+
 Exit status: 0 when the referee counted all four checkpoints, 1 when the mission failed,
 2 on bad input (one line on stderr naming the problem), 130 on Ctrl-C.
 """
@@ -11,6 +13,7 @@ Exit status: 0 when the referee counted all four checkpoints, 1 when the mission
 from __future__ import annotations
 
 import argparse
+import ipaddress
 import math
 import os
 import sys
@@ -28,8 +31,9 @@ from bt_servicesim.mission.settings import (
     REPORT_NAME,
     RunSettings,
 )
+from bt_servicesim.monitor.groot2_server import DEFAULT_HOST, DEFAULT_PORT, Groot2Server
+from bt_servicesim.monitor.live_server import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_servicesim.monitor.live_server import (
-    DEFAULT_PORT,
     LiveAddress,
     LiveServer,
     LiveServerError,
@@ -82,9 +86,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--attach", action="store_true",
                         help="start no simulator: run against the backend already on this "
                         "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
-    parser.add_argument("--foxglove", nargs="?", const=str(DEFAULT_PORT), metavar="[ADDR:]PORT",
+    parser.add_argument("--groot", nargs="?", const=str(DEFAULT_PORT), metavar="[ADDR:]PORT",
+                        help="serve the live tree to Groot2 and btview (BehaviorTree.CPP v4's "
+                        f"monitor protocol) on {DEFAULT_HOST}:{DEFAULT_PORT}, on PORT, or on "
+                        "ADDR:PORT (an IPv4 address; 0.0.0.0 for every interface)")
+    parser.add_argument("--foxglove", nargs="?", const=str(FOXGLOVE_PORT), metavar="[ADDR:]PORT",
                         help="serve the live topics to Foxglove over WebSocket on "
-                        f"127.0.0.1:PORT (default {DEFAULT_PORT}), or on ADDR:PORT")
+                        f"127.0.0.1:PORT (default {FOXGLOVE_PORT}), or on ADDR:PORT")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -108,11 +116,14 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
     if not (math.isfinite(args.time_limit) and 0.0 < args.time_limit <= MAX_TIME_LIMIT_S):
         raise UsageError(f"--time-limit {args.time_limit}: must be more than 0 and at most "
                          f"{MAX_TIME_LIMIT_S:.0f} sim seconds")
+    groot = None if args.groot is None else groot_address(args.groot)
+    if groot is not None and args.executive != "bt":
+        raise UsageError(f"--groot shows a behaviour tree; the {args.executive} executive has none")
     return RunSettings(
         world=args.world, seed=args.seed, speed=speed, tree=args.tree,
         out=_run_directory(args.out, overwrite=args.overwrite),
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
-        run_id=args.run_id or uuid.uuid4().hex, attach=args.attach,
+        run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove),
     )
 
@@ -124,6 +135,24 @@ def _live_address(argument: str | None) -> LiveAddress | None:
         return LiveAddress.parse(argument)
     except ValueError as error:
         raise UsageError(f"--foxglove {error}") from None
+
+
+def groot_address(argument: str) -> tuple[str, int]:
+    """``--groot``'s ``PORT`` or ``ADDR:PORT`` as (IPv4 address, port); ``localhost`` is
+    127.0.0.1."""
+    host, _, port_text = argument.rpartition(":")
+    host = host or DEFAULT_HOST
+    if host == "localhost":
+        host = "127.0.0.1"
+    try:
+        address = ipaddress.ip_address(host)
+    except ValueError:
+        address = None
+    if not isinstance(address, ipaddress.IPv4Address):
+        raise UsageError(f"--groot {argument}: {host} is not an IPv4 address")
+    if not (port_text.isdigit() and 1 <= int(port_text) <= 65535):
+        raise UsageError(f"--groot {argument}: the port must be a number from 1 to 65535")
+    return host, int(port_text)
 
 
 def _check_backend(args: argparse.Namespace) -> None:
@@ -161,26 +190,40 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    monitor: Groot2Server | None = None
     live: LiveServer | None = None
     try:
         settings = settings_from(args)
         make_executive = executive_factory(settings)
+        monitor = _open_monitor(settings)  # before the run directory: a port in use leaves none
         live = open_live_server(settings.foxglove) if settings.foxglove else None
-        settings.out.mkdir(parents=True, exist_ok=True)
     except (UsageError, MissionTreeError, LiveServerError, OSError) as error:
-        if live is not None:
-            live.stop()
+        if monitor is not None:
+            monitor.close()
         return error_line(PROG, error)
     try:
-        return _run(settings, make_executive, tuple(args.sim_arg), live)
+        return _run(settings, make_executive, args, monitor, live)
     finally:
+        if monitor is not None:
+            monitor.close()
         if live is not None:
             live.stop()
 
 
-def _run(settings: RunSettings, make_executive: ExecutiveFactory, sim_args: tuple[str, ...],
-         live: LiveServer | None) -> int:
-    """The mission on a ROS domain of its own (unless attached), its input checked."""
+def _open_monitor(settings: RunSettings) -> Groot2Server | None:
+    """The Groot2 server, listening before anything starts, if the run was asked for one."""
+    if settings.groot is None:
+        return None
+    host, port = settings.groot
+    return Groot2Server(host=host, port=port)
+
+
+def _run(settings: RunSettings, make_executive: ExecutiveFactory, args: argparse.Namespace,
+         monitor: Groot2Server | None, live: LiveServer | None) -> int:
+    try:
+        settings.out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        return error_line(PROG, error)
     if live is not None:
         print(describe(live), flush=True)
     apply_localhost_defaults()
@@ -196,7 +239,7 @@ def _run(settings: RunSettings, make_executive: ExecutiveFactory, sim_args: tupl
     try:
         return MissionRun(
             settings=settings, make_executive=make_executive,
-            extra_sim_args=sim_args, live_server=live,
+            extra_sim_args=tuple(args.sim_arg), monitor=monitor, live_server=live,
         ).execute()
     finally:
         if claim is not None:

@@ -45,5 +45,7 @@ class RunSettings:
     """Carried by the report, so that whoever started the run can tell the report is its own."""
     attach: bool = False
     """Start no simulator: run against the backend already on the environment's ROS domain."""
+    groot: tuple[str, int] | None = None
+    """Where the Groot2 monitor listens (address, port), or ``None`` for no monitor."""
     foxglove: LiveAddress | None = None
     """Serve the live topics to Foxglove on this address (``run --foxglove``); None: no server."""

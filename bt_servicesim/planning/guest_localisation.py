@@ -21,6 +21,11 @@ refuse. So the mission closes in before asking for the guest:
   guest's side towards there: a robot that must drive past the guest it just picked up
   crowds them, and a guest following the robot's trail first walks back to where the robot
   stood. It keeps off walls where it can (the referee books objects within 0.35 m too).
+- Others stand near the guest too (the competition's idlers have areas by the pick-ups): RFID
+  names them beside the guest. The guest is always picked out by name, and
+  :func:`locate_bystanders` locates everyone else heard lately the same way, so that
+  :func:`approach_goal` keeps the robot more than 1.0 m (centre to centre: the referee books
+  "approximation" within 0.75 m of the robot's body) from where they may stand.
 - :class:`GuestSteadilyInRange` holds the pick-up back until every reading over the last half
   sim second, taken while the robot stands, names the guest.
 
@@ -35,7 +40,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +57,7 @@ __all__ = [
     "RfidReading",
     "approach_goal",
     "estimate_guest",
+    "locate_bystanders",
 ]
 
 
@@ -103,6 +109,15 @@ PASSING_WINDOW = 1.5
 (the possible spots lie well inside)."""
 DEPARTURE_SCALE = 1.0
 """Metres of route, ahead of or behind the guest, over which the departure term saturates."""
+BYSTANDER_RECENT = 1.0
+"""Sim seconds: everyone but the guest that RFID named this recently is a bystander."""
+MOST_BYSTANDERS = 6
+"""Bystanders located at most (the nearest few matter; each costs an estimate)."""
+BYSTANDER_BERTH = 1.0
+"""Metres, centre to centre, within which the referee books approximation to a person."""
+BYSTANDER_WEIGHT = 0.5
+"""Score lost by a goal within :data:`BYSTANDER_BERTH` of every spot a bystander may stand on
+(half the pick-up reach's worth: reach still comes first)."""
 STEADY_FOR = 0.5
 """Sim seconds of readings that must all name the guest before a pick-up."""
 STEADY_READINGS = 3
@@ -250,10 +265,21 @@ def _count_beyond(cells: np.ndarray, points: np.ndarray, radius: float) -> np.nd
     return (_distances(cells, points) > radius).sum(axis=1)
 
 
+def locate_bystanders(history: RfidHistory, guest: str, grid: OccupancyGrid2D,
+                      now: float) -> list[GuestEstimate]:
+    """Where the others RFID named in the last :data:`BYSTANDER_RECENT` sim seconds may stand,
+    each estimated as the guest is (at most :data:`MOST_BYSTANDERS`, the most often heard)."""
+    heard = [name for reading in history.since(now - BYSTANDER_RECENT)
+             for name in reading.names if name != guest]
+    names = sorted(set(heard), key=lambda name: (-heard.count(name), name))
+    located = (estimate_guest(history, name, grid, now) for name in names[:MOST_BYSTANDERS])
+    return [estimate for estimate in located if estimate is not None]
+
+
 # ============================================================================ the approach
 def approach_goal(
     estimate: GuestEstimate, grid: OccupancyGrid2D, robot: Pose2D,
-    leave_towards: Point | None = None,
+    leave_towards: Point | None = None, bystanders: Sequence[GuestEstimate] = (),
 ) -> Pose2D | None:
     """A reachable spot near the estimate, facing it, from which the guest is within reach.
 
@@ -269,7 +295,8 @@ def approach_goal(
     corridor the way past them is a squeeze, or contact): when the guest stands between the
     robot and the way out, the robot goes round to their far side if it can, passes them now
     if it can do so safely (they stand still; a guest following the robot is harder to pass),
-    and otherwise stays on its side. For an
+    and otherwise stays on its side. A cell within :data:`BYSTANDER_BERTH` of where
+    ``bystanders`` may stand scores up to :data:`BYSTANDER_WEIGHT` less each. For an
     estimate split in two (a robot that drove a straight line cannot tell
     its left from its right) it may lie between the two halves.
     None if the robot already stands :data:`CLOSE_ENOUGH` and no cell scores clearly better
@@ -285,6 +312,9 @@ def approach_goal(
         scores += _departure(estimate, grid, here_and_cells, leave_towards)
     for berth, penalty in PASSING_BERTHS:
         scores[~_reachable_keeping(berth, estimate, grid, robot, here_and_cells)] -= penalty
+    for other in bystanders:
+        near_other = _distances(here_and_cells, other.spots) < BYSTANDER_BERTH
+        scores -= BYSTANDER_WEIGHT * near_other.mean(axis=1)
     here, scores = scores[0], scores[1:]
     near = math.hypot(estimate.x - robot.x, estimate.y - robot.y) <= CLOSE_ENOUGH
     if near and here >= scores.max() - STAY_SLACK:

@@ -23,6 +23,8 @@ class OneLineArgumentParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from servicesim_sim.camera import RATE_HZ
+
     parser = OneLineArgumentParser(prog=PROG, description="The ServiceSim simulator node.")
     parser.add_argument("--world", help="world file (default: the ServiceSim office)")
     parser.add_argument("--seed", type=int, help="randomise the task (default: the shipped task)")
@@ -33,7 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--guest-out-of-range", action="store_true",
                         help="place the guest beyond RFID range of the pick-up area centre")
     parser.add_argument("--drift-scale", type=float,
-                        help="scale drift times (<1 = earlier and more frequent drifts)")
+                        help="scale the drift schedule, in world time (<1 = earlier and more "
+                             "frequent drifts)")
     parser.add_argument("--nav-abort-probability", type=float,
                         help="probability that a navigation goal aborts")
     parser.add_argument("--rfid-dropout", type=float, help="probability an RFID message is lost")
@@ -43,8 +46,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="encoder calibration error of odometry (default 0: exact)")
     parser.add_argument("--localisation-noise", type=float,
                         help="metres (and radians) of noise on the localisation estimate")
-    parser.add_argument("--camera-rate", type=float, default=2.0,
-                        help="camera frames per sim second (0 = off)")
+    parser.add_argument("--camera-rate", type=float, default=RATE_HZ,
+                        help=f"camera frames per sim second while someone subscribes "
+                             f"(0 = off; default {RATE_HZ:g}, the original's)")
+    parser.add_argument("--guest-path", choices=("trail", "straight"),
+                        help="how the guest follows: along the robot's trail (default) or "
+                             "straight at the robot through walls (the original)")
     return parser
 
 

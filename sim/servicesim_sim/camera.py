@@ -1,9 +1,9 @@
 """The robot's front camera: a cheap pinhole picture of walls, floor, ceiling and people.
 
-The original robot carried a 640x480 rgb8 camera with a 1.0629 rad horizontal field of view,
-and OSRF's later example found a lost guest in it as a blue shirt over red trousers, judging
-distance as 550·1.5 / (blob height in pixels). This camera keeps exactly what that needs and
-little else:
+The original robot carried a 640x480 rgb8 camera with a 1.0629 rad horizontal field of view
+at 24 frames a sim second, and OSRF's later example found a lost guest in it as a blue shirt
+over red trousers, judging distance as 550·1.5 / (blob height in pixels). This camera keeps
+exactly what that needs and little else:
 
 * A pinhole model at the robot's origin, facing its yaw, 1.0 m above the floor, square pixels
   (fx = fy = (width / 2) / tan(hfov / 2), about 545 at the defaults).
@@ -33,6 +33,7 @@ from servicesim_sim.world import OccupancyMap
 WIDTH = 640
 HEIGHT = 480
 HFOV = 1.0629  # radians
+RATE_HZ = 24.0  # the original's FrontCamera update_rate (servicebot.urdf)
 CAMERA_HEIGHT = 1.0  # metres above the floor
 WALL_HEIGHT = 2.5
 COLUMNS_PER_RAY = 4

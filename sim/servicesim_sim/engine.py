@@ -6,9 +6,17 @@ messages and requests into calls. Keeping ROS out makes the rules testable in mi
 the engine deterministic: every random draw comes from generators seeded by the scenario.
 
 One :meth:`SimEngine.step` is ``dt`` sim seconds: the robot drives (navigation's command, else
-the last ``cmd_vel`` for half a second), the guest follows its trail, the crowd walks, the
-referee checks the checkpoints that depend on where things are (1 and 4), whether the guest
-fell too far behind or drifted, and books contact and approximation penalties.
+the last ``cmd_vel``, which persists as with ``gazebo_ros_diff_drive``: there is no timeout),
+the guest follows, the crowd walks, the guest drifts at the scheduled world times or falls too
+far behind, the referee checks the checkpoints that depend on where things are (1 and 4), and
+contact and approximation penalties are booked from the start of the world.
+
+The referee's services play the original's rules (``Checkpoint.cc``, ``CP_PickUp.cc``,
+``CP_DropOff.cc``, ``FollowActorPlugin.cc``): a pick-up or drop-off before its checkpoint
+started is a failed attempt (before ``new_task`` too); one after its checkpoint is done answers
+success with no penalty, and still acts on the guest (a pick-up within reach makes them follow
+again, a drop-off makes them stop); ``drift`` always answers true and arms a drift that fires
+once the guest follows and is more than 1.2 m from the robot.
 """
 
 from __future__ import annotations
@@ -20,7 +28,7 @@ import numpy as np
 
 from servicesim_sim import referee as rules
 from servicesim_sim.camera import render_front_camera
-from servicesim_sim.guest import LOST_DISTANCE, Guest, GuestState
+from servicesim_sim.guest import LOST_DISTANCE, STOP_DISTANCE, Guest, GuestState
 from servicesim_sim.localisation import (
     IDENTITY,
     AmclModel,
@@ -42,11 +50,10 @@ PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
 ROBOT_NAME = "servicebot"
 RFID_RANGE_M = 2.0
 PICKUP_RANGE_M = 2.0
-PERSON_BODY_RADIUS = 0.25
-PERSON_APPROXIMATION_M = 0.75
-OBJECT_APPROXIMATION_M = 0.35
+PERSON_BODY_RADIUS = 0.25  # a person's collision box (0.44 x 0.60 m) as a disc
+PERSON_APPROXIMATION_M = 0.75  # ghost cylinder radius, centred on the base (servicebot.urdf)
+OBJECT_APPROXIMATION_M = 0.35  # ghost cylinder radius, centred on the base (servicebot.urdf)
 CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
-CMD_VEL_TIMEOUT_S = 0.5
 CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
 CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
 TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
@@ -75,10 +82,15 @@ class SimEngine:
         task = scenario.task
         self.robot = Robot(x=task.start_x, y=task.start_y, yaw=task.start_yaw, walls=walls)
         self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,
-                           yaw=task.guest_yaw, wall_clearance=walls.at)
+                           yaw=task.guest_yaw, wall_clearance=walls.at,
+                           path=scenario.difficulty.guest_path)
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
-                           taken_names={task.guest_name}, keep_clear=self._keep_clear())
+                           taken_names={task.guest_name}, keep_clear=self._keep_clear(),
+                           occupied=[(task.guest_x, task.guest_y, PERSON_BODY_RADIUS),
+                                     (task.start_x, task.start_y, BODY_RADIUS)],
+                           idling_areas=world.idling_areas,
+                           walker_patience_s=world.people.walker_patience_s)
         self._knobs = np.random.default_rng(scenario.knob_seed)
         difficulty = scenario.difficulty
         self.odometry = WheelOdometry(drift=difficulty.odom_drift,
@@ -94,15 +106,17 @@ class SimEngine:
         self._ticket = 0
         self._localised = False
         self._refused: dict[int, NavigationState] = {}
-        self._cmd_vel = (0.0, 0.0, -math.inf)
-        self._nav_command = (0.0, 0.0)
+        self._cmd_vel = (0.0, 0.0)
+        self._nav_driving = False
         self._next_control = 0.0
         self._drifts = list(scenario.drift_times)
+        self._drift_armed = False
         self._seen_revision = -1
         self._steps = 0
         self._nobody_near_until = -math.inf
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
+        """Where walker routes do not go (idlers may stand there, as in the original)."""
         task, areas = self.scenario.task, self.world.areas
         discs = [(task.start_x, task.start_y, 1.5), (task.guest_x, task.guest_y, 1.5)]
         for name in (task.pick_up, task.drop_off, task.start_area):
@@ -129,8 +143,12 @@ class SimEngine:
 
     def pickup(self, guest_name: str, robot_name: str) -> tuple[bool, str]:
         referee = self.referee
-        if not referee.running:
-            return False, "no task is running"
+        if not referee.checkpoint_started(rules.PICK_UP_GUEST):
+            referee.failed_pickup()  # booked even before new_task; scored once it starts
+            return False, ("no task is running" if not referee.started
+                           else "checkpoint 1 (reach the pick-up area) is not done")
+        if referee.checkpoint_done[rules.PICK_UP_GUEST]:
+            return True, self._pick_up_again(guest_name, robot_name)
         reason = self._pickup_refusal(guest_name, robot_name)
         if reason:
             referee.failed_pickup()
@@ -139,14 +157,19 @@ class SimEngine:
         referee.reach(rules.PICK_UP_GUEST)
         return True, f"{guest_name} follows {robot_name}"
 
+    def _pick_up_again(self, guest_name: str, robot_name: str) -> str:
+        """Checkpoint 2 is done: the answer is success whatever happens; the guest follows
+        (again) only if the names are right and the robot is within reach."""
+        if self._pickup_refusal(guest_name, robot_name) or self.guest.following:
+            return "checkpoint 2 is done; the guest's state is unchanged"
+        self.guest.start_following(self.robot.x, self.robot.y)
+        return f"checkpoint 2 is done; {guest_name} follows {robot_name} again"
+
     def _pickup_refusal(self, guest_name: str, robot_name: str) -> str:
         if robot_name != ROBOT_NAME:
             return f"unknown robot {robot_name!r}"
         if guest_name != self.guest.name:
             return f"{guest_name!r} is not the guest"
-        if self.referee.current != rules.PICK_UP_GUEST:
-            return ("checkpoint 1 (reach the pick-up area) is not done"
-                    if self.referee.current < rules.PICK_UP_GUEST else "the guest is picked up")
         distance = self.guest.distance_to(self.robot.x, self.robot.y)
         if distance > PICKUP_RANGE_M:
             return f"the guest is {distance:.2f} m away (more than {PICKUP_RANGE_M} m)"
@@ -154,17 +177,21 @@ class SimEngine:
 
     def dropoff(self, guest_name: str) -> tuple[bool, str]:
         referee = self.referee
-        if not referee.running:
-            return False, "no task is running"
+        if referee.checkpoint_done[rules.DROP_OFF_GUEST]:
+            if guest_name == self.guest.name and self.guest.following:
+                self.guest.stop_following(GuestState.DROPPED_OFF)
+            return True, "checkpoint 3 is done"
         reason = self._dropoff_refusal(guest_name)
         if reason:
-            referee.failed_dropoff()
+            referee.failed_dropoff()  # booked even before new_task; scored once it starts
             return False, reason
         self.guest.stop_following(GuestState.DROPPED_OFF)
         referee.reach(rules.DROP_OFF_GUEST)
         return True, f"{guest_name} dropped off in {self.scenario.task.drop_off}"
 
     def _dropoff_refusal(self, guest_name: str) -> str:
+        if not self.referee.running:
+            return "no task is running"
         if guest_name != self.guest.name:
             return f"{guest_name!r} is not the guest"
         if self.referee.current != rules.DROP_OFF_GUEST or not self.guest.following:
@@ -176,14 +203,14 @@ class SimEngine:
         return ""
 
     def force_drift(self) -> tuple[bool, str]:
-        if not self.guest.following:
-            return False, "the guest is not following"
-        self._drift()
-        return True, "the guest drifted"
+        """The debug ``drift``: always true; the drift fires once the guest follows and is
+        more than 1.2 m from the robot (now, or after the next pick-up)."""
+        self._drift_armed = True
+        return True, "drift armed"
 
     def _drift(self) -> None:
         self.guest.stop_following(GuestState.DRIFTED)
-        self.referee.back_to_pick_up(too_fast=False)
+        self.referee.guest_stopped_following(too_fast=False)
 
     # ---------------------------------------------------------------- the robot
     def set_initial_pose(self, x: float, y: float, yaw: float) -> None:
@@ -194,13 +221,14 @@ class SimEngine:
         self._estimate_due = True
 
     def command_velocity(self, v: float, w: float) -> None:
-        """Drive with (v, w) for the next half second; a non-finite twist stops the robot.
+        """Drive with (v, w) until the next command, as ``gazebo_ros_diff_drive`` does (no
+        timeout); a non-finite twist stops the robot.
 
         Clamping alone would not do: ``min(0.5, nan)`` is 0.5, full speed ahead.
         """
         if not (math.isfinite(v) and math.isfinite(w)):
             v = w = 0.0
-        self._cmd_vel = (v, w, self.sim_time)
+        self._cmd_vel = (v, w)
 
     def robot_pose(self) -> tuple[float, float, float]:
         """The true pose in map: ground truth, for the referee, records and tests only."""
@@ -289,25 +317,29 @@ class SimEngine:
         self.guest.step(dt, robot_x=self.robot.x, robot_y=self.robot.y)
         self._steps += 1
         if self._steps % CROWD_PERIOD_STEPS == 0:
-            self.crowd.step(dt * CROWD_PERIOD_STEPS, robot=self.robot.pose)
+            self.crowd.step(dt * CROWD_PERIOD_STEPS, robot=self.robot.pose,
+                            others=[(self.guest.x, self.guest.y)])
         self.sim_time += dt
         self.referee.advance(dt)
         if self.referee.running:
             self._check_area_checkpoints()
-            self._check_guest()
-            self._book_contacts(dt)
+        self._check_guest()
+        self._book_contacts(dt)
 
     def _drive_command(self) -> tuple[float, float]:
+        """Navigation's controller publishes on ``cmd_vel`` too: at 20 Hz while a goal runs, and
+        a zero twist when it ends (as Nav2's controller server does). Otherwise the last
+        command persists."""
         if self.navigator.status == "running":
+            self._nav_driving = True
             if self.sim_time >= self._next_control - 1e-9:
                 self._next_control = self.sim_time + CONTROLLER_PERIOD_S
-                self._nav_command = self.navigator.command(
+                self._cmd_vel = self.navigator.command(
                     pose=self.robot.pose, people=self._obstacles(), now=self.sim_time)
-            return self._nav_command
-        v, w, when = self._cmd_vel
-        if self.sim_time - when <= CMD_VEL_TIMEOUT_S:
-            return v, w
-        return 0.0, 0.0
+        elif self._nav_driving:
+            self._nav_driving = False
+            self._cmd_vel = (0.0, 0.0)
+        return self._cmd_vel
 
     def _obstacles(self) -> list[tuple[float, float]]:
         """People navigation must avoid: everyone but a guest walking behind the robot."""
@@ -327,74 +359,87 @@ class SimEngine:
             referee.reach(rules.RETURN_TO_START)
 
     def _check_guest(self) -> None:
+        """The original's order (``FollowActorPlugin.cc``): a guest more than 4 m behind stops
+        following ("too fast"); else a drift fires at a scheduled world time whatever the
+        distance, or, when armed by the ``drift`` service, once the guest is more than 1.2 m
+        from the robot. A scheduled drift nobody follows for is skipped."""
         guest = self.guest
-        elapsed = self.sim_time - (self.task_started_at or 0.0)
-        due = bool(self._drifts) and elapsed >= self._drifts[0]
-        if due:
-            self._drifts.pop(0)  # a drift due while the guest is not following is skipped
+        due = False
+        while self._drifts and self.sim_time >= self._drifts[0]:
+            self._drifts.pop(0)
+            due = True
         if not guest.following:
             return
-        if guest.distance_to(self.robot.x, self.robot.y) > LOST_DISTANCE:
+        distance = guest.distance_to(self.robot.x, self.robot.y)
+        if distance > LOST_DISTANCE:
             guest.stop_following(GuestState.LOST)
-            self.referee.back_to_pick_up(too_fast=True)
-        elif due:
+            self.referee.guest_stopped_following(too_fast=True)
+        elif due or (self._drift_armed and distance > STOP_DISTANCE):
+            self._drift_armed = False
             self._drift()
 
     def _book_contacts(self, dt: float) -> None:
-        wall_gap = self.robot.wall_gap()
-        if wall_gap >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
+        """Contact and approximation depths, as the original's ``PenaltyChecker`` took them.
+
+        Approximation: the depth of a ghost cylinder centred on the base (0.75 m for people,
+        0.35 m for objects) into each person's body and into the nearest wall. Contact: the
+        depth of the robot's body into them. Booked from the start of the world.
+        """
+        clearance = self.robot.walls.at(self.robot.x, self.robot.y)  # centre to nearest wall
+        if clearance >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
             return  # nobody and nothing near: the common case, nothing to book
-        gaps = self._person_gaps()
-        touching = np.clip(PERSON_BODY_RADIUS - gaps, 0.0, None)
+        distances = self._person_distances()
+        touching = np.clip(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0, None)
         self.referee.contact(person_depth=float(touching.sum()),
-                             object_depth=max(0.0, -wall_gap), dt=dt)
-        approach = np.clip(PERSON_APPROXIMATION_M - gaps, 0.0, PERSON_APPROXIMATION_M)
+                             object_depth=max(0.0, BODY_RADIUS - clearance), dt=dt)
+        approach = np.clip(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0,
+                           PERSON_APPROXIMATION_M)
         self.referee.approximation(
             person_depth=float(approach.sum()),
-            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - wall_gap)),
+            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
             dt=dt)
 
     def _anyone_may_be_near(self) -> bool:
-        """Whether someone may be within the approximation distance of the robot's body.
+        """Whether someone's body may be within the people's ghost cylinder.
 
         When the nearest person is farther, nobody can come within it before the gap closes
         at :data:`CLOSING_SPEED_BOUND`, so the people need not be looked at again until then.
         """
         if self.sim_time < self._nobody_near_until:
             return False
-        gap = self._nearest_person_gap()
-        if gap < PERSON_APPROXIMATION_M:
+        gap = self._nearest_person_distance() - (PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS)
+        if gap < 0.0:
             return True
-        self._nobody_near_until = self.sim_time + (gap - PERSON_APPROXIMATION_M) / (
-            CLOSING_SPEED_BOUND)
+        self._nobody_near_until = self.sim_time + gap / CLOSING_SPEED_BOUND
         return False
 
-    def _nearest_person_gap(self) -> float:
-        """Distance from the robot's body edge to the nearest person's origin (plain floats:
+    def _nearest_person_distance(self) -> float:
+        """Distance from the robot's origin to the nearest person's origin (plain floats:
         this runs every step)."""
         x, y = self.robot.x, self.robot.y
         nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
                        for person in self.crowd.people),
                       default=math.inf)
         nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
-        return math.sqrt(nearest) - BODY_RADIUS
+        return math.sqrt(nearest)
 
-    def _person_gaps(self) -> np.ndarray:
-        """Distance from the robot's body edge to each person's origin."""
+    def _person_distances(self) -> np.ndarray:
+        """Distance from the robot's origin to each person's origin."""
         xs = [person.x for person in self.crowd.people] + [self.guest.x]
         ys = [person.y for person in self.crowd.people] + [self.guest.y]
-        distances = np.hypot(np.asarray(xs) - self.robot.x, np.asarray(ys) - self.robot.y)
-        return distances - BODY_RADIUS
+        return np.hypot(np.asarray(xs) - self.robot.x, np.asarray(ys) - self.robot.y)
 
     # ------------------------------------------------------------------ sensors
     def rfid_names(self) -> list[str] | None:
-        """Everyone within 2 m; None (nothing published) when nobody is, or a reading is lost."""
+        """Everyone within 2 m, in the world's order (walkers, idlers, then the guest, as the
+        original's world file lists its actors and ``VicinityPlugin.cc`` reports them); None
+        (nothing published) when nobody is, or a reading is lost."""
         x, y = self.robot.x, self.robot.y
         names = [name for name, _, px, py in self.people_states()
                  if math.hypot(px - x, py - y) <= RFID_RANGE_M]
         if not names or self._knobs.random() < self.scenario.difficulty.rfid_dropout:
             return None
-        return sorted(names)
+        return names
 
     def people_states(self) -> list[tuple[str, str, float, float]]:
         return [*self.crowd.states(), (self.guest.name, "guest", self.guest.x, self.guest.y)]

@@ -1,9 +1,11 @@
 """The guest: waits to be picked up, then follows the robot along its trail.
 
-The original guest walked straight at the robot, through walls. This one follows the robot's
-*trail* — the points the robot's origin passed, recorded every few centimetres — so it takes the
-same doors and corridors the robot took. It walks at up to 0.8 m/s, stops when it is within
-1.2 m of the robot, and stops following for good (until picked up again) in two ways the
+The original guest walked straight at the robot, through walls (``FollowActorPlugin.cc``); that
+is still here, as ``path="straight"`` (the simulator's ``--guest-path straight``), and does
+nothing else: no trail, no stepping aside. By default (``path="trail"``) the guest follows the
+robot's *trail* — the points the robot's origin passed, recorded every few centimetres — so it
+takes the same doors and corridors the robot took. It walks at up to 0.8 m/s, stops when it is
+within 1.2 m of the robot, and stops following for good (until picked up again) in two ways the
 referee cares about: the robot gets more than 4.0 m ahead ("too fast"), or a scheduled drift
 makes it wander off its task and stay where it is.
 
@@ -34,6 +36,7 @@ WALL_CLEARANCE = 0.3  # m: the guest keeps this far from walls when stepping asi
 YIELD_DIRECTIONS = (0.0, 0.6, -0.6, 1.2, -1.2, 1.57, -1.57)  # rad off "straight away"
 REJOIN_LOOKAHEAD = 400  # trail points (20 m) searched for the nearest when rejoining
 REJOIN_CLEARANCE = 0.2  # m: a rejoining guest walks straight only this far clear of walls
+GUEST_PATHS = ("trail", "straight")  # ours (the default), the original's
 
 
 class GuestState(Enum):
@@ -48,8 +51,12 @@ class Guest:
     """Position and state of the guest; :meth:`step` moves them."""
 
     def __init__(self, *, name: str, x: float, y: float, yaw: float,
-                 wall_clearance: Callable[[float, float], float] | None = None) -> None:
+                 wall_clearance: Callable[[float, float], float] | None = None,
+                 path: str = "trail") -> None:
+        if path not in GUEST_PATHS:
+            raise ValueError(f"guest path {path!r}: must be one of {', '.join(GUEST_PATHS)}")
         self.name = name
+        self.path = path
         self.wall_clearance = wall_clearance
         self.x, self.y, self.yaw = x, y, yaw
         self.state = GuestState.WAITING
@@ -80,7 +87,7 @@ class Guest:
 
     def record_robot(self, robot_x: float, robot_y: float) -> None:
         """Extend the trail with the robot's origin when it has moved far enough."""
-        if not self.following:
+        if not self.following or self.path == "straight":
             return
         last = self.trail[-1] if self.trail else (self.x, self.y)
         if math.hypot(robot_x - last[0], robot_y - last[1]) >= TRAIL_SPACING:
@@ -88,7 +95,10 @@ class Guest:
 
     def step(self, dt: float, *, robot_x: float, robot_y: float) -> None:
         """Walk along the trail towards the robot, stopping 1.2 m short of it; step aside when
-        the robot comes too close."""
+        the robot comes too close. On the ``straight`` path, walk straight at the robot."""
+        if self.path == "straight":
+            self._walk_straight(dt, robot_x=robot_x, robot_y=robot_y)
+            return
         if self.state is not GuestState.WAITING and self.distance_to(robot_x, robot_y) < (
                 YIELD_DISTANCE):
             self._step_aside(dt, robot_x=robot_x, robot_y=robot_y)
@@ -112,6 +122,15 @@ class Guest:
             self.x += budget * math.cos(self.yaw)
             self.y += budget * math.sin(self.yaw)
             budget = 0.0
+
+    def _walk_straight(self, dt: float, *, robot_x: float, robot_y: float) -> None:
+        """The original's guest: straight at the robot, walls or not, until 1.2 m short."""
+        gap = self.distance_to(robot_x, robot_y)
+        if not self.following or gap <= STOP_DISTANCE:
+            return
+        self.yaw = math.atan2(robot_y - self.y, robot_x - self.x)
+        self.x += FOLLOW_SPEED * dt * math.cos(self.yaw)
+        self.y += FOLLOW_SPEED * dt * math.sin(self.yaw)
 
     def _rejoin_trail(self) -> None:
         """Drop the trail points before the one where walking straight there, then on along

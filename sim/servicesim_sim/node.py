@@ -31,6 +31,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import rclpy
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped, Twist
@@ -128,6 +129,7 @@ class SimulatorNode:
         self._io_count = 0
         self._dropped = 0
         self._camera_next = 0.0
+        self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
         self._make_publishers()
         self._make_services()
         self._navigation = ActionServer(
@@ -162,7 +164,8 @@ class SimulatorNode:
         self._score = publisher(Score, "/servicesim/score", 10)
         self._referee = publisher(RefereeState, "/servicesim/referee", LATCHED)
         self._actors = publisher(ActorStates, "/servicesim/actors", 10)
-        self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 2)
+        # a period sends up to three frames at once (at most 30 a sim second): keep them all
+        self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 4)
         self._map_publisher = publisher(OccupancyGrid, "/servicebot/map", LATCHED)
         self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
                                      latched=LATCHED, now=stamp(self.engine.sim_time))
@@ -227,9 +230,10 @@ class SimulatorNode:
 
     async def _task_info(self, request: TaskInfo.Request, response: TaskInfo.Response) -> Any:
         await self._latency()
-        if not self.engine.task_started:
-            self.node.get_logger().warning("task_info refused: no task has been started")
-            return response
+        if not self.engine.task_running():  # the original fails it before and after the task
+            state = "has completed" if self.engine.task_started else "has been started"
+            self.node.get_logger().warning(f"task_info refused: no task {state}")
+            return response  # the documented error answer: every field empty
         return self._fill_task(response)
 
     def _fill_task(self, response: Any) -> Any:
@@ -500,20 +504,30 @@ class SimulatorNode:
         scan.ranges = array.array("f", self.engine.scan_ranges().tobytes())
         self._send(self._scan, scan)
 
-    def _publish_camera(self) -> None:
-        rate = self.settings.camera_rate_hz
-        if rate <= 0.0 or self.engine.sim_time < self._camera_next:
+    def _capture_camera(self) -> None:
+        """Render a frame when one is due, after a physics step, while someone subscribes.
+
+        Frames fall due every 1 / rate sim s on a fixed schedule (at 24 Hz and 50 Hz physics:
+        0.04 and 0.06 s apart, 24 a sim second), so the rate is kept between I/O periods;
+        :meth:`_publish_camera` sends them with the period's /clock.
+        """
+        rate, now = self.settings.camera_rate_hz, self.engine.sim_time
+        if rate <= 0.0 or now < self._camera_next - 1e-9:
             return
-        self._camera_next = self.engine.sim_time + 1.0 / rate
+        self._camera_next = max(self._camera_next + 1.0 / rate, now)
         if self._camera.get_subscription_count() == 0:
             return
-        pixels = self.engine.camera_image()
-        image = Image(height=pixels.shape[0], width=pixels.shape[1], encoding="rgb8",
-                      is_bigendian=0, step=pixels.shape[1] * 3)
-        image.header.stamp = stamp(self.engine.sim_time)
-        image.header.frame_id = "camera_front"
-        image.data = pixels.tobytes()
-        self._send(self._camera, image)
+        self._frames.append((now, self.engine.camera_image()))
+
+    def _publish_camera(self) -> None:
+        for when, pixels in self._frames:
+            image = Image(height=pixels.shape[0], width=pixels.shape[1], encoding="rgb8",
+                          is_bigendian=0, step=pixels.shape[1] * 3)
+            image.header.stamp = stamp(when)
+            image.header.frame_id = "camera_front"
+            image.data = pixels.tobytes()
+            self._send(self._camera, image)
+        self._frames.clear()
 
     def _referee_state(self) -> RefereeState:
         report = self.engine.referee_report()
@@ -555,6 +569,7 @@ class SimulatorNode:
             scores: list[float] = []
             for _ in range(self.steps_per_io):
                 self.engine.step()
+                self._capture_camera()
                 if self.engine.task_running():
                     scores.append(float(self.engine.score()))
             self._publish_scores(scores)

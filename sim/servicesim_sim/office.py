@@ -12,13 +12,17 @@ Everything is plain data, so the building can be read and changed like a drawing
 * ``OUTLINE`` - the building's outer wall, a closed rectilinear polygon. Inside is free floor,
   outside is unknown.
 * ``ROOMS`` - the 19 rooms, each a box of wall centre lines with one door. Rooms with no target
-  area had a closed door in the original; here every room is open. (Their names are not in the
-  competition's data; ours follow its naming scheme.)
+  area had a closed door in the original's shipped world; here every room is open by default,
+  and ``--closed-doors`` writes the variant with those doors shut (:data:`CLOSED_IN_SHIPPED`).
+  (Their names are not in the competition's data; ours follow its naming scheme.)
 * ``WALLS`` - free-standing walls: the lobby's partitions.
 * ``FURNITURE`` - solid blocks: the public cubicle desk crosses and the cafe's desk bank.
 * ``CUBICLE_CLUSTERS`` - the private cubicles: two rows of booths back to back, each booth with
   a 0.55 m entrance (too narrow for the robot; the target strips lie in front of them).
 * ``TARGET_AREAS`` - the 70 target areas, exactly as the competition defines them.
+* ``IDLING_AREAS`` - the 19 boxes where the competition's idlers stand, each with the way they
+  face (facts of its ``worlds/idling_humans.erb``; one box there has min and max x swapped,
+  written here low to high).
 
 Doors are 1.2 m wide (the original's are about 1.05 m) so that a robot whose planner inflates
 obstacles by 0.35-0.4 m still fits through. ``python -m servicesim_sim.office`` rasterises the
@@ -107,11 +111,13 @@ class Room:
     door_side: str  # "north", "south", "east" or "west"
     door_at: float  # the door's centre along that side
 
-    def walls(self) -> tuple[Wall, ...]:
+    def walls(self, *, closed: bool = False) -> tuple[Wall, ...]:
+        """The four walls, the door a gap in one of them unless ``closed`` (then it is wall)."""
         (x0, y0), (x1, y1) = self.low, self.high
         sides = {"south": ((x0, y0), (x1, y0)), "north": ((x0, y1), (x1, y1)),
                  "west": ((x0, y0), (x0, y1)), "east": ((x1, y0), (x1, y1))}
-        return tuple(Wall(start, end, (self.door_at,) if side == self.door_side else ())
+        return tuple(Wall(start, end,
+                          (self.door_at,) if side == self.door_side and not closed else ())
                      for side, (start, end) in sides.items())
 
 
@@ -274,6 +280,30 @@ TARGET_AREAS: tuple[tuple[str, Point, Point], ...] = (
     ("FrontCouchB", (3.75, 0.0), (6.0, 2.25)),
 )
 
+# Where the idlers stand: (min corner, max corner, yaw). North-facing is pi/2.
+HALF_PI, QUARTER_PI = math.pi / 2.0, math.pi / 4.0
+IDLING_AREAS: tuple[tuple[Point, Point, float], ...] = (
+    ((-3.97, 0.26), (-2.12, 0.40), math.pi),  # lobby, by FrontCouchA
+    ((-3.16, 3.32), (-2.52, 3.88), 0.0),
+    ((-0.39, 17.0), (0.26, 17.61), math.pi),  # south of BackEntrance
+    ((1.69, 20.54), (2.31, 20.96), -HALF_PI),
+    ((19.82, 14.23), (20.49, 15.84), -HALF_PI),  # east, by PublicCubicle_30
+    ((17.11, 7.15), (18.98, 7.86), -QUARTER_PI),  # in the PublicCafe
+    ((17.5, 4.07), (18.73, 4.70), 0.0),
+    ((16.81, 1.11), (20.42, 1.74), 0.0),
+    ((5.55, 2.48), (5.92, 2.88), 0.0),  # by FrontCouchB
+    ((1.82, 0.29), (2.35, 1.62), -HALF_PI),  # lobby, east of FrontElevator
+    ((-26.2, 5.01), (-25.74, 6.85), HALF_PI),  # PrivateCafe
+    ((-26.6, 11.17), (-26.4, 14.49), -HALF_PI),  # west wall
+    ((-25.3, 15.28), (-25.1, 15.56), math.pi),
+    ((-27.26, 17.31), (-27.24, 19.59), HALF_PI),  # PrivateOfficeD
+    ((-2.56, 21.54), (-1.68, 22.16), 0.0),  # BackEntrance
+    ((5.98, 18.75), (8.7, 19.2), 0.0),  # north corridor
+    ((10.63, 18.36), (11.45, 19.14), -QUARTER_PI),
+    ((12.57, 16.88), (16.95, 17.64), math.pi),
+    ((12.46, 21.22), (17.82, 22.25), 0.0),  # PublicMeetingRoomA
+)
+
 # The competition's shipped task. The guest's yaw is ours (the original's is random).
 SHIPPED_PICK_UP, SHIPPED_DROP_OFF = "FrontElevator", "PrivateCubicle_32_1"
 SHIPPED_GUEST = {"name": "human_20843", "x": -0.043, "y": 1.512, "yaw": 1.5708}
@@ -282,13 +312,24 @@ PEOPLE = {"walkers": 10, "idlers": 30}
 DRIFT = {"start_s": 200.0, "min_interval_s": 100.0, "max_interval_s": 300.0, "count": 30}
 
 
-def obstacle_blocks() -> Iterator[Block]:
-    """Every solid block of the building: outer walls, rooms, walls, furniture, cubicles."""
+def closed_in_shipped() -> frozenset[str]:
+    """The rooms whose door was shut in the original's shipped world: those with no target
+    area (``worlds/room.erb``: a room with a closed door is no target)."""
+    targets = {name for name, _, _ in TARGET_AREAS}
+    return frozenset(room.name for room in ROOMS if room.name not in targets)
+
+
+CLOSED_IN_SHIPPED = closed_in_shipped()
+
+
+def obstacle_blocks(closed: frozenset[str] = frozenset()) -> Iterator[Block]:
+    """Every solid block of the building: outer walls, rooms (the ``closed`` ones' doors shut),
+    walls, furniture, cubicles."""
     corners = (*OUTLINE, OUTLINE[0])
     for start, end in pairwise(corners):
         yield from Wall(start, end).blocks()
     for room in ROOMS:
-        for wall in room.walls():
+        for wall in room.walls(closed=room.name in closed):
             yield from wall.blocks()
     for wall in WALLS:
         yield from wall.blocks()
@@ -299,11 +340,11 @@ def obstacle_blocks() -> Iterator[Block]:
 
 
 # --------------------------------------------------------------------------- rasterising
-def rasterise() -> np.ndarray:
+def rasterise(closed: frozenset[str] = frozenset()) -> np.ndarray:
     """The map as PGM pixels in image order (row 0 at the top, the map's north edge)."""
     pixels = np.full((SIZE, SIZE), UNKNOWN_PIXEL, dtype=np.uint8)
     pixels[inside_outline(OUTLINE)] = FREE_PIXEL
-    for block in obstacle_blocks():
+    for block in obstacle_blocks(closed):
         rows, cols = block_cells(block)
         pixels[rows, cols] = OCCUPIED_PIXEL
     return np.flipud(pixels).copy()
@@ -355,12 +396,14 @@ def map_yaml() -> str:
     )
 
 
-def world_yaml() -> str:
+def world_yaml(*, closed_doors: bool = False) -> str:
+    name, rooms = ("office_closed_doors", "the shipped world's doors shut") if closed_doors else (
+        "office", "every room open")
     lines = [
         "# The ServiceSim office. Generated by `python -m servicesim_sim.office` from office.py;",
         "# edit office.py, not this file.",
-        "name: office",
-        "description: The office of OSRF's ServiceSim competition (2018), every room open.",
+        f"name: {name}",
+        f"description: The office of OSRF's ServiceSim competition (2018), {rooms}.",
         "map: map.yaml",
         "areas:",
         *(f"  {name}: {{min: [{low[0]!r}, {low[1]!r}], max: [{high[0]!r}, {high[1]!r}]}}"
@@ -371,6 +414,9 @@ def world_yaml() -> str:
         f"  guest: {_flow(SHIPPED_GUEST)}",
         f"  start: {_flow(SHIPPED_START)}",
         f"people: {_flow(PEOPLE)}",
+        "idling_areas:",
+        *(f"  - {{min: [{low[0]!r}, {low[1]!r}], max: [{high[0]!r}, {high[1]!r}], "
+          f"yaw: {round(yaw, 5)!r}}}" for low, high, yaw in IDLING_AREAS),
         f"drift: {_flow(DRIFT)}",
     ]
     return "\n".join(lines) + "\n"
@@ -381,13 +427,16 @@ def _flow(mapping: Mapping[str, object]) -> str:
     return "{" + ", ".join(f"{key}: {value}" for key, value in mapping.items()) + "}"
 
 
-def write_world(directory: Path) -> list[Path]:
-    """Write map.pgm, map.yaml and world.yaml into ``directory``; return their paths."""
+def write_world(directory: Path, *, closed_doors: bool = False) -> list[Path]:
+    """Write map.pgm, map.yaml and world.yaml into ``directory``; return their paths.
+
+    ``closed_doors``: the variant with the doors the shipped world had shut."""
     directory.mkdir(parents=True, exist_ok=True)
+    closed = CLOSED_IN_SHIPPED if closed_doors else frozenset()
     files = {
-        "map.pgm": pgm_bytes(rasterise()),
+        "map.pgm": pgm_bytes(rasterise(closed)),
         "map.yaml": map_yaml().encode("utf-8"),
-        "world.yaml": world_yaml().encode("utf-8"),
+        "world.yaml": world_yaml(closed_doors=closed_doors).encode("utf-8"),
     }
     written = []
     for name, content in files.items():
@@ -409,9 +458,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      description="Regenerate the office world's files.")
     parser.add_argument("--out", type=Path, default=DEFAULT_WORLD.parent,
                         help="directory to write into (default: the package's worlds/office)")
+    parser.add_argument("--closed-doors", action="store_true",
+                        help="shut the doors the original's shipped world had shut (the rooms "
+                             "with no target area)")
     args = parser.parse_args(argv)
     try:
-        written = write_world(args.out)
+        written = write_world(args.out, closed_doors=args.closed_doors)
     except OSError as error:
         print(f"{parser.prog}: error: {args.out}: {error.strerror or error}", file=sys.stderr)
         return 2

@@ -1,9 +1,12 @@
 """The office's other people: walkers on looping routes and idlers standing still.
 
-As in the original competition there are walkers (0.9–1.2 m/s, each on a looping route, stopping
-while the robot is within 1.5 m in front of them) and idlers (standing at random spots at least
-1 m apart). Every one of them is called ``human_NNNNN`` and is an obstacle; the engine decides
-what touching one costs, this module only says where they are.
+The original competition's rules (osrf/servicesim, ``servicesim_competition``): 10 walkers at
+0.9–1.2 m/s on looping routes, each stopping while anyone (the robot, the guest, an idler,
+another walker) is in a lane 1.5 m ahead and ±0.6 m wide, and waiting as long as it stays
+blocked (``src/TrajectoryActorPlugin.cc``); 30 idlers, each at a random point of one of the
+world's idling areas, facing the area's yaw ± 0.5 rad, at least 1 m from the others
+(``worlds/idling_humans.erb``). Every one of them is called ``human_NNNNN`` and is an obstacle;
+the engine decides what touching one costs, this module only says where they are.
 
 Design intent:
 
@@ -11,18 +14,25 @@ Design intent:
   crowd. Stepping is cheap (arc length along a precomputed polyline) and draws nothing random.
 * People stay inside the building: the bounding box of the map's occupied cells, so a map whose
   outside is free (the competition's own) keeps nobody on the lawn.
-* Idlers are placed first, each at least 0.6 m from any wall, 1 m from each other and outside the
-  keep-clear discs. An idler is also refused where it would cut a passage the robot needs (the
-  robot-passable free space must not split), so no seed makes a room unreachable.
-* Walker routes are planned afterwards on a coarse grid of the free space eroded by 0.5 m, with
-  the keep-clear discs and the idlers cut out, and straightened by line of sight. A walker so
-  never walks through a wall, an idler or a keep-clear disc, and never needs to side-step.
+* Idlers are placed first. A world with idling areas gets them there, on free cells, as the
+  original placed them; a world without gets them anywhere 0.6 m clear of walls. Either way no
+  target keeps them away: they only never stand on somebody already there (the guest, the
+  robot's start: the ``occupied`` discs), and an idler is refused where it would cut a passage
+  the robot needs (the robot-passable free space must not split), so no seed makes a room
+  unreachable.
+* Walker routes are ours (the original's are twelve hand-drawn loops): planned afterwards on a
+  coarse grid of the free space eroded by 0.5 m, with the keep-clear discs and the idlers cut
+  out, straightened by line of sight, and redrawn until nobody standing still (an idler, the
+  waiting guest) ever comes into a walker's lane: a walker stopped by someone who never moves
+  would stand there for the whole run.
 """
 
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,29 +40,30 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from servicesim_sim.world import OccupancyMap
+from servicesim_sim.world import IdlingArea, OccupancyMap
 
 WALKER = "walker"
 IDLER = "idler"
 
 PERSON_RADIUS = 0.25  # metres; a person's footprint seen as a disc
 WALKER_SPEED_RANGE = (0.9, 1.2)  # m/s
-WALKER_STOP_DISTANCE = 1.5  # a robot this close in front stops a walker ...
-WALKER_STOP_HALF_ANGLE = math.radians(60.0)  # ... when within this angle of its heading
-WALKER_GIVE_WAY_DISTANCE = 0.9  # and a robot this close anywhere ahead (±90°) stops it too:
-# nobody walks into the robot from the side, which the referee would book as the robot's contact
-WALKER_PATIENCE_S = 5.0  # a walker stopped this long for the robot turns back along its route:
-# in a corridor too narrow to pass, a walker waiting for the robot and a robot waiting for the
-# walker would otherwise wait for each other for ever
+WALKER_STOP_DISTANCE = 1.5  # anyone nearer than this ahead of a walker ... (obstacle_margin)
+WALKER_LANE_HALF_WIDTH = 0.4 * WALKER_STOP_DISTANCE  # ... and this near its line stops it
 WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
-WALKER_IDLER_CLEARANCE = 0.6  # ... and this far from idlers
+WALKER_IDLER_CLEARANCE = 0.75  # ... and this far from idlers (beyond the lane's half-width)
+WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns back (ours: the
+# original's hand-drawn loops run one way and rarely meet head on; random loops do, and without
+# this every walker of the office stands deadlocked within about 100 s)
+ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of standing people
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
 IDLER_SPACING = 1.0
-IDLER_WALL_CLEARANCE = 0.6
+IDLER_YAW_SPREAD = 0.5  # radians either side of an idling area's yaw
+IDLER_WALL_CLEARANCE = 0.6  # where a world has no idling areas
 ROBOT_PASSAGE_CLEARANCE = 0.35  # free space the robot needs around its centre
 PASSAGE_CELL = 0.10  # metres per cell of the robot-passage connectivity grid
+POCKET_M2 = 1.0  # an idler may cut off a pocket of robot-passable floor this small, no more
 PLACEMENT_DRAWS = 200  # random spots drawn per idler before giving up
 
 NAME_NUMBERS = 100_000  # human_00000 .. human_99999
@@ -144,10 +155,15 @@ class Clearance:
 
 # ----------------------------------------------------------------------------------- idlers
 class RobotPassage:
-    """Where the robot's centre can go, as connected regions, so idlers never split one."""
+    """Where the robot's centre can go, as connected regions, so idlers never split one.
+
+    Cutting off a pocket of at most :data:`POCKET_M2` (the corner behind an idler by a wall)
+    is no split: it strands no target and keeps the original's draw nearly untouched.
+    """
 
     def __init__(self, clearance: Clearance) -> None:
         step = max(1, round(PASSAGE_CELL / clearance.resolution))
+        self._step = step
         self._sample = (slice(step // 2, None, step), slice(step // 2, None, step))
         self._clearance = clearance
         self.passable = clearance.metres[self._sample] >= ROBOT_PASSAGE_CLEARANCE
@@ -159,8 +175,10 @@ class RobotPassage:
         cut = self._clearance.disc_mask([(x, y, reach)])[self._sample] & self.passable
         after = self.passable & ~cut
         labels, _ = ndimage.label(after)
+        pocket = POCKET_M2 / (self._clearance.resolution * self._step) ** 2
         for region in np.unique(self.labels[cut]):
-            if np.unique(labels[(self.labels == region) & after]).size > 1:
+            sizes = np.bincount(labels[(self.labels == region) & after])
+            if np.count_nonzero(sizes > pocket) > 1:
                 return False
         self.passable, self.labels = after, labels
         return True
@@ -179,13 +197,69 @@ def most_idlers(allowed: np.ndarray, resolution: float) -> int:
     return math.floor(grown / (math.pi * radius ** 2))
 
 
-def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
-                keep_clear: list[KeepClear]) -> list[tuple[float, float]]:
-    """Random standing spots: off walls, apart, out of keep-clear discs, splitting nothing."""
+IdlerPose = tuple[float, float, float]  # (x, y, yaw)
+
+
+def idler_poses(clearance: Clearance, rng: np.random.Generator, *, count: int,
+                areas: tuple[IdlingArea, ...], occupied: list[KeepClear]) -> list[IdlerPose]:
+    """Random standing poses, :data:`IDLER_SPACING` apart, off the ``occupied`` discs, splitting
+    no passage: in the idling ``areas`` when there are any, else anywhere clear of walls."""
     if count == 0:
         return []
+    draw = _area_draw(clearance, areas) if areas else _free_draw(clearance, count)
+    passage = RobotPassage(clearance)
+    poses: list[IdlerPose] = []
+    for _ in range(count * PLACEMENT_DRAWS):
+        if len(poses) == count:
+            break
+        x, y, yaw = draw(rng)
+        if any(math.hypot(x - sx, y - sy) < IDLER_SPACING for sx, sy, _ in poses):
+            continue
+        if any(math.hypot(x - ox, y - oy) < radius + PERSON_RADIUS
+               for ox, oy, radius in occupied):
+            continue
+        if passage.block(x, y):
+            poses.append((x, y, yaw))
+    if len(poses) < count:
+        where = "the world's idling areas" if areas else "this map"
+        raise CrowdError(f"room for only {len(poses)} of {count} idlers in {where}")
+    return poses
+
+
+Draw = Callable[[np.random.Generator], IdlerPose]
+
+
+def _area_draw(clearance: Clearance, areas: tuple[IdlingArea, ...]) -> Draw:
+    """The original's draw: an area, a uniform point in it, its yaw ± a half radian; a point on
+    a blocked cell is drawn again."""
+
+    def draw(rng: np.random.Generator) -> IdlerPose:
+        while True:
+            area = areas[int(rng.integers(len(areas)))]
+            x = area.min_x + (area.max_x - area.min_x) * float(rng.uniform())
+            y = area.min_y + (area.max_y - area.min_y) * float(rng.uniform())
+            yaw = area.yaw + float(rng.uniform(-IDLER_YAW_SPREAD, IDLER_YAW_SPREAD))
+            row, col = clearance.cells(np.array([x]), np.array([y]))
+            if clearance.metres[row[0], col[0]] > 0.0:
+                return x, y, yaw
+
+    if not any(_area_has_floor(clearance, area) for area in areas):
+        raise CrowdError("no idling area has a free cell for an idler")
+    return draw
+
+
+def _area_has_floor(clearance: Clearance, area: IdlingArea) -> bool:
+    step = clearance.resolution / 2.0
+    xs = np.arange(area.min_x, area.max_x + step, step)
+    ys = np.arange(area.min_y, area.max_y + step, step)
+    grid_x, grid_y = np.meshgrid(xs, ys)
+    rows, cols = clearance.cells(grid_x.ravel(), grid_y.ravel())
+    return bool((clearance.metres[rows, cols] > 0.0).any())
+
+
+def _free_draw(clearance: Clearance, count: int) -> Draw:
+    """Anywhere :data:`IDLER_WALL_CLEARANCE` clear of walls, facing any way."""
     allowed = clearance.metres >= IDLER_WALL_CLEARANCE
-    allowed &= ~clearance.disc_mask(keep_clear, grow=PERSON_RADIUS)
     candidates = np.flatnonzero(allowed)
     if candidates.size == 0:
         raise CrowdError("no free spot for idlers: nowhere 0.6 m clear of walls")
@@ -193,20 +267,13 @@ def idler_spots(clearance: Clearance, rng: np.random.Generator, *, count: int,
     if count > most:  # drawing spots for them would only take minutes to fail
         raise CrowdError(f"room for only {most} of {count} idlers on this map at best "
                          f"({IDLER_SPACING:g} m apart, {IDLER_WALL_CLEARANCE:g} m from walls)")
-    passage = RobotPassage(clearance)
-    spots: list[tuple[float, float]] = []
-    for _ in range(count * PLACEMENT_DRAWS):
-        if len(spots) == count:
-            break
+
+    def draw(rng: np.random.Generator) -> IdlerPose:
         row, col = np.unravel_index(candidates[rng.integers(candidates.size)], allowed.shape)
         x, y = (float(v) for v in clearance.centres(row, col))
-        if any(math.hypot(x - sx, y - sy) < IDLER_SPACING for sx, sy in spots):
-            continue
-        if passage.block(x, y):
-            spots.append((x, y))
-    if len(spots) < count:
-        raise CrowdError(f"room for only {len(spots)} of {count} idlers on this map")
-    return spots
+        return x, y, float(rng.uniform(-math.pi, math.pi))
+
+    return draw
 
 
 # ----------------------------------------------------------------------------------- routes
@@ -296,6 +363,33 @@ class RouteGrid:
         return points[kept]
 
 
+def route_meets(route: np.ndarray, standing: np.ndarray) -> bool:
+    """Whether a walker on the closed polyline ``route`` would ever have one of the
+    ``standing`` points (n, 2) in its lane, walking either way along it.
+
+    Along a leg the lane's sideways offset of a point is constant, and the point lies ahead
+    within the stop distance for some position on the leg exactly when the leg reaches to
+    within that distance behind it.
+    """
+    if standing.size == 0:
+        return False
+    for start, end in itertools.pairwise(route):
+        length = float(math.hypot(*(end - start)))
+        if length == 0.0:
+            continue
+        along_unit = (end - start) / length
+        offset = standing - start
+        ahead = offset @ along_unit
+        side = np.abs(offset[:, 0] * along_unit[1] - offset[:, 1] * along_unit[0])
+        reach = np.sqrt(np.clip(WALKER_STOP_DISTANCE ** 2 - side ** 2, 0.0, None))
+        in_band = side < WALKER_LANE_HALF_WIDTH
+        forwards = (ahead > 0.0) & (ahead - reach < length)
+        backwards = (ahead < length) & (ahead + reach > 0.0)
+        if (in_band & (forwards | backwards)).any():
+            return True
+    return False
+
+
 # ----------------------------------------------------------------------------------- walkers
 @dataclass
 class Walker:
@@ -307,7 +401,7 @@ class Walker:
     speed: float
     travelled: float  # arc length from the route's start, below the route's length
     direction: int = 1  # +1 along the route, -1 back along it
-    waited: float = 0.0  # sim seconds stopped for the robot, this time
+    waited: float = 0.0  # sim seconds stopped, this time
 
     def __post_init__(self) -> None:
         # advance() runs for every walker every other physics step: plain floats and bisect
@@ -317,6 +411,7 @@ class Walker:
         self._along = [float(a) for a in self.along]
         self._headings = [math.atan2(y1 - y0, x1 - x0) for x0, y0, x1, y1 in zip(
             self._xs, self._ys, self._xs[1:], self._ys[1:], strict=False)]
+        self._cos, self._sin = 1.0, 0.0  # of the way it faces; advance() keeps them
 
     @classmethod
     def on(cls, person: Person, route: np.ndarray, *, speed: float,
@@ -339,22 +434,26 @@ class Walker:
         heading = self._headings[leg]
         self.person.yaw = heading if self.direction > 0 else math.atan2(
             -math.sin(heading), -math.cos(heading))
+        self._cos, self._sin = math.cos(self.person.yaw), math.sin(self.person.yaw)
 
     def turn_back(self) -> None:
-        """Walk the route the other way from here (the robot has blocked it long enough)."""
+        """Walk the route the other way from here (blocked for longer than its patience)."""
         self.direction = -self.direction
         self.waited = 0.0
         self.advance(0.0)
 
-    def sees_robot_ahead(self, robot: tuple[float, float, float]) -> bool:
-        dx, dy = robot[0] - self.person.x, robot[1] - self.person.y
-        distance = math.hypot(dx, dy)
-        if distance > WALKER_STOP_DISTANCE:
-            return False
-        facing = dx * math.cos(self.person.yaw) + dy * math.sin(self.person.yaw)
-        if distance <= WALKER_GIVE_WAY_DISTANCE:
-            return facing > 0.0
-        return facing >= math.cos(WALKER_STOP_HALF_ANGLE) * distance
+    def blocked(self, points: Sequence[tuple[float, float]]) -> bool:
+        """Whether any point lies in the lane ahead: nearer than :data:`WALKER_STOP_DISTANCE`,
+        ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
+        walker's own position is never ahead of it)."""
+        x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
+        reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE
+        for px, py in points:
+            dx, dy = px - x, py - y
+            if (dx * dx + dy * dy < reach and dx * cos + dy * sin > 0.0
+                    and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
+                return True
+        return False
 
 
 # ------------------------------------------------------------------------------------ crowd
@@ -371,31 +470,50 @@ def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> lis
 
 
 class Crowd:
-    """All walkers and idlers of one run."""
+    """All walkers and idlers of one run.
+
+    ``keep_clear`` discs keep walker routes away (the task's spots and areas); ``occupied``
+    discs are bodies nobody may be placed on (the guest, the robot's start); ``idling_areas``
+    are where idlers stand (none: anywhere free). A walker blocked by the robot, the guest or an
+    idler for ``walker_patience_s`` turns back; the default, infinity, is the original's rule:
+    it waits as long as it stays blocked.
+    """
 
     def __init__(self, occupancy_map: OccupancyMap, *, rng: np.random.Generator,
                  walkers: int, idlers: int, taken_names: set[str],
-                 keep_clear: list[KeepClear]) -> None:
+                 keep_clear: list[KeepClear], occupied: Sequence[KeepClear] = (),
+                 idling_areas: tuple[IdlingArea, ...] = (),
+                 walker_patience_s: float = math.inf) -> None:
         if walkers < 0 or idlers < 0:
             raise ValueError(f"walkers {walkers}, idlers {idlers}: counts must be 0 or more")
         if walkers + idlers + len(taken_names) > NAME_NUMBERS:
             raise CrowdError(f"walkers {walkers} and idlers {idlers}: more people than the "
                              f"{NAME_NUMBERS} human_NNNNN names")
+        self.walker_patience_s = walker_patience_s
         clearance = Clearance.of(occupancy_map)
         names = fresh_names(rng, walkers + idlers, taken=taken_names)
-        spots = idler_spots(clearance, rng, count=idlers, keep_clear=keep_clear)
-        standing = [Person(name=name, role=IDLER, x=x, y=y, yaw=float(rng.uniform(-math.pi,
-                                                                                  math.pi)))
-                    for name, (x, y) in zip(names[walkers:], spots, strict=True)]
+        poses = idler_poses(clearance, rng, count=idlers, areas=idling_areas,
+                            occupied=list(occupied))
+        standing = [Person(name=name, role=IDLER, x=x, y=y, yaw=yaw)
+                    for name, (x, y, yaw) in zip(names[walkers:], poses, strict=True)]
         self._walkers: list[Walker] = []
         if walkers:
+            spots = [(x, y) for x, y, _ in poses]
             grid = RouteGrid(clearance, keep_clear=keep_clear, idlers=spots)
-            self._walkers = [self._walker(name, grid, rng) for name in names[:walkers]]
+            still = np.array(spots + [(x, y) for x, y, _ in occupied], dtype=float)
+            self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
+                             for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
 
     @staticmethod
-    def _walker(name: str, grid: RouteGrid, rng: np.random.Generator) -> Walker:
-        route = grid.loop(rng)
+    def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
+                still: np.ndarray) -> Walker:
+        for _ in range(ROUTE_DRAWS):
+            route = grid.loop(rng)
+            if not route_meets(route, still):
+                break
+        else:
+            raise CrowdError(f"no walker route clear of the idlers in {ROUTE_DRAWS} draws")
         speed = float(rng.uniform(*WALKER_SPEED_RANGE))
         person = Person(name=name, role=WALKER, x=float(route[0, 0]), y=float(route[0, 1]),
                         yaw=0.0)
@@ -405,18 +523,26 @@ class Crowd:
     def walkers(self) -> list[Walker]:
         return list(self._walkers)
 
-    def step(self, dt: float, *, robot: tuple[float, float, float]) -> None:
-        """Move every walker ``dt`` seconds on, except those with the robot just ahead; one
-        stopped for :data:`WALKER_PATIENCE_S` turns back."""
+    def step(self, dt: float, *, robot: tuple[float, float, float],
+             others: Sequence[tuple[float, float]] = ()) -> None:
+        """Move every walker ``dt`` seconds on, except those with someone in their lane (as
+        everyone stood at the step's start): the robot, ``others`` (the guest), an idler or
+        another walker. A walker waits for the first three for :attr:`walker_patience_s`, and
+        for walkers alone :data:`WALKER_STANDOFF_S`; then it turns back."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
-        for walker in self._walkers:
-            if not walker.sees_robot_ahead(robot):
+        # idlers are left out: routes are drawn so that none ever stands in a walker's lane
+        fixed = [(robot[0], robot[1]), *others]
+        moving = [(w.person.x, w.person.y) for w in self._walkers]
+        stops = [(w.blocked(fixed), w.blocked(moving)) for w in self._walkers]
+        for walker, (by_people, by_walkers) in zip(self._walkers, stops, strict=True):
+            if not (by_people or by_walkers):
                 walker.waited = 0.0
                 walker.advance(walker.direction * walker.speed * dt)
                 continue
             walker.waited += dt
-            if walker.waited >= WALKER_PATIENCE_S:
+            patience = self.walker_patience_s if by_people else WALKER_STANDOFF_S
+            if walker.waited >= patience:
                 walker.turn_back()
 
     def states(self) -> list[tuple[str, str, float, float]]:

@@ -9,16 +9,22 @@ checkpoint time          × 1 (CP1), × 2 (CP2), × 2 (CP3), × 1 (CP4)
 failed pick-up           40 each
 failed drop-off          50 each
 guest lost "too fast"    25 each
-contact                  40000 × depth (a person), 20000 × depth (a wall)
-approximation            1 × depth inside 0.75 m of a person, 0.25 × depth inside
-                         0.35 m of a wall
+contact                  40000 × depth (a person), 20000 × depth (an object)
+approximation            1 × depth of the 0.75 m ghost cylinder into a person,
+                         0.25 × depth of the 0.35 m ghost cylinder into an object
 ======================  =====================================================
 
 The original's contact sensors reported at the physics rate, 500 Hz, and each report added
-weight × penetration depth. The simulator steps more coarsely, so a step of ``dt`` seconds adds
-``500 · dt`` reports' worth: the penalty per sim second is the original's for the same depth.
+weight × penetration depth (``PenaltyChecker.cc``). The simulator steps more coarsely, so a step
+of ``dt`` seconds adds ``500 · dt`` reports' worth: the penalty per sim second is the original's
+for the same depth.
 
-A drift or a guest lost "too fast" sends the task from checkpoint 3 back to checkpoint 2. The
+Penalties are booked from the start of the world, not from ``new_task``, as the original's
+were: its contact checker ran from the start, and a pick-up or drop-off called before the task
+booked its failed-attempt points on a checkpoint that had not started; both count in the score
+once it starts. Nothing is booked once the task has completed.
+
+A drift or a guest lost "too fast" during checkpoint 3 sends the task back to checkpoint 2. The
 referee only keeps the books; the engine decides what happened and asks it to record it.
 """
 
@@ -90,16 +96,22 @@ class Referee:
         else:
             self.current = checkpoint + 1
 
-    def back_to_pick_up(self, *, too_fast: bool) -> None:
-        """The guest stopped following during checkpoint 3: pick them up again."""
-        if too_fast:
-            self.penalties.too_fast += 1
-        else:
+    def guest_stopped_following(self, *, too_fast: bool) -> None:
+        """The guest drifted or fell behind. During checkpoint 3 that sends the task back to
+        checkpoint 2 (and "too fast" costs its penalty); at other times (a guest picked up
+        again after the drop-off) it changes nothing but the drift count."""
+        if not too_fast:
             self.penalties.drifts += 1
-        if self.current == DROP_OFF_GUEST:
+        if self.running and self.current == DROP_OFF_GUEST:
+            if too_fast:
+                self.penalties.too_fast += 1
             self.checkpoint_done[PICK_UP_GUEST] = False
             self.current = PICK_UP_GUEST
         self.revision += 1
+
+    def checkpoint_started(self, checkpoint: int) -> bool:
+        """Whether the task has reached ``checkpoint`` (done or current), ever."""
+        return self.started and (self.completed or self.current >= checkpoint)
 
     def failed_pickup(self) -> None:
         self.penalties.failed_pickup += 1
@@ -110,13 +122,13 @@ class Referee:
         self.revision += 1
 
     def contact(self, *, person_depth: float, object_depth: float, dt: float) -> None:
-        if self.running and (person_depth > 0.0 or object_depth > 0.0):
+        if not self.completed and (person_depth > 0.0 or object_depth > 0.0):
             reports = CONTACT_REPORT_RATE_HZ * dt
             self.penalties.contact += reports * (PERSON_CONTACT_WEIGHT * person_depth
                                                  + OBJECT_CONTACT_WEIGHT * object_depth)
 
     def approximation(self, *, person_depth: float, object_depth: float, dt: float) -> None:
-        if self.running and (person_depth > 0.0 or object_depth > 0.0):
+        if not self.completed and (person_depth > 0.0 or object_depth > 0.0):
             reports = CONTACT_REPORT_RATE_HZ * dt
             self.penalties.approximation += reports * (
                 PERSON_APPROXIMATION_WEIGHT * person_depth

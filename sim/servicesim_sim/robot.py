@@ -1,12 +1,12 @@
 """The servicebot: a differential-drive base integrated over sim time, stopped by walls.
 
-Commands are clamped to the navigation limits (0.5 m/s, 1.0 rad/s) and integrated exactly for
-a constant twist over the step. The body is a disc of the footprint's half-length (the 0.4 x
-0.5 m footprint's inscribed-to-circumscribed middle ground, 0.25 m) for contacts: a step that
-would push it into a wall is refused for its translation (rotation still happens), so the
-robot can scrape along a wall but never pass through one. Wall clearance comes from one
-distance transform of the static map, computed when the world loads.
-"""
+The engine holds the last command until the next one, as ``gazebo_ros_diff_drive`` does (no
+timeout). Commands are clamped to the navigation limits (0.5 m/s, 1.0 rad/s) and integrated
+exactly for a constant twist over the step. The body is a disc of the footprint's half-length
+(the 0.4 x 0.5 m footprint's inscribed-to-circumscribed middle ground, 0.25 m) for contacts: a
+step that would push it into a wall is refused for its translation (rotation still happens), so
+the robot can scrape along a wall but never pass through one. Wall clearance comes from one
+distance transform of the static map, computed when the world loads. """
 
 from __future__ import annotations
 
@@ -49,10 +49,6 @@ class Robot:
     @property
     def pose(self) -> tuple[float, float, float]:
         return self.x, self.y, self.yaw
-
-    def wall_gap(self) -> float:
-        """Distance from the body's edge to the nearest wall (negative when pressed in)."""
-        return self.walls.at(self.x, self.y) - BODY_RADIUS
 
     def step(self, dt: float, *, v: float, w: float) -> None:
         """Drive with (v, w), clamped to the limits, for ``dt`` sim seconds."""

@@ -8,7 +8,10 @@ of the default office) is played, with the original's drift schedule parameters.
 
 :class:`Difficulty` holds the knobs that make a run harder for the executive under test: a guest
 placed beyond RFID range of the pick-up area's centre, earlier and more frequent drifts,
-navigation goals that abort, RFID messages that are lost, and slow referee services.
+navigation goals that abort, RFID messages that are lost, and slow referee services. It also
+carries ``guest_path``, the one deliberate difference of the guest from the original that can be
+switched back: ``trail`` (the default) follows the robot's trail, ``straight`` walks straight at
+the robot, through walls, as the original's guest did.
 """
 
 from __future__ import annotations
@@ -36,7 +39,8 @@ SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed
 
 @dataclass(frozen=True)
 class Difficulty:
-    """Knobs that make the world harder for the executive; the defaults are the original."""
+    """Knobs that make the world harder for the executive; the defaults are the original's,
+    but for ``guest_path`` (see the module docstring)."""
 
     guest_out_of_range: bool = False
     drift_scale: float = 1.0  # < 1: earlier and more frequent drifts
@@ -45,6 +49,7 @@ class Difficulty:
     service_latency_s: float = 0.0  # sim seconds before a referee service answers
     odom_drift: float = 0.0  # encoder calibration error (std of the scale factors' offsets)
     localisation_noise: float = 0.0  # m (and rad): std of the noise on a converged estimate
+    guest_path: str = "trail"  # how the guest follows: "trail" (ours) or "straight" (original)
 
     @classmethod
     def default(cls) -> Difficulty:
@@ -62,7 +67,7 @@ class Scenario:
     """One run's task and random draws."""
 
     task: TaskSpec
-    drift_times: tuple[float, ...]  # sim seconds after the task started
+    drift_times: tuple[float, ...]  # world sim seconds (not counted from new_task)
     people_seed: int
     knob_seed: int
     difficulty: Difficulty
@@ -105,11 +110,14 @@ def person_name(rng: np.random.Generator) -> str:
 
 def drift_schedule(spec: DriftSpec, *, rng: np.random.Generator,
                    scale: float = 1.0) -> tuple[float, ...]:
-    """Drift times: the first at ``start_s``, then every ``min..max`` seconds, scaled."""
+    """Drift times in absolute world sim seconds, as the original's world template drew them:
+    none before ``start_s``; the first ``min..max`` seconds after it, each next one ``min..max``
+    seconds after the one before. ``scale`` shrinks (< 1) or stretches the whole schedule,
+    ``start_s`` and the intervals alike."""
     times, now = [], spec.start_s
     for _ in range(spec.count):
-        times.append(round(now * scale, 3))
         now += float(rng.uniform(spec.min_interval_s, spec.max_interval_s))
+        times.append(round(now * scale, 3))
     return tuple(times)
 
 

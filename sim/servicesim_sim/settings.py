@@ -80,6 +80,8 @@ def difficulty_from(args: argparse.Namespace) -> Difficulty:
     changes: dict[str, object] = {}
     if args.guest_out_of_range:
         changes["guest_out_of_range"] = True
+    if getattr(args, "guest_path", None):
+        changes["guest_path"] = args.guest_path
     for argument, (field, lowest, highest) in _KNOBS.items():
         value = getattr(args, argument)
         if value is None:

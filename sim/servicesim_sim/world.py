@@ -34,7 +34,8 @@ UNKNOWN = -1
 BLOCKED_FROM = 50  # cells of value 50..100 (and unknown) are obstacles; 0..49 are free
 MAP_MODES = ("trinary", "scale", "raw")
 DEFAULT_WORLD = Path(__file__).resolve().parent / "worlds" / "office" / "world.yaml"
-WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "drift", "targets")
+WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
+              "targets")
 
 
 class WorldError(ValueError):
@@ -143,11 +144,30 @@ class TaskSpec:
 
 
 @dataclass(frozen=True)
+class IdlingArea:
+    """A box where idlers stand, facing ``yaw`` (radians) give or take half a radian.
+
+    ``min`` may equal ``max`` in x or y: a line of spots, as some of the original's areas are.
+    """
+
+    min_x: float
+    min_y: float
+    max_x: float
+    max_y: float
+    yaw: float
+
+
+@dataclass(frozen=True)
 class PeopleSpec:
-    """How many people share the building with the robot and the guest."""
+    """How many people share the building with the robot and the guest, and how walkers wait.
+
+    ``walker_patience_s``: a walker blocked this long turns back; infinite (the original's rule)
+    means it waits as long as it stays blocked.
+    """
 
     walkers: int = 10
     idlers: int = 30
+    walker_patience_s: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -172,6 +192,7 @@ class World:
     people: PeopleSpec = field(default_factory=PeopleSpec)
     drift: DriftSpec = field(default_factory=DriftSpec)
     targets: tuple[str, ...] = ()
+    idling_areas: tuple[IdlingArea, ...] = ()  # none: idlers stand anywhere free
 
 
 # --------------------------------------------------------------------------- reading YAML
@@ -436,7 +457,7 @@ def load_world(path: str | Path) -> World:
     return World(
         name=fields.text("name", default=path.stem), path=path, map=occupancy, areas=areas,
         task=task, people=_people(fields), drift=_drift(fields),
-        targets=_targets(fields, areas),
+        targets=_targets(fields, areas), idling_areas=_idling_areas(fields, occupancy),
     )
 
 
@@ -544,13 +565,40 @@ def _people(fields: _Fields) -> PeopleSpec:
     if not fields.has("people"):
         return PeopleSpec()
     people = fields.child("people")
-    people.reject_unknown(("walkers", "idlers"))
+    people.reject_unknown(("walkers", "idlers", "walker_patience_s"))
     defaults = PeopleSpec()
     spec = PeopleSpec(walkers=people.integer("walkers", default=defaults.walkers),
-                      idlers=people.integer("idlers", default=defaults.idlers))
+                      idlers=people.integer("idlers", default=defaults.idlers),
+                      walker_patience_s=people.number("walker_patience_s",
+                                                      default=defaults.walker_patience_s))
     if spec.walkers < 0 or spec.idlers < 0:
         people.fail("people.walkers and people.idlers must be 0 or more")
+    if not spec.walker_patience_s > 0.0:
+        people.fail(f"people.walker_patience_s must be more than 0, not "
+                    f"{spec.walker_patience_s:g}")
     return spec
+
+
+def _idling_areas(fields: _Fields, occupancy: OccupancyMap) -> tuple[IdlingArea, ...]:
+    if not fields.has("idling_areas"):
+        return ()
+    value = fields.raw("idling_areas")
+    if not isinstance(value, list) or not value:
+        fields.fail(f"idling_areas must be a non-empty list, not {_kind(value)}")
+    return tuple(_idling_area(_Fields(item, path=fields.path, where=f"idling_areas[{index}]"),
+                              occupancy) for index, item in enumerate(value))
+
+
+def _idling_area(fields: _Fields, occupancy: OccupancyMap) -> IdlingArea:
+    fields.reject_unknown(("min", "max", "yaw"))
+    (min_x, min_y), (max_x, max_y) = _point(fields, "min"), _point(fields, "max")
+    if not (min_x <= max_x and min_y <= max_y):
+        fields.fail(f"{fields.where}: min ({min_x:g}, {min_y:g}) must not exceed max "
+                    f"({max_x:g}, {max_y:g}) in x or y")
+    if not _box_on_map(AreaBox(min_x, min_y, max_x, max_y), occupancy):
+        fields.fail(f"{fields.where} lies outside the map")
+    return IdlingArea(min_x=min_x, min_y=min_y, max_x=max_x, max_y=max_y,
+                      yaw=fields.number("yaw"))
 
 
 def _drift(fields: _Fields) -> DriftSpec:

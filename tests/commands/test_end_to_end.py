@@ -74,12 +74,14 @@ def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
 
 
 def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
-    code, report = mission(tmp_path, "--sim-arg=--drift-scale=0.3")
+    # drift times are world times (the original's): at scale 0.2 they come at 71, 97, 121 ...
+    # s, while the shipped task guides the guest from about 30-70 s to 120 s
+    code, report = mission(tmp_path, "--sim-arg=--drift-scale=0.2")
     assert_completed(code, report)
     assert report["penalties"]["drifts"] >= 1
     # a pick-up that succeeds ends the recovery in the same tick (the RecoveryNode halts it and
     # guides again at once), so the log shows the call's answer, not a SUCCESS status
-    picked_up_again = any(feedback.startswith("picked up") for feedback in tree_log_feedback(
+    picked_up_again = any("answered true" in feedback for feedback in tree_log_feedback(
         tmp_path, "PickUpGuestAgain.CallPickUpGuest"))
     assert picked_up_again or "SUCCESS" in tree_log_statuses(tmp_path, "GuestCaughtUp")
 

@@ -19,6 +19,7 @@ from bt_servicesim.planning.guest_localisation import (
     RfidReading,
     approach_goal,
     estimate_guest,
+    locate_bystanders,
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from tests.fakes import (
@@ -191,3 +192,44 @@ def test_history_since_returns_the_recent_readings_in_order() -> None:
     assert len(history) == 5
     assert [reading.stamp for reading in history.since(5.0)] == [5.0, 6.0, 7.0]
     assert np.isclose(history.latest.stamp, 7.0)
+
+
+# ============================================================================ bystanders
+def test_the_approach_keeps_a_bystander_out_of_the_referees_one_metre() -> None:
+    estimate, grid, robot = spots_around(7.0, 7.0), open_room(), Pose2D(7.0, 3.0, math.pi / 2)
+    alone = approach_goal(estimate, grid, robot)
+    assert alone is not None
+    bystander = spots_around(alone.x, alone.y)  # an idler stands where the goal would be
+    goal = approach_goal(estimate, grid, robot, bystanders=[bystander])
+    assert goal is not None
+    assert all(math.dist((goal.x, goal.y), spot) >= 1.0 for spot in bystander.spots)
+    assert 1.1 <= math.dist((goal.x, goal.y), (7.0, 7.0)) <= 1.8  # still in reach, not crowding
+
+
+def test_a_robot_beside_a_bystander_moves_off_though_the_guest_is_in_reach() -> None:
+    estimate, grid, robot = spots_around(7.0, 7.0), open_room(), Pose2D(7.0, 5.6, math.pi / 2)
+    assert approach_goal(estimate, grid, robot) is None  # close enough: it would stay
+    goal = approach_goal(estimate, grid, robot, bystanders=[spots_around(6.6, 5.0)])
+    assert goal is not None and math.dist((goal.x, goal.y), (6.6, 5.0)) >= 1.0 + 0.2
+
+
+def test_bystanders_are_located_by_their_names_and_do_not_move_the_guests_estimate() -> None:
+    # RFID lists at the pick-up name the guest and an idler standing 2 m from them
+    grid, guest, idler = open_room(), (7.0, 7.0), (8.6, 5.8)
+    crowded, alone = RfidHistory(), RfidHistory()
+    now = 0.0
+    path = [(float(x), 4.0) for x in np.arange(3.0, 7.0, 0.05)]  # east, then north: an L
+    for robot in path + [(7.0, float(y)) for y in np.arange(4.0, 5.21, 0.05)]:
+        names = {name for name, where in ((GUEST, guest), ("human_00042", idler))
+                 if math.dist(robot, where) <= RFID_RANGE}
+        crowded.add(RfidReading(now, *robot, frozenset(names)))
+        alone.add(RfidReading(now, *robot, frozenset(names & {GUEST})))
+        now += 0.1
+    estimate = estimate_guest(crowded, GUEST, grid, now)
+    assert estimate is not None and math.dist((estimate.x, estimate.y), guest) < 1.2
+    by_itself = estimate_guest(alone, GUEST, grid, now)
+    assert by_itself is not None and (estimate.x, estimate.y) == (by_itself.x, by_itself.y)
+    others = locate_bystanders(crowded, GUEST, grid, now)
+    assert len(others) == 1 and not locate_bystanders(alone, GUEST, grid, now)
+    assert min(math.dist(spot, idler) for spot in others[0].spots) < 0.2
+    assert min(math.dist(spot, guest) for spot in estimate.spots) < 0.2

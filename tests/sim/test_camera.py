@@ -7,13 +7,27 @@ these tests look at the pictures the same way, with colour thresholds rather tha
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
+from rclpy.context import Context
+from rclpy.node import Node
 from scipy import ndimage
+from sensor_msgs.msg import Image
 
-from servicesim_sim.camera import CEILING, FLOOR, FrontCamera, outfit, render_front_camera
-from servicesim_sim.world import OccupancyMap
+from servicesim_sim.camera import (
+    CEILING,
+    FLOOR,
+    RATE_HZ,
+    FrontCamera,
+    outfit,
+    render_front_camera,
+)
+from servicesim_sim.node import SimulatorNode
+from servicesim_sim.scenario import Difficulty
+from servicesim_sim.settings import SimSettings
+from servicesim_sim.world import DEFAULT_WORLD, OccupancyMap, load_world
 
 RESOLUTION = 0.05
 GUEST = "human_20843"
@@ -171,3 +185,41 @@ def test_a_robot_against_a_wall_sees_nothing_but_wall() -> None:
 def test_a_bad_camera_size_is_refused() -> None:
     with pytest.raises(ValueError, match="hfov"):
         FrontCamera(HALL, hfov=0.0)
+
+
+# ------------------------------------------------------------------ the node's frame rate
+def test_the_node_renders_the_originals_24_frames_a_sim_second_only_for_a_subscriber(
+        ros_context: Context) -> None:
+    # servicebot.urdf: the FrontCamera sensor's update_rate is 24; frames fall between the
+    # 0.1 s I/O periods, so the rate is not capped at the I/O rate (10 a sim second)
+    settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=0.0,
+                           difficulty=Difficulty.default(), camera_rate_hz=RATE_HZ)
+    node = Node("servicesim_camera", context=ros_context)
+    simulator = SimulatorNode(settings, node=node)
+    run_for(simulator, sim_seconds=1.0)
+    assert simulator._frames == []  # nobody subscribes: nothing rendered
+    viewer = Node("viewer", context=ros_context)
+    viewer.create_subscription(Image, "/servicebot/camera_front/image_raw", lambda _: None, 50)
+    deadline = time.monotonic() + 20.0
+    while simulator._camera.get_subscription_count() == 0:
+        assert time.monotonic() < deadline, "the viewer was never discovered"
+        time.sleep(0.05)
+    start = simulator.engine.sim_time
+    stamps = run_for(simulator, sim_seconds=2.0)
+    assert len(stamps) == 48
+    gaps = np.round(np.diff(stamps), 6)
+    assert set(gaps) <= {0.04, 0.06}
+    assert start < stamps[0] and stamps[-1] <= start + 2.0 + 1e-9
+    simulator._publish_camera()
+    assert simulator._frames == []
+    viewer.destroy_node()
+    node.destroy_node()
+
+
+def run_for(simulator: SimulatorNode, *, sim_seconds: float) -> list[float]:
+    """Step the simulator's engine as its loop does, capturing frames; their stamps."""
+    simulator._frames.clear()
+    for _ in range(round(sim_seconds / simulator.engine.dt)):
+        simulator.engine.step()
+        simulator._capture_camera()
+    return [when for when, _ in simulator._frames]

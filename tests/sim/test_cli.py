@@ -29,6 +29,7 @@ def simulator(*arguments: str) -> subprocess.CompletedProcess[str]:
         (["--camera-rate", "100"], "--camera-rate"),
         (["--world", "no/such/world.yaml"], "no/such/world.yaml"),
         (["--teleport"], "--teleport"),
+        (["--guest-path", "zigzag"], "--guest-path"),
     ],
 )
 def test_bad_arguments_are_one_line_and_exit_2(arguments: list[str], named: str) -> None:
@@ -69,3 +70,14 @@ def test_stop_signals_end_the_simulator_cleanly_even_when_repeated(
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_guest_path_straight_reaches_the_guest_and_trail_is_the_default() -> None:
+    from servicesim_sim.__main__ import build_parser
+    from servicesim_sim.settings import difficulty_from
+
+    parser = build_parser()
+    assert difficulty_from(parser.parse_args([])).guest_path == "trail"
+    straight = difficulty_from(parser.parse_args(["--guest-path", "straight",
+                                                  "--difficulty", "hard"]))
+    assert (straight.guest_path, straight.drift_scale) == ("straight", 0.25)

@@ -4,9 +4,11 @@ the guest following, getting lost and drifting, RFID silence, determinism per se
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from functools import cache
 
+import numpy as np
 import pytest
 
 from servicesim_sim.engine import TF_ERROR, SimEngine
@@ -126,12 +128,12 @@ def test_a_robot_more_than_4_m_ahead_loses_the_guest_too_fast() -> None:
 
 
 def test_scheduled_and_forced_drifts_stop_the_guest_where_they_are() -> None:
-    sim = engine(difficulty=Difficulty(drift_scale=0.01))  # first drift 2 s into the task
-    assert not sim.force_drift()[0]  # nobody is following yet
+    # drift_scale 0.01: the first drift 3-5 world s after the world starts
+    sim = engine(difficulty=Difficulty(drift_scale=0.01))
     sim.new_task()
     at_pick_up_beside_guest(sim)
     sim.pickup("human_20843", "servicebot")
-    for _ in range(int(3.0 / sim.dt)):
+    for _ in range(int(5.0 / sim.dt)):
         sim.step()
     assert sim.guest_state() == "drifted" and sim.referee.penalties.drifts == 1
     spot = (sim.guest.x, sim.guest.y)
@@ -139,7 +141,190 @@ def test_scheduled_and_forced_drifts_stop_the_guest_where_they_are() -> None:
     assert (sim.guest.x, sim.guest.y) == spot
     place_robot(sim, sim.guest.x + 1.5, sim.guest.y)
     assert sim.pickup("human_20843", "servicebot")[0]
-    assert sim.force_drift()[0] and sim.guest_state() == "drifted"
+    assert sim.force_drift()[0]
+    sim.step()
+    assert sim.guest_state() == "drifted"
+
+
+def test_drift_times_are_world_times_after_the_start_time_not_200_s_after_new_task() -> None:
+    times = engine().scenario.drift_times
+    assert len(times) == 30
+    assert 300.0 <= times[0] <= 500.0  # start_time 200 + U(100, 300), as the original drew
+    gaps = [later - earlier for earlier, later in itertools.pairwise(times)]
+    assert all(100.0 <= gap <= 300.0 for gap in gaps)
+    hard = engine(difficulty=Difficulty.hard()).scenario.drift_times
+    assert 75.0 <= hard[0] <= 125.0  # hard scales the whole schedule by 0.25
+    assert all(25.0 <= b - a <= 75.0 for a, b in itertools.pairwise(hard))
+
+
+def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None:
+    sim = engine()
+    sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
+    sim._drifts = list(sim.scenario.drift_times)
+    while sim.sim_time < 3.0:
+        sim.step()
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    assert sim.pickup("human_20843", "servicebot")[0]
+    while sim.sim_time < 5.9:
+        sim.step()
+    assert sim.guest_state() == "following"
+    while sim.sim_time < 6.1:  # 3 s after new_task, not 6
+        sim.step()
+    assert sim.guest_state() == "drifted"
+    assert sim.referee.current == 1
+
+
+def test_a_pickup_or_drop_off_again_after_its_checkpoint_answers_true_for_free() -> None:
+    sim = engine()
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    assert sim.pickup("human_20843", "servicebot")[0]
+    assert sim.pickup("human_20843", "servicebot")[0]  # checkpoint 2 done: true
+    assert sim.pickup("human_11111", "otherbot")[0]  # whatever the names
+    drop = sim.world.areas["PrivateCubicle_32_1"]
+    sim.guest.x, sim.guest.y = drop.centre
+    place_robot(sim, drop.centre[0] + 1.1, drop.centre[1])
+    assert sim.dropoff("human_20843")[0]
+    assert sim.dropoff("human_20843")[0]  # checkpoint 3 done: true
+    penalties = sim.referee.penalties
+    assert (penalties.failed_pickup, penalties.failed_dropoff) == (0, 0)
+
+
+def test_a_pickup_after_the_drop_off_makes_the_guest_follow_again() -> None:
+    sim = engine()
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    sim.pickup("human_20843", "servicebot")
+    drop = sim.world.areas["PrivateCubicle_32_1"]
+    sim.guest.x, sim.guest.y = drop.centre
+    place_robot(sim, drop.centre[0] + 1.1, drop.centre[1])
+    sim.dropoff("human_20843")
+    assert sim.guest_state() == "dropped_off"
+    assert sim.pickup("human_20843", "servicebot") == (
+        True, "checkpoint 2 is done; human_20843 follows servicebot again")
+    assert sim.guest_state() == "following"
+    assert sim.referee.current == 3  # the task stays at checkpoint 4
+    place_robot(sim, sim.guest.x + 4.5, sim.guest.y)  # lost after checkpoint 3: no penalty
+    assert sim.guest_state() == "lost" and sim.referee.penalties.too_fast == 0
+    assert sim.referee.current == 3
+
+
+def test_pickup_and_drop_off_before_new_task_book_their_points_once_scoring_starts() -> None:
+    sim = engine()
+    assert sim.pickup("human_20843", "servicebot")[0] is False
+    assert sim.dropoff("human_20843")[0] is False
+    assert sim.score() == pytest.approx(90.0)
+    assert not sim.task_running()  # the score is only published while a task runs
+    sim.new_task()
+    sim.step()
+    assert sim.score() == pytest.approx(90.0 + sim.dt)
+
+
+def spot_beside_guest(sim: SimEngine, distance: float) -> tuple[float, float]:
+    guest = sim.guest
+    for angle in range(0, 360, 5):
+        x = guest.x + distance * math.cos(math.radians(angle))
+        y = guest.y + distance * math.sin(math.radians(angle))
+        if sim.robot.walls.at(x, y) > 0.45:
+            return x, y
+    raise AssertionError(f"no free spot {distance} m from the guest")
+
+
+def test_drift_with_nobody_following_fires_after_the_next_pickup_beyond_1_2_m() -> None:
+    sim = engine()
+    assert sim.force_drift() == (True, "drift armed")  # nobody follows: armed, true
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    place_robot(sim, *spot_beside_guest(sim, 1.1))
+    assert sim.pickup("human_20843", "servicebot")[0]
+    for _ in range(20):
+        sim.step()
+    assert sim.guest_state() == "following"  # within 1.2 m: the armed drift waits
+    place_robot(sim, *spot_beside_guest(sim, 1.6))
+    assert sim.guest_state() == "drifted" and sim.referee.current == 1
+    sim.robot.x, sim.robot.y = spot_beside_guest(sim, 1.6)
+    assert sim.pickup("human_20843", "servicebot")[0]
+    sim.step()
+    assert sim.guest_state() == "following"  # the drift fired once; nothing is armed
+
+
+def far_from_people(sim: SimEngine, x: float, y: float) -> bool:
+    return all(math.hypot(px - x, py - y) > 2.0 for _, _, px, py in sim.people_states())
+
+
+def test_approximation_and_contact_count_from_the_start_of_the_world() -> None:
+    sim = engine()
+    sim.robot.x, sim.robot.y = spot_beside_guest(sim, 0.8)
+    sim.step()  # before new_task
+    assert sim.referee.penalties.approximation == pytest.approx(
+        500 * sim.dt * (0.75 + 0.25 - 0.8), rel=0.05)
+    assert sim.score() > 0.0
+
+
+def test_walls_are_approximated_by_the_0_35_m_ghost_cylinder_around_the_origin() -> None:
+    sim = engine()
+    walls, grid = sim.robot.walls, sim.robot.walls.grid
+    for clearance, depth in ((0.45, 0.0), (0.30, 0.05)):
+        rows, cols = np.nonzero(np.abs(grid - clearance) < 0.01)
+        spots = [sim.world.map.cell_to_world(r, c) for r, c in zip(rows, cols, strict=True)]
+        x, y = next(spot for spot in spots if far_from_people(sim, *spot))
+        before = sim.referee.penalties.approximation
+        sim.robot.x, sim.robot.y = x, y
+        sim.step()
+        booked = sim.referee.penalties.approximation - before
+        expected = 500 * sim.dt * 0.25 * (0.35 - walls.at(x, y)) if depth else 0.0
+        assert booked == pytest.approx(expected, abs=1e-9)
+
+
+def test_cmd_vel_persists_until_the_next_command() -> None:
+    sim = engine()
+    yaw = sim.robot.yaw
+    sim.command_velocity(0.0, 0.5)
+    for _ in range(int(2.0 / sim.dt)):
+        sim.step()
+    turned = math.remainder(sim.robot.yaw - yaw, math.tau)
+    assert turned == pytest.approx(1.0, abs=0.03)  # 2 s at 0.5 rad/s, no 0.5 s stop
+    sim.command_velocity(0.0, 0.0)
+    sim.step()
+    assert sim.robot_velocity() == (0.0, 0.0)
+
+
+def test_a_command_beyond_the_robots_limits_drives_at_the_limits() -> None:
+    sim = engine()
+    sim.command_velocity(5.0, -4.0)
+    sim.step()
+    assert sim.robot_velocity() == (0.5, -1.0)
+
+
+def test_a_goal_cancelled_mid_drive_leaves_the_robot_stopped() -> None:
+    sim = engine()  # the shipped start, facing -x along PublicBathroomB
+    sim.set_initial_pose(*sim.robot_pose())
+    ticket = sim.navigate(8.5, 3.75, 3.14)
+    for _ in range(int(2.0 / sim.dt)):
+        sim.step()
+    assert sim.robot_velocity()[0] > 0.1  # driving
+    sim.cancel_navigation(ticket)
+    sim.step()
+    pose = sim.robot_pose()
+    for _ in range(50):
+        sim.step()
+    assert sim.robot_pose() == pose  # the controller's last word was a stop, as Nav2's is
+
+
+def test_rfid_lists_names_in_the_worlds_order_walkers_idlers_then_the_guest() -> None:
+    sim = engine()
+    people = sim.crowd.people
+    first, second = next((a, b) for a, b in itertools.combinations(people, 2)
+                         if a.name > b.name)  # world order is not alphabetical here
+    x, y = sim.guest.x + 1.2, sim.guest.y
+    for person, offset in ((first, 0.5), (second, -0.5)):
+        person.x, person.y = x, y + offset
+    sim.robot.x, sim.robot.y = x, y
+    names = sim.rfid_names() or []
+    world_order = [name for name, *_ in sim.people_states() if name in names]
+    assert names == world_order and names.index(first.name) < names.index(second.name)
+    assert names[-1] == sim.guest.name
 
 
 def test_rfid_is_silent_with_nobody_near_and_names_the_guest_near() -> None:

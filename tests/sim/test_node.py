@@ -104,6 +104,12 @@ def test_task_info_new_task_and_a_second_new_task(graph: Graph) -> None:
     assert again.pick_up_location == ""
     info = graph.call(TaskInfo, "/servicesim/task_info", TaskInfo.Request())
     assert info.guest_name == "human_20843"
+    referee = graph.simulator.engine.referee
+    referee.running, referee.completed = False, True  # as if checkpoint 4 were reached
+    after = graph.call(TaskInfo, "/servicesim/task_info", TaskInfo.Request())
+    assert after.guest_name == ""  # the error answer: the task has completed
+    once_more = graph.call(NewTask, "/servicesim/new_task", NewTask.Request())
+    assert once_more.pick_up_location == ""  # one task per simulator run
 
 
 def test_a_refused_pickup_is_booked_and_the_score_runs_with_the_task(graph: Graph) -> None:
@@ -121,7 +127,7 @@ def test_a_refused_pickup_is_booked_and_the_score_runs_with_the_task(graph: Grap
     graph.spin_until(lambda: states[-1].failed_pickups == 1 and len(scores) > 10)
     assert scores[-1] >= 40.0
     drift = graph.call(Drift, "/servicesim/drift", Drift.Request())
-    assert drift.drift is False  # nobody is following
+    assert drift.drift is True  # armed even with nobody following, as the original
 
 
 def navigate(graph: Graph, x: float, y: float, *, cancel_after_s: float | None = None) -> Any:

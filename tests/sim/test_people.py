@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.people import IDLER, WALKER, Crowd, Person
-from servicesim_sim.world import OccupancyMap
+from servicesim_sim.people import IDLER, WALKER, Crowd, CrowdError, Person
+from servicesim_sim.world import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
 
 RESOLUTION = 0.05
 ORIGIN = (-2.0, -2.0)
@@ -101,24 +101,22 @@ def test_walkers_keep_off_walls_idlers_and_keep_clear_discs(seed: int) -> None:
             assert all(math.hypot(walker.x - x, walker.y - y) >= r for x, y, r in KEEP_CLEAR)
 
 
-def test_walkers_move_at_their_own_speed_between_0_9_and_1_2_metres_a_second() -> None:
-    people = crowd(4)
-    dt, steps = 0.1, 200
-    start = {p.name: (p.x, p.y) for p in walkers_of(people)}
-    paths = dict.fromkeys(start, 0.0)
-    last = dict(start)
+def walked_speed(people: Crowd, *, dt: float = 0.1, steps: int = 200) -> float:
+    """The mean speed of a crowd's one walker over ``steps``, checking every hop."""
+    walker = walkers_of(people)[0]
+    path, last = 0.0, (walker.x, walker.y)
     for _ in range(steps):
         people.step(dt, robot=FAR_AWAY)
-        for walker in walkers_of(people):
-            hop = math.hypot(walker.x - last[walker.name][0], walker.y - last[walker.name][1])
-            assert hop <= 1.2 * dt + 1e-9
-            paths[walker.name] += hop
-            last[walker.name] = (walker.x, walker.y)
-    speeds = [path / (dt * steps) for path in paths.values()]
+        hop = math.hypot(walker.x - last[0], walker.y - last[1])
+        assert hop <= 1.2 * dt + 1e-9
+        path, last = path + hop, (walker.x, walker.y)
+    return path / (dt * steps)
+
+
+def test_walkers_move_at_their_own_speed_between_0_9_and_1_2_metres_a_second() -> None:
+    speeds = [walked_speed(crowd(seed, walkers=1)) for seed in (4, 5, 6)]  # alone: nobody stops
     assert all(0.9 * 0.97 <= speed <= 1.2 + 1e-9 for speed in speeds), speeds  # 3%: corners
     assert len({round(speed, 3) for speed in speeds}) > 1
-    assert all(math.hypot(walker.x - start[walker.name][0], walker.y - start[walker.name][1])
-               > 0.0 for walker in walkers_of(people))
 
 
 Robot = tuple[float, float, float]
@@ -150,31 +148,59 @@ def steps_moved(people: Crowd, walker: Person, robot: Callable[[Person], Robot])
 
 
 def test_a_walker_stops_for_a_robot_in_front_and_walks_on_when_it_is_gone() -> None:
-    people = crowd(5)
-    walker, *others = walkers_of(people)
-    others_before = [(p.x, p.y) for p in others]
-    assert steps_moved(people, walker, robot_at(distance=1.2, bearing=math.radians(40.0))) == 0
-    assert all((p.x, p.y) != xy for p, xy in zip(others, others_before, strict=True))
+    people = crowd(5, walkers=1)
+    walker = walkers_of(people)[0]
+    assert steps_moved(people, walker, robot_at(distance=1.2, bearing=math.radians(25.0))) == 0
     assert steps_moved(people, walker, far_away) > 0.85
 
 
-@pytest.mark.parametrize(("distance", "bearing"), [
-    (1.0, math.pi),  # behind
-    (1.0, math.radians(75.0)),  # beside, outside the +-60 degree cone
-    (1.8, 0.0),  # ahead but further than 1.5 m
-    (0.7, math.radians(120.0)),  # close, but behind its shoulder
+def at_lane_offset(*, ahead: float, side: float) -> Callable[[Person], Robot]:
+    """A robot kept ``ahead`` metres along a walker's heading and ``side`` metres left of it."""
+    return robot_at(distance=math.hypot(ahead, side), bearing=math.atan2(side, ahead))
+
+
+@pytest.mark.parametrize(("ahead", "side"), [
+    (1.45, 0.0),  # straight ahead, just inside 1.5 m
+    (1.2, 0.55),  # to one side, just inside the 0.6 m half-width
+    (0.3, -0.55),  # close, to the other side
 ])
-def test_a_walker_does_not_stop_for_a_robot_behind_beside_or_far(distance: float,
-                                                                  bearing: float) -> None:
-    people = crowd(5)
+def test_a_walker_stops_for_a_robot_in_its_lane(ahead: float, side: float) -> None:
+    # TrajectoryActorPlugin.cc 197-199: nearer than 1.5 m, ahead, within 0.4 x 1.5 m sideways
+    people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
-    assert steps_moved(people, walker, robot_at(distance=distance, bearing=bearing)) > 0.85
+    assert steps_moved(people, walker, at_lane_offset(ahead=ahead, side=side)) == 0
 
 
-def test_a_walker_blocked_by_the_robot_for_5_s_turns_back_and_walks_away() -> None:
-    people = crowd(5)
+@pytest.mark.parametrize(("ahead", "side"), [
+    (-1.0, 0.0),  # behind
+    (1.0, 0.7),  # ahead but beside the lane (the old +-60 degree cone stopped for this)
+    (0.2, 0.78),  # close at its shoulder (the old give-way disc stopped for this)
+    (1.55, 0.0),  # ahead but further than 1.5 m
+    (1.3, 0.8),  # ahead and within 1.5 m, but beside the lane
+])
+def test_a_walker_does_not_stop_for_a_robot_outside_its_lane(ahead: float, side: float) -> None:
+    people = crowd(5, walkers=1)
+    walker = walkers_of(people)[0]
+    assert steps_moved(people, walker, at_lane_offset(ahead=ahead, side=side)) > 0.85
+
+
+def test_a_walker_waits_for_the_robot_as_long_as_it_stays_in_the_lane() -> None:
+    # TrajectoryActorPlugin.cc 250: no time-out, it waits while the way is blocked
+    people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
     robot = robot_at(distance=1.2, bearing=0.0)(walker)  # stays where it was put
+    before = (walker.x, walker.y)
+    for _ in range(600):  # a sim minute
+        people.step(0.1, robot=robot)
+    assert (walker.x, walker.y) == before
+    assert steps_moved(people, walker, far_away) > 0.85
+
+
+def test_a_walker_with_patience_turns_back_after_it() -> None:
+    people = Crowd(office_map(), rng=np.random.default_rng(5), walkers=1, idlers=12,
+                   taken_names=set(), keep_clear=KEEP_CLEAR, walker_patience_s=5.0)
+    walker = walkers_of(people)[0]
+    robot = robot_at(distance=1.2, bearing=0.0)(walker)
     blocked = 0.0
     while steps_moved(people, walker, lambda _: robot) == 0.0:
         blocked += 1.0
@@ -185,14 +211,62 @@ def test_a_walker_blocked_by_the_robot_for_5_s_turns_back_and_walks_away() -> No
     assert math.hypot(walker.x - robot[0], walker.y - robot[1]) > gap_before + 0.5
 
 
-def test_a_walker_gives_way_to_a_robot_close_at_its_side() -> None:
-    people = crowd(5)
+def test_a_walker_stops_for_the_guest_in_its_lane_too() -> None:
+    people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
-    assert steps_moved(people, walker, robot_at(distance=0.8, bearing=math.radians(80.0))) == 0
+    guest = robot_at(distance=1.0, bearing=0.2)(walker)
+    before = (walker.x, walker.y)
+    for _ in range(100):
+        people.step(0.1, robot=FAR_AWAY, others=[guest[:2]])
+    assert (walker.x, walker.y) == before
+    people.step(0.1, robot=FAR_AWAY, others=[])
+    assert (walker.x, walker.y) != before
+
+
+def lane_holds(walker: tuple[float, float, float], x: float, y: float) -> bool:
+    """Whether (x, y) lies in the lane of a walker at pose ``walker``: the original's rule."""
+    wx, wy, yaw = walker
+    dx, dy = x - wx, y - wy
+    ahead = dx * math.cos(yaw) + dy * math.sin(yaw)
+    side = -dx * math.sin(yaw) + dy * math.cos(yaw)
+    return math.hypot(dx, dy) < 1.5 and ahead > 0.0 and abs(side) < 0.6
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_walkers_stop_for_each_other_and_no_standoff_lasts(seed: int) -> None:
+    people = crowd(seed, walkers=6, idlers=12)
+    stood = dict.fromkeys((p.name for p in walkers_of(people)), 0.0)
+    waited_for_a_walker = False
+    for _ in range(1200):
+        before = {p.name: (p.x, p.y, p.yaw) for p in walkers_of(people)}
+        people.step(0.1, robot=FAR_AWAY)
+        for walker in walkers_of(people):
+            ahead = [o for o in walkers_of(people) if o is not walker
+                     and lane_holds(before[walker.name], *before[o.name][:2])]
+            if (walker.x, walker.y) == before[walker.name][:2]:
+                waited_for_a_walker |= bool(ahead)
+                stood[walker.name] += 0.1
+                assert stood[walker.name] <= 10.5, "stood longer than two standoffs"
+            else:
+                assert not ahead, "walked on with a walker in its lane"
+                stood[walker.name] = 0.0
+    assert waited_for_a_walker
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_no_idler_ever_stands_in_a_walker_lane(seed: int) -> None:
+    # a walker stopped by someone who never moves would stand there for the whole run
+    people = crowd(seed, walkers=3, idlers=14)
+    standing = [(p.x, p.y) for p in idlers_of(people)]
+    for _ in range(600):
+        people.step(0.1, robot=FAR_AWAY)
+        for walker in walkers_of(people):
+            assert not any(lane_holds((walker.x, walker.y, walker.yaw), x, y)
+                           for x, y in standing)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
-def test_idlers_stand_apart_off_walls_and_out_of_keep_clear_discs(seed: int) -> None:
+def test_idlers_without_idling_areas_stand_apart_anywhere_off_walls(seed: int) -> None:
     office = office_map()
     people = crowd(seed, idlers=20, occupancy_map=office)
     standing = idlers_of(people)
@@ -200,12 +274,72 @@ def test_idlers_stand_apart_off_walls_and_out_of_keep_clear_discs(seed: int) -> 
     gaps = np.hypot(*(spots[:, None, :] - spots[None, :, :]).transpose(2, 0, 1))
     assert gaps[~np.eye(len(spots), dtype=bool)].min() >= 1.0
     assert all(body_is_free(office, x, y, 0.55) for x, y in spots)
-    assert all(math.hypot(x - cx, y - cy) > r for x, y in spots for cx, cy, r in KEEP_CLEAR)
     assert all(-1.0 <= x <= 21.0 and -1.0 <= y <= 13.0 for x, y in spots)  # in the building
     assert len({round(p.yaw, 6) for p in standing}) == len(standing)
     for _ in range(20):
         people.step(0.1, robot=FAR_AWAY)
     assert [(p.x, p.y) for p in idlers_of(people)] == [tuple(s) for s in spots]
+
+
+def test_targets_keep_no_idler_away_only_an_occupied_spot_does() -> None:
+    # the original places idlers with no regard to targets; the walker keep-clear discs are
+    # no exclusion zone for them, only a body already standing there is
+    spots = [(p.x, p.y) for seed in range(8) for p in idlers_of(crowd(seed, idlers=20))]
+    assert any(math.hypot(x - cx, y - cy) < r for x, y in spots for cx, cy, r in KEEP_CLEAR)
+    guest = (2.0, 2.0, 0.25)
+    for seed in range(8):
+        people = Crowd(office_map(), rng=np.random.default_rng(seed), walkers=0, idlers=20,
+                       taken_names=set(), keep_clear=[], occupied=[guest])
+        assert all(math.hypot(p.x - 2.0, p.y - 2.0) >= 0.5 for p in idlers_of(people))
+
+
+HALL_AREAS = (  # two idling areas in the hall and a line of spots along the room wall
+    IdlingArea(min_x=1.0, min_y=6.0, max_x=4.0, max_y=7.0, yaw=0.0),
+    IdlingArea(min_x=9.0, min_y=9.0, max_x=11.0, max_y=11.0, yaw=math.pi / 2),
+    IdlingArea(min_x=16.0, min_y=4.5, max_x=19.0, max_y=4.5, yaw=-math.pi / 2),
+)
+
+
+def area_of(person: Person) -> IdlingArea | None:
+    return next((a for a in HALL_AREAS if a.min_x <= person.x <= a.max_x
+                 and a.min_y <= person.y <= a.max_y), None)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_idlers_stand_in_idling_areas_facing_their_yaw_and_apart(seed: int) -> None:
+    # idling_humans.erb 20-40 and the loop after: a random area, a random point of it, the
+    # area's yaw +- 0.5 rad, at least 1 m from every idler placed before
+    people = Crowd(office_map(), rng=np.random.default_rng(seed), walkers=2, idlers=8,
+                   taken_names=set(), keep_clear=KEEP_CLEAR, idling_areas=HALL_AREAS)
+    standing = idlers_of(people)
+    assert len(standing) == 8
+    for person in standing:
+        area = area_of(person)
+        assert area is not None, person
+        turn = math.remainder(person.yaw - area.yaw, 2 * math.pi)
+        assert abs(turn) <= 0.5
+    spots = np.array([(p.x, p.y) for p in standing])
+    gaps = np.hypot(*(spots[:, None, :] - spots[None, :, :]).transpose(2, 0, 1))
+    assert gaps[~np.eye(len(spots), dtype=bool)].min() >= 1.0
+
+
+def test_idlers_use_every_idling_area_and_spread_their_yaw() -> None:
+    people = [p for seed in range(6) for p in idlers_of(
+        Crowd(office_map(), rng=np.random.default_rng(seed), walkers=0, idlers=8,
+              taken_names=set(), keep_clear=[], idling_areas=HALL_AREAS))]
+    assert {HALL_AREAS.index(area_of(p)) for p in people} == {0, 1, 2}
+    turns = [math.remainder(p.yaw - area_of(p).yaw, 2 * math.pi) for p in people]
+    assert min(turns) < -0.3 and max(turns) > 0.3
+
+
+def test_too_many_idlers_for_the_idling_areas_are_refused_with_a_clear_message() -> None:
+    with pytest.raises(CrowdError, match=r"room for only \d+ of 40 idlers in the world.s idling"):
+        Crowd(office_map(), rng=np.random.default_rng(0), walkers=0, idlers=40,
+              taken_names=set(), keep_clear=[], idling_areas=HALL_AREAS)
+    walled = (IdlingArea(min_x=14.2, min_y=8.2, max_x=14.8, max_y=8.8, yaw=0.0),)  # the pillar
+    with pytest.raises(CrowdError, match="no idling area has a free cell"):
+        Crowd(office_map(), rng=np.random.default_rng(0), walkers=0, idlers=1,
+              taken_names=set(), keep_clear=[], idling_areas=walled)
 
 
 def two_rooms_and_a_corridor() -> OccupancyMap:
@@ -252,3 +386,31 @@ def test_impossible_crowds_are_refused_with_a_clear_message() -> None:
         crowd(0, walkers=0, idlers=400)
     with pytest.raises(ValueError, match="dt"):
         crowd(0).step(-0.1, robot=FAR_AWAY)
+
+
+def office_crowd(seed: int) -> tuple[Crowd, World]:
+    """The office's crowd as the engine makes it for the shipped task (guest, start occupied)."""
+    office = load_world(DEFAULT_WORLD)
+    task = office.task
+    assert task is not None
+    return Crowd(office.map, rng=np.random.default_rng(seed), walkers=0, idlers=30,
+                 taken_names={task.guest_name}, keep_clear=[],
+                 occupied=[(task.guest_x, task.guest_y, 0.25), (task.start_x, task.start_y, 0.3)],
+                 idling_areas=office.idling_areas), office
+
+
+def test_office_idlers_stand_in_its_idling_areas_and_some_near_the_shipped_pick_up() -> None:
+    # RFID at the shipped pick-up hears an idler too: area 10 of idling_humans.erb lies 1.8 m
+    # east of FrontElevator's centre
+    near_pick_up = 0
+    for seed in range(6):
+        people, office = office_crowd(seed)
+        standing = idlers_of(people)
+        assert len(standing) == 30
+        for person in standing:
+            assert any(a.min_x <= person.x <= a.max_x and a.min_y <= person.y <= a.max_y
+                       for a in office.idling_areas), person
+        centre = office.areas["FrontElevator"].centre
+        near_pick_up += any(math.hypot(p.x - centre[0], p.y - centre[1]) <= 2.0
+                            for p in standing)
+    assert near_pick_up >= 2

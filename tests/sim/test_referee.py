@@ -44,7 +44,7 @@ def test_failed_calls_and_too_fast_carry_their_penalties() -> None:
     referee.failed_dropoff()
     referee.reach(rules.GO_TO_PICK_UP)
     referee.reach(rules.PICK_UP_GUEST)
-    referee.back_to_pick_up(too_fast=True)
+    referee.guest_stopped_following(too_fast=True)
     assert referee.score() == pytest.approx(2 * 40 + 50 + 25)
     report = referee.report()["penalties"]
     assert (report["failed_pickup"], report["failed_dropoff"], report["too_fast"]) == (2, 1, 1)
@@ -55,7 +55,7 @@ def test_a_drift_sends_checkpoint_3_back_to_2_without_penalty() -> None:
     referee.reach(rules.GO_TO_PICK_UP)
     referee.reach(rules.PICK_UP_GUEST)
     assert referee.current == rules.DROP_OFF_GUEST
-    referee.back_to_pick_up(too_fast=False)
+    referee.guest_stopped_following(too_fast=False)
     assert referee.current == rules.PICK_UP_GUEST
     assert not referee.checkpoint_done[rules.PICK_UP_GUEST]
     assert referee.penalties.drifts == 1 and referee.score() == 0.0
@@ -109,6 +109,35 @@ def test_the_guest_follows_the_trail_round_a_corner_and_stops_1_2_m_short() -> N
     assert math.hypot(guest.x - 5.0, guest.y - 5.0) == pytest.approx(STOP_DISTANCE, abs=0.06)
     # it turned the corner on the trail rather than cutting across the (imagined) wall
     assert all(y < 0.06 or x > 4.94 for x, y in visited)
+
+
+def test_the_straight_guest_cuts_the_corner_through_walls_as_the_original_did() -> None:
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0, path="straight",
+                  wall_clearance=lambda x, y: 0.0)  # walls everywhere: they do not matter
+    guest.start_following(1.0, 0.0)
+    visited: list[tuple[float, float]] = []
+    original_step = guest.step
+
+    def recording_step(dt: float, *, robot_x: float, robot_y: float) -> None:
+        original_step(dt, robot_x=robot_x, robot_y=robot_y)
+        visited.append((guest.x, guest.y))
+
+    guest.step = recording_step  # type: ignore[method-assign]
+    walk(guest, [(1.0, 0.0), (5.0, 0.0), (5.0, 5.0)])
+    assert math.hypot(guest.x - 5.0, guest.y - 5.0) == pytest.approx(STOP_DISTANCE, abs=0.02)
+    assert any(y > 0.2 and x < 4.8 for x, y in visited)  # across the corner, off the trail
+
+
+def test_the_straight_guest_does_not_step_aside() -> None:
+    guest = Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0, path="straight")
+    guest.start_following(0.5, 0.0)
+    guest.step(0.1, robot_x=0.5, robot_y=0.0)
+    assert (guest.x, guest.y) == (0.0, 0.0)
+
+
+def test_an_unknown_guest_path_is_one_clear_line() -> None:
+    with pytest.raises(ValueError, match="guest path 'zigzag': must be one of trail, straight"):
+        Guest(name="human_00001", x=0.0, y=0.0, yaw=0.0, path="zigzag")
 
 
 def test_a_guest_the_robot_drives_past_rejoins_its_trail_ahead_not_where_it_stood() -> None:

@@ -16,6 +16,7 @@ from servicesim_sim import office
 from servicesim_sim.world import (
     DEFAULT_WORLD,
     AreaBox,
+    IdlingArea,
     OccupancyMap,
     World,
     WorldError,
@@ -24,7 +25,9 @@ from servicesim_sim.world import (
     read_areas,
 )
 
-REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "reference" / "servicesim"
+REFERENCE = next(parent / "shared" / "reference" / "servicesim"  # from main or a worktree
+                 for parent in Path(__file__).resolve().parents
+                 if (parent / "shared" / "reference" / "servicesim").is_dir())
 ROBOT_CLEARANCE_M = 0.35
 
 
@@ -62,6 +65,17 @@ def test_office_has_the_70_reference_target_areas(world: World) -> None:
     assert world.areas == expected
     assert list(world.areas) == list(expected)
     assert world.targets == tuple(expected)
+
+
+def test_office_has_the_19_reference_idling_areas(world: World) -> None:
+    data = yaml.safe_load((REFERENCE / "idling_areas.yaml").read_text())["idling_areas"]
+    expected = [(min(a["min"][0], a["max"][0]), a["min"][1], max(a["min"][0], a["max"][0]),
+                 a["max"][1], a["yaw"]) for a in data]
+    got = [(a.min_x, a.min_y, a.max_x, a.max_y, a.yaw) for a in world.idling_areas]
+    assert len(got) == 19
+    assert np.asarray(got) == pytest.approx(np.asarray(expected), abs=1e-5)
+    assert all(world.map.is_free(*area_centre) for area_centre in
+               [((a.min_x + a.max_x) / 2, (a.min_y + a.max_y) / 2) for a in world.idling_areas])
 
 
 def test_reference_area_file_loads_as_a_separate_area_file(world: World) -> None:
@@ -113,6 +127,32 @@ def test_a_door_is_a_gap_of_door_width_in_its_wall() -> None:
         door = {"south": (room.door_at, y0), "north": (room.door_at, y1),
                 "west": (x0, room.door_at), "east": (x1, room.door_at)}[room.door_side]
         assert occupancy.is_free(*door), room.name
+
+
+def test_the_closed_doors_variant_shuts_the_shipped_worlds_closed_rooms_and_plays(
+        tmp_path: Path) -> None:
+    # service.world.erb / room.erb: a room whose door is shut gets no target area; the shipped
+    # world's rooms without one are the eight shut here, and everything else stays reachable
+    assert office.main(["--closed-doors", "--out", str(tmp_path)]) == 0
+    closed = load_world(tmp_path / "world.yaml")
+    assert closed.name == "office_closed_doors"
+    assert len(office.CLOSED_IN_SHIPPED) == 8
+    assert not office.CLOSED_IN_SHIPPED & set(closed.areas)
+    labels = reachable_regions(closed.map, ROBOT_CLEARANCE_M)
+    hall = region_at(closed.map, labels, *closed.areas["FrontElevator"].centre)
+    for room in office.ROOMS:
+        (x0, y0), (x1, y1) = room.low, room.high
+        door = {"south": (room.door_at, y0), "north": (room.door_at, y1),
+                "west": (x0, room.door_at), "east": (x1, room.door_at)}[room.door_side]
+        shut = room.name in office.CLOSED_IN_SHIPPED
+        assert closed.map.is_free(*door) is not shut, room.name
+        inside = region_at(closed.map, labels, (x0 + x1) / 2, (y0 + y1) / 2)
+        assert (inside == hall) is not shut, room.name
+    assert {region_at(closed.map, labels, *box.centre) for box in closed.areas.values()} == {hall}
+    task = closed.task
+    assert task is not None
+    assert region_at(closed.map, labels, task.start_x, task.start_y) == hall
+    assert region_at(closed.map, labels, task.guest_x, task.guest_y) == hall
 
 
 def test_office_has_the_shipped_task(world: World) -> None:
@@ -247,6 +287,8 @@ task:
   guest: {name: human_12345, x: 0.7, y: 0.7, yaw: 0.0}
   start: {area: Study, x: 1.0, y: 3.0, yaw: 1.57}
 people: {walkers: 2, idlers: 3}
+idling_areas:
+  - {min: [2.5, 0.5], max: [3.5, 0.5], yaw: 1.5708}
 drift: {start_s: 10.0, min_interval_s: 5.0, max_interval_s: 6.0, count: 2}
 targets: [Hall, Kitchen, Study]
 """
@@ -272,6 +314,9 @@ def test_tiny_world_loads(tmp_path: Path) -> None:
     assert world.task is not None and world.task.start_yaw == 1.57
     assert (world.people.walkers, world.drift.max_interval_s) == (2, 6.0)
     assert not world.map.is_free(1.1, 1.3) and world.map.is_free(0.7, 0.7)
+    assert world.idling_areas == (IdlingArea(min_x=2.5, min_y=0.5, max_x=3.5, max_y=0.5,
+                                             yaw=1.5708),)
+    assert world.people.walker_patience_s == math.inf  # the original's: waits while blocked
 
 
 def test_world_defaults_when_optional_parts_are_left_out(tmp_path: Path) -> None:
@@ -282,6 +327,7 @@ def test_world_defaults_when_optional_parts_are_left_out(tmp_path: Path) -> None
     assert world.targets == ("Hall", "Kitchen", "Study")
     assert (world.people.walkers, world.people.idlers) == (10, 30)
     assert (world.drift.start_s, world.drift.count) == (200.0, 30)
+    assert world.idling_areas == ()
 
 
 Breakage = Callable[[Path], None]
@@ -373,6 +419,20 @@ BROKEN = [
      "people.idlers must be a whole number"),
     ("people-unknown", replace("walkers: 2", "runners: 2"), "world.yaml",
      "unknown key 'people.runners'"),
+    ("people-patience-zero", replace("idlers: 3}", "idlers: 3, walker_patience_s: 0}"),
+     "world.yaml", "people.walker_patience_s must be more than 0, not 0"),
+    ("idling-areas-not-a-list", replace("idling_areas:\n  - {min: [2.5, 0.5], max: [3.5, 0.5], "
+                                        "yaw: 1.5708}", "idling_areas: 3"), "world.yaml",
+     "idling_areas must be a non-empty list"),
+    ("idling-area-no-yaw", replace(", yaw: 1.5708}", "}"), "world.yaml",
+     "missing key 'idling_areas[0].yaw'"),
+    ("idling-area-min-above-max", replace("min: [2.5, 0.5], max: [3.5, 0.5]",
+                                          "min: [3.6, 0.5], max: [3.5, 0.5]"), "world.yaml",
+     "idling_areas[0]: min (3.6, 0.5) must not exceed max (3.5, 0.5)"),
+    ("idling-area-off-the-map", replace("max: [3.5, 0.5]", "max: [4.5, 0.5]"), "world.yaml",
+     "idling_areas[0] lies outside the map"),
+    ("idling-area-unknown-key", replace("yaw: 1.5708}", "yaw: 1.5708, count: 2}"),
+     "world.yaml", "unknown key 'idling_areas[0].count'"),
     ("drift-interval-order", replace("min_interval_s: 5.0", "min_interval_s: 7.0"), "world.yaml",
      "drift.min_interval_s (7) must not exceed drift.max_interval_s (6)"),
     ("drift-boolean", replace("count: 2", "count: true"), "world.yaml",

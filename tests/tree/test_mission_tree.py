@@ -313,22 +313,45 @@ def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> Non
     assert script.count("CallPickUpGuest") == 1
 
 
-def test_a_drop_off_refused_for_a_drifted_guest_picks_them_up_again() -> None:
+def test_a_drop_off_refused_picks_the_guest_up_again_and_repositions_whatever_it_answers(
+) -> None:
+    # the pick-up answers true for a drifted guest picked up again and, for free, for a guest
+    # who follows but stands outside the area: the answer cannot tell which, so both happen
     script = Script({"CallDropOffGuest": [Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     assert script.count("CallDropOffGuest") == 2
     assert script.count("CallPickUpDriftedGuest") == 1
-    assert script.count("ComputeRepositionGoal") == 0
+    assert script.count("ComputeRepositionGoal") == 1
 
 
-def test_a_drop_off_refused_with_the_guest_following_repositions_and_tries_again() -> None:
-    script = Script({"CallDropOffGuest": [Status.FAILURE], "CallPickUpDriftedGuest": [
-        Status.FAILURE]})
+def test_a_guest_out_of_range_after_a_refused_drop_off_is_not_asked_for_but_repositioned(
+) -> None:
+    script = Script({"CallDropOffGuest": [Status.FAILURE],
+                     "DriftedGuestInRange": [Status.FAILURE]})
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
-    assert script.count("CallDropOffGuest") == 2
+    assert script.count("CallPickUpDriftedGuest") == 0
     assert script.count("ComputeRepositionGoal") == 1
+    assert script.count("CallDropOffGuest") == 2
+
+
+def test_a_pick_up_answered_true_is_confirmed_by_rfid_and_a_guest_who_stays_is_reacquired(
+) -> None:
+    # after the true answer, the guest drops out of RFID range while the robot repositions:
+    # the guest does not follow, and the mission goes back for them
+    script = Script({
+        "CallDropOffGuest": [Status.FAILURE],
+        "WatchGuestFollowsReposition": [(Status.FAILURE, 10)],
+        "NavigateToRepositionGoal": [(Status.SUCCESS, 100)],
+        "GuestWithUs": [Status.SUCCESS, Status.FAILURE],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    reposition = next(c for c in script.calls if matches(c, "NavigateToRepositionGoal"))
+    assert script.terminated[reposition][-1] == Status.INVALID  # cut short by the watch
+    assert script.count("GuestCaughtUp") == 1  # re-acquired (here: waited for)
+    assert script.count("CallDropOffGuest") == 2
 
 
 def test_drop_offs_refused_over_and_over_fail_the_mission_in_the_end() -> None:

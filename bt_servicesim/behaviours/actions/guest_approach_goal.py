@@ -1,7 +1,9 @@
 """Estimate where the guest stands from the RFID history and place a goal close to them.
 
-A thin wrapper over :func:`~bt_servicesim.planning.guest_localisation.estimate_guest` and
-:func:`~bt_servicesim.planning.guest_localisation.approach_goal`.
+A thin wrapper over :func:`~bt_servicesim.planning.guest_localisation.estimate_guest`,
+:func:`~bt_servicesim.planning.guest_localisation.locate_bystanders` and
+:func:`~bt_servicesim.planning.guest_localisation.approach_goal`: the guest is picked out of
+the RFID lists by name, and the goal keeps clear of the others the lists name.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from bt_servicesim.planning.guest_localisation import (
     RfidHistory,
     approach_goal,
     estimate_guest,
+    locate_bystanders,
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.ros.sim_clock import clock_from_setup_kwargs, sim_now_s
@@ -62,13 +65,15 @@ class GuestApproachGoal(ActionNode):
         except (NoDataAvailable, TypeError) as error:
             self.feedback_message = f"cannot estimate the guest's position: {error}"
             return Status.FAILURE
-        estimate = estimate_guest(history, guest, grid, sim_now_s(self._clock),
-                                  self._sighting_gap())
+        now = sim_now_s(self._clock)
+        estimate = estimate_guest(history, guest, grid, now, self._sighting_gap())
         if estimate is None:
             self.feedback_message = f"{guest} not heard lately: no estimate"
             return Status.FAILURE
-        goal = approach_goal(estimate, grid, robot, leave_towards=self._leave_towards())
-        where = f"{guest} near ({estimate.x:.2f}, {estimate.y:.2f})"
+        others = locate_bystanders(history, guest, grid, now)
+        goal = approach_goal(estimate, grid, robot, leave_towards=self._leave_towards(),
+                             bystanders=others)
+        where = f"{guest} near ({estimate.x:.2f}, {estimate.y:.2f}), {len(others)} others near"
         if goal is None:
             self.feedback_message = f"{where}: already close, or no reachable spot near"
             return Status.FAILURE

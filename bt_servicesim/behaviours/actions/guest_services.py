@@ -1,6 +1,11 @@
 """The referee's guest hand-over services: pick the guest up, drop them off.
 
-A completed call is not a hand-over: only ``success=true`` is SUCCESS.
+A completed call is not a hand-over: only ``success=true`` is SUCCESS. Nor is ``success=true``
+proof that the guest follows: the original referee answers true to any pick-up once checkpoint 2
+is done (and to any drop-off once checkpoint 3 is), with no penalty, whether or not the guest
+follows (``Checkpoint.cc``, ``CP_PickUp.cc``, ``CP_DropOff.cc``). So SUCCESS here means only
+"the referee said yes"; the tree confirms that the guest follows from RFID while the robot
+moves (``GuestFollowing``).
 """
 
 from typing import Any, ClassVar
@@ -34,7 +39,7 @@ class PickUpGuest(ServiceCall):
         guest = self._request.guest_name
         if not response.success:
             return False, f"pick-up of {guest} refused (too far, wrong name or before CP1)"
-        return True, f"picked up {guest}"
+        return True, f"pick-up of {guest} answered true (RFID confirms the following)"
 
 
 class DropOffGuest(ServiceCall):

@@ -107,7 +107,8 @@ def test_pick_up_succeeds_only_on_success(graph: ExecutiveGraph, ros_context: ob
     assert (referee.requests[-1].guest_name, referee.requests[-1].robot_name) == (
         "human_20843", "servicebot",
     )
-    assert pick_up.feedback_message == "picked up human_20843"
+    assert pick_up.feedback_message == (
+        "pick-up of human_20843 answered true (RFID confirms the following)")
 
     referee.pickup_ok = False  # a completed call is not a call that worked
     assert graph.tick_until_done(pick_up) == Status.FAILURE
