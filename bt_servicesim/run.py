@@ -32,6 +32,14 @@ from bt_servicesim.mission.settings import (
     RunSettings,
 )
 from bt_servicesim.monitor.groot2_server import DEFAULT_HOST, DEFAULT_PORT, Groot2Server
+from bt_servicesim.monitor.live_server import DEFAULT_PORT as FOXGLOVE_PORT
+from bt_servicesim.monitor.live_server import (
+    LiveAddress,
+    LiveServer,
+    LiveServerError,
+    describe,
+    open_live_server,
+)
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
 from bt_servicesim.tree.loading import (
@@ -82,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="serve the live tree to Groot2 and btview (BehaviorTree.CPP v4's "
                         f"monitor protocol) on {DEFAULT_HOST}:{DEFAULT_PORT}, on PORT, or on "
                         "ADDR:PORT (an IPv4 address; 0.0.0.0 for every interface)")
+    parser.add_argument("--foxglove", nargs="?", const=str(FOXGLOVE_PORT), metavar="[ADDR:]PORT",
+                        help="serve the live topics to Foxglove over WebSocket on "
+                        f"127.0.0.1:PORT (default {FOXGLOVE_PORT}), or on ADDR:PORT")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -113,7 +124,17 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         out=_run_directory(args.out, overwrite=args.overwrite),
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
+        foxglove=_live_address(args.foxglove),
     )
+
+
+def _live_address(argument: str | None) -> LiveAddress | None:
+    if argument is None:
+        return None
+    try:
+        return LiveAddress.parse(argument)
+    except ValueError as error:
+        raise UsageError(f"--foxglove {error}") from None
 
 
 def groot_address(argument: str) -> tuple[str, int]:
@@ -169,17 +190,24 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    monitor: Groot2Server | None = None
+    live: LiveServer | None = None
     try:
         settings = settings_from(args)
         make_executive = executive_factory(settings)
         monitor = _open_monitor(settings)  # before the run directory: a port in use leaves none
-    except (UsageError, MissionTreeError, OSError) as error:
+        live = open_live_server(settings.foxglove) if settings.foxglove else None
+    except (UsageError, MissionTreeError, LiveServerError, OSError) as error:
+        if monitor is not None:
+            monitor.close()
         return error_line(PROG, error)
     try:
-        return _run(settings, make_executive, args, monitor)
+        return _run(settings, make_executive, args, monitor, live)
     finally:
         if monitor is not None:
             monitor.close()
+        if live is not None:
+            live.stop()
 
 
 def _open_monitor(settings: RunSettings) -> Groot2Server | None:
@@ -191,11 +219,13 @@ def _open_monitor(settings: RunSettings) -> Groot2Server | None:
 
 
 def _run(settings: RunSettings, make_executive: ExecutiveFactory, args: argparse.Namespace,
-         monitor: Groot2Server | None) -> int:
+         monitor: Groot2Server | None, live: LiveServer | None) -> int:
     try:
         settings.out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         return error_line(PROG, error)
+    if live is not None:
+        print(describe(live), flush=True)
     apply_localhost_defaults()
     claim = None
     if not settings.attach:  # a domain of its own: it only ever talks to its own simulator
@@ -209,7 +239,7 @@ def _run(settings: RunSettings, make_executive: ExecutiveFactory, args: argparse
     try:
         return MissionRun(
             settings=settings, make_executive=make_executive,
-            extra_sim_args=tuple(args.sim_arg), monitor=monitor,
+            extra_sim_args=tuple(args.sim_arg), monitor=monitor, live_server=live,
         ).execute()
     finally:
         if claim is not None:

@@ -52,6 +52,7 @@ from bt_servicesim.mission.stopping import (
     exit_code_for,
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
+from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
@@ -74,12 +75,14 @@ class MissionRun:
         make_executive: Callable[[Node], Executive],
         extra_sim_args: tuple[str, ...] = (),
         monitor: Groot2Server | None = None,
+        live_server: LiveServer | None = None,
     ) -> None:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
-        closes it."""
+        closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to."""
         self.settings = settings
         self.make_executive = make_executive
         self.monitor = monitor
+        self.live_server = live_server
         self.simulator = None if settings.attach else SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
             log_path=settings.out / "sim.log", extra_args=extra_sim_args,
@@ -118,7 +121,7 @@ class MissionRun:
         if self.monitor is not None and tree is not None:
             self.monitor.watch(tree)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
-                             tree_file=self.settings.tree)
+                             tree_file=self.settings.tree, live_server=self.live_server)
         try:
             code = self._run(node, executor, monitor, executive, records)
         except (KeyboardInterrupt, Terminated) as stop:

@@ -15,6 +15,8 @@ from pathlib import Path
 import py_trees
 from rclpy.node import Node
 
+from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
+from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.records.mcap import (
     MCAP_NAME,
     TASK_TOPIC,
@@ -40,12 +42,15 @@ FINAL_TREE_NAME = "final_tree.txt"
 class RunRecords:
     """The run's records in its directory (see the module docstring), made on ``node``."""
 
-    def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path) -> None:
+    def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path,
+                 live_server: LiveServer | None = None) -> None:
+        """``live_server``: also forward the recorded topics to this Foxglove server."""
         self.out = out
         self.tree = behaviour_tree_of(executive)
         self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
                                  own_topics=(TASK_TOPIC, TREE_TOPIC))
         self.task = TaskTopic(node=node, recorder=self.mcap)
+        self.live = None if live_server is None else FoxgloveBridge(node=node, server=live_server)
         # the picture is drawn from the recording after the run: decoding the people's
         # positions as they come would cost the executive a tenth of its time
         self.phases: list[tuple[float, str]] = []
@@ -80,6 +85,8 @@ class RunRecords:
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
 
     def _close_recording(self) -> None:
+        if self.live is not None:
+            self.live.close()
         if self.tree_topic is not None:
             self.tree_topic.flush()  # the last state, if the period held it back
         self.mcap.close()

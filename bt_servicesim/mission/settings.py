@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from bt_servicesim.monitor.live_server import LiveAddress
+
 __all__ = [
     "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S",
     "RunSettings",
@@ -45,3 +47,5 @@ class RunSettings:
     """Start no simulator: run against the backend already on the environment's ROS domain."""
     groot: tuple[str, int] | None = None
     """Where the Groot2 monitor listens (address, port), or ``None`` for no monitor."""
+    foxglove: LiveAddress | None = None
+    """Serve the live topics to Foxglove on this address (``run --foxglove``); None: no server."""

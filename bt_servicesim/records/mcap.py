@@ -44,6 +44,7 @@ from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Sc
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
 
 from bt_servicesim.records.tree_log import TickRecord, TreeState
 from bt_servicesim.ros.messages import pose_from_msg
@@ -55,6 +56,9 @@ TREE_TOPIC = "/bt_servicesim/tree"
 GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
 """The simulator's true robot pose (``nav_msgs/Odometry`` in ``map``): records may draw from it,
 the executive never reads it (a real robot has no such topic)."""
+MARKERS_TOPIC, AREA_MARKERS_TOPIC = "/servicesim/markers", "/servicesim/markers/areas"
+"""The simulator's ``visualization_msgs/MarkerArray`` in ``map``: people, guest and plan; the
+target areas (latched), for a 3D viewer such as Foxglove's."""
 SNAPSHOT_PERIOD_S = 0.5  # sim s between tree snapshots while the tip stays put
 DEFINITION_SEPARATOR = "=" * 80
 PRIMITIVE_TYPES = frozenset({
@@ -95,6 +99,8 @@ RECORDED_TOPICS = (
     RecordedTopic("/servicesim/referee", RefereeState, latched=True),
     RecordedTopic("/servicesim/actors", ActorStates),
     RecordedTopic("/servicebot/map", OccupancyGrid, latched=True),
+    RecordedTopic(MARKERS_TOPIC, MarkerArray),
+    RecordedTopic(AREA_MARKERS_TOPIC, MarkerArray, latched=True),
     RecordedTopic(TASK_TOPIC, String, latched=True),
     RecordedTopic(TREE_TOPIC, String),
 )

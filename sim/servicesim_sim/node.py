@@ -64,6 +64,7 @@ from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.localisation import Estimate, Pose
+from servicesim_sim.marker_topics import MarkerTopics
 from servicesim_sim.pacing import Pacer
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
@@ -166,6 +167,8 @@ class SimulatorNode:
         # a period sends up to three frames at once (at most 30 a sim second): keep them all
         self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 4)
         self._map_publisher = publisher(OccupancyGrid, "/servicebot/map", LATCHED)
+        self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
+                                     latched=LATCHED, now=stamp(self.engine.sim_time))
         # the high-rate messages are built once and refilled: publish serialises at the call
         self._clock_message = Clock()
         self._score_message = Score()
@@ -431,6 +434,7 @@ class SimulatorNode:
             self._send(self._referee, self._referee_state())
         if self._io_count % PUBLIC_PERIOD_STEPS == 0:
             self._send(self._actors, self._actor_states())
+            self._markers.publish(stamp(now))
         self._publish_camera()
 
     def _publish_scores(self, scores: list[float]) -> None:

@@ -27,6 +27,7 @@ from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Sc
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from bt_servicesim.records.mcap import (
     RECORDED_TOPICS,
@@ -72,8 +73,14 @@ def sample_messages() -> dict[str, Any]:
     estimate = PoseWithCovarianceStamped()
     estimate.header.frame_id = "map"
     estimate.pose.pose.position.x, estimate.pose.covariance[35] = 9.5, 0.0025
+    name = Marker(ns="area_names", id=3, type=Marker.TEXT_VIEW_FACING, text="PublicCafe")
+    name.header.frame_id, name.scale.z, name.color.a = "map", 0.25, 1.0
+    plan = Marker(ns="plan", id=0, type=Marker.LINE_STRIP,
+                  points=[Point(x=1.0, y=2.0), Point(x=1.5, y=2.5, z=0.125)])
     return {
         "/servicebot/odom": odom,
+        "/servicesim/markers": MarkerArray(markers=[
+            Marker(ns="people", action=Marker.DELETEALL), name, plan]),
         "/tf": TFMessage(transforms=[transform]),
         "/servicebot/amcl_pose": estimate,
         "/servicebot/rfid": ActorNames(actor_names=["human_20843"]),
