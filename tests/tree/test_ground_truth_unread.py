@@ -15,7 +15,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 GROUND_TRUTH = ("/servicesim/referee", "/servicesim/actors", "/servicesim/ground_truth",
-                "/servicesim/markers",                 "RefereeState", "ActorStates")
+                "/servicesim/markers", "RefereeState", "ActorStates")
 DECIDING = [*(REPO / "bt_servicesim" / package for package in ("behaviours", "tree", "planning")),
             REPO / "trees"]
 
