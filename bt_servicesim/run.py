@@ -74,6 +74,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--attach", action="store_true",
                         help="start no simulator: run against the backend already on this "
                         "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
+    parser.add_argument("--free-running", action="store_true",
+                        help="do not join the simulator's lockstep even where it offers it: "
+                        "the tree ticks on /clock as it would on Gazebo (runs may not replay)")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -81,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Simulator options the run sets itself; --sim-arg may not set them behind its back.
-RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world")
+RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world", "--await-lockstep")
 MAX_TIME_LIMIT_S = 1e6
 """The longest mission time limit, in sim seconds (eleven days): longer is a typo."""
 
@@ -102,6 +105,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         out=_run_directory(args.out, overwrite=args.overwrite),
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach,
+        free_running=args.free_running,
     )
 
 

@@ -51,6 +51,7 @@ from bt_servicesim.mission.stopping import (
     Terminated,
     exit_code_for,
 )
+from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
@@ -75,13 +76,18 @@ class MissionRun:
     ) -> None:
         self.settings = settings
         self.make_executive = make_executive
+        await_lockstep = () if settings.free_running else (
+            "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
         self.simulator = None if settings.attach else SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
-            log_path=settings.out / "sim.log", extra_args=extra_sim_args,
+            log_path=settings.out / "sim.log", extra_args=(*await_lockstep, *extra_sim_args),
         )
         self.started_wall = time.monotonic()
         self.failure: str | None = None
         self.traceback: str | None = None
+        self.timing = "free running"
+        self.lockstep: lockstep.LockstepClient | None = None
+        """How the executive keeps time with the backend, as the report says it."""
 
     def execute(self) -> int:
         """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
@@ -140,9 +146,11 @@ class MissionRun:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
             return refused
+        client = self._lockstep_offer(node, executor)
         executive.setup()
         self._wait_for_servers(node, executor)
         self._spin_for(executor, DISCOVERY_SETTLE_S)
+        self._join_lockstep(client, executor)
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
@@ -161,6 +169,8 @@ class MissionRun:
                     return self._fail(self.simulator.describe_exit(), executive, node)
             if now_ns > limit_ns:
                 return self._fail("the mission tree outlived its time limit", executive, node)
+            if node.lockstep is not None:
+                node.lockstep.check_stalled()
         if _succeeded(executive):  # the referee books checkpoint 4 a moment after the tree
             self._spin_until(executor, lambda: monitor.completed, FINAL_STATE_WAIT_S)
         monitor.freeze()  # the report is the referee's books when the mission ended
@@ -204,6 +214,32 @@ class MissionRun:
         node.destroy_client(client)
         return None
 
+    def _lockstep_offer(self, node: ExecutiveNode,
+                        executor: Executor) -> lockstep.LockstepClient | None:
+        """A lockstep client if the backend offers lockstep (and the run wants it), else None.
+
+        Decided before the tree sets up: in lockstep every subscription is reliable, so that
+        the client can count every message the simulator announces.
+        """
+        if self.settings.free_running:
+            print("free running: --free-running asked for it", flush=True)
+            return None
+        if not lockstep.offered(node, executor):
+            print("free running: the backend offers no lockstep", flush=True)
+            return None
+        node.reliable_subscriptions = True
+        return lockstep.LockstepClient(node, name=node.get_fully_qualified_name())
+
+    def _join_lockstep(self, client: lockstep.LockstepClient | None,
+                       executor: Executor) -> None:
+        if client is None:
+            return
+        if client.join(executor):
+            self.timing, self.lockstep = "lockstep", client
+            print("lockstep with the simulator", flush=True)
+        else:
+            print("free running: the simulator did not answer the lockstep join", flush=True)
+
     @staticmethod
     def _wait_for_servers(node: Node, executor: Executor) -> None:
         """Until every service and action the executive set up a client for has a server.
@@ -242,6 +278,7 @@ class MissionRun:
             "executive": self.settings.executive,
             "ros_domain_id": int(os.environ.get("ROS_DOMAIN_ID", "0") or 0),
             "attached": self.settings.attach,
+            "timing": self.timing,
         }
 
     def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
@@ -260,6 +297,8 @@ class MissionRun:
             "last_activity": (f"{executive.phase()}: {executive.activity()}"
                               if self.failure else None),
             "traceback": TRACEBACK_NAME if self.traceback else None,
+            "ticks": getattr(executive, "ticks", None),
+            "lockstep_stalls": self.lockstep.stalls if self.lockstep else None,
         }
         write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"

@@ -43,3 +43,5 @@ class RunSettings:
     """Carried by the report, so that whoever started the run can tell the report is its own."""
     attach: bool = False
     """Start no simulator: run against the backend already on the environment's ROS domain."""
+    free_running: bool = False
+    """Do not join the backend's lockstep even if it offers one (for comparisons)."""

@@ -10,12 +10,12 @@ Interrupting it stops the tree, so behaviours cancel whatever they have in fligh
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import py_trees
 from rclpy.node import Node
 
-from bt_servicesim.ros.sim_ticker import SimTicker
+from bt_servicesim.ros.sim_ticker import sim_ticker
 from bt_servicesim.tree.lean_tree import LeanBehaviourTree
 from bt_servicesim.tree.loading import DEFAULT_PHASES
 from bt_servicesim.tree.shape import short_label
@@ -59,7 +59,7 @@ class MissionExecutive:
         self.error: str | None = None
         """What a tick raised, as one line, when the mission failed because of it."""
         self.ticks = 0
-        self._ticker: SimTicker | None = None
+        self._ticker: Any = None
         self._phase: tuple[int, str] = (-1, "-")
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
@@ -71,7 +71,7 @@ class MissionExecutive:
 
     def start(self) -> None:
         """Tick every ``tick_period_s`` of the node's clock (sim time under ``use_sim_time``)."""
-        self._ticker = SimTicker(self.node, self.tick_period_s, self.tick)
+        self._ticker = sim_ticker(self.node, self.tick_period_s, self.tick)
 
     @property
     def finished(self) -> bool:

@@ -43,6 +43,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="encoder calibration error of odometry (default 0: exact)")
     parser.add_argument("--localisation-noise", type=float,
                         help="metres (and radians) of noise on the localisation estimate")
+    parser.add_argument("--await-lockstep", type=float, default=0.0, metavar="SECONDS",
+                        help="hold at the first period until a lockstep client joins, for up "
+                        "to SECONDS of wall time, so that the task starts at the same sim "
+                        "time in every run (default 0: do not wait)")
     parser.add_argument("--camera-rate", type=float, default=2.0,
                         help="camera frames per sim second (0 = off)")
     return parser
