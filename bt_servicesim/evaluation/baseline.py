@@ -102,7 +102,7 @@ class SeedStateMachine:
         self.states_entered: list[str] = []
         self.goals_sent: list[Pose2D] = []
         self.ignored_answers: list[tuple[str, bool]] = []
-        self._jitter = random.Random(seed).uniform
+        self._jitter = random.Random(0 if seed is None else seed).uniform  # never OS entropy
         self._state = "-"
         self._activity = ""
         self._clients: dict[str, Client] = {}

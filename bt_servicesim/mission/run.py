@@ -133,6 +133,8 @@ class MissionRun:
             self.traceback = "".join(traceback.format_exception(error))
             code = EXIT_FAILED
         stops.hold()
+        if self.lockstep is not None:
+            self.lockstep.leave()
         if self.simulator is not None:
             self.simulator.stop()
         records.finish(title=self._title(monitor))

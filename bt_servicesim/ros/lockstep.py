@@ -49,6 +49,10 @@ OFFER_WAIT_S = 3.0
 """Wall seconds a run waits for the join service once the simulator's own services are up."""
 JOIN_SETTLE_S = 0.5
 """Wall seconds after the join for what the simulator sent before it to arrive."""
+FINAL_PERIODS = 2
+"""Periods the client stays in step after its last ticker stopped: what the last tick sent is
+served and answered; then it holds the simulator still until :meth:`LockstepClient.leave`,
+so that what the run reports of the end does not depend on how long it takes to report."""
 STALL_WARNING_S = 10.0
 """Wall seconds a period may wait for its messages before the client ticks anyway and says so."""
 DUE_TOLERANCE_NS = 10_000_000
@@ -117,6 +121,8 @@ class LockstepClient:
         self.stalls = 0
         """Periods ticked without every counted message (after :data:`STALL_WARNING_S`)."""
         self._tickers: list[LockstepTicker] = []
+        self._idle_periods: int | None = None
+        """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
         self._pending: LockstepPeriod | None = None
         self._pending_since = 0.0
         self._scheduled = False
@@ -176,11 +182,26 @@ class LockstepClient:
     def ticker(self, period_s: float, callback: Callable[[], None]) -> LockstepTicker:
         ticker = LockstepTicker(self, period_s, callback)
         self._tickers.append(ticker)
+        self._idle_periods = None
         return ticker
 
     def remove(self, ticker: LockstepTicker) -> None:
         if ticker in self._tickers:
             self._tickers.remove(ticker)
+            if not self._tickers:
+                self._idle_periods = 0
+
+    @property
+    def holding(self) -> bool:
+        """Whether the client holds the simulator still (its executive has finished)."""
+        return self._idle_periods is not None and self._idle_periods >= FINAL_PERIODS
+
+    def leave(self) -> None:
+        """Leave the lockstep: the simulator no longer waits for this client."""
+        if self.client_id is not None:
+            self._done.publish(LockstepDone(client=self.client_id, leaving=True))
+            self.client_id = None
+            self.traffic.on_arrival = None
 
     # ---------------------------------------------------------------- period
     def _on_period(self, message: LockstepPeriod) -> None:
@@ -208,7 +229,8 @@ class LockstepClient:
         return lacking
 
     def _check(self) -> None:
-        if self._pending is None or self._scheduled or self.missing():
+        if (self._pending is None or self._scheduled or self.holding
+                or self.client_id is None or self.missing()):
             return
         self._scheduled = True
         # a task, so that callbacks of what just arrived (a future's) run before the tick
@@ -216,7 +238,7 @@ class LockstepClient:
 
     def check_stalled(self) -> None:
         """Tick a period that waited too long for its messages anyway, and say what lacked."""
-        if (self._pending is None or self._scheduled
+        if (self._pending is None or self._scheduled or self.holding or self.client_id is None
                 or time.monotonic() - self._pending_since < STALL_WARNING_S):
             return
         self.stalls += 1
@@ -235,6 +257,8 @@ class LockstepClient:
         self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
         for ticker in list(self._tickers):
             ticker.tick_if_due(now_ns)
+        if self._idle_periods is not None:
+            self._idle_periods += 1
         self.periods += 1
         self._publish_done(int(period.period))
 

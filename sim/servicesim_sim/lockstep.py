@@ -199,6 +199,11 @@ class LockstepServer:
         return response
 
     def _on_done(self, message: LockstepDone) -> None:
+        if message.leaving:
+            name = self.gate.leave(int(message.client))
+            if name is not None:
+                self.node.get_logger().info(f"lockstep: client {name!r} left")
+            return
         requests = dict(zip(message.endpoints, (int(n) for n in message.requests), strict=False))
         self.gate.done(int(message.client), int(message.period), requests)
 

@@ -97,6 +97,11 @@ class LockstepGate:
                                if endpoint in self.endpoints}
         return True
 
+    def leave(self, client_id: int) -> str | None:
+        """A client leaves: the gate no longer waits for it; its name, None if unknown."""
+        client = self._clients.pop(client_id, None)
+        return None if client is None else client.name
+
     def take(self, endpoint: str) -> int:
         """The simulator took a request on ``endpoint``; its number on that endpoint."""
         number = self.taken.get(endpoint, 0) + 1
