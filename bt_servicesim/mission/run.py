@@ -75,6 +75,7 @@ class MissionRun:
         extra_sim_args: tuple[str, ...] = (),
     ) -> None:
         self.settings = settings
+        self.extra_sim_args = extra_sim_args
         self.make_executive = make_executive
         await_lockstep = () if settings.free_running else (
             "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
@@ -281,6 +282,7 @@ class MissionRun:
             "ros_domain_id": int(os.environ.get("ROS_DOMAIN_ID", "0") or 0),
             "attached": self.settings.attach,
             "timing": self.timing,
+            "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
 
     def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
@@ -317,6 +319,21 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
+
+
+def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:
+    """The run command that plays this run's mission again: in lockstep, exactly."""
+    words = ["python -m bt_servicesim.run"]
+    if settings.seed is not None:
+        words.append(f"--seed {settings.seed}")
+    if settings.world is not None:
+        words.append(f"--world {settings.world}")
+    words += [f"--tree {settings.tree}", f"--executive {settings.executive}",
+              f"--speed {settings.speed:g}", f"--time-limit {settings.time_limit_s:g}"]
+    words += [f"--sim-arg={argument}" for argument in sim_args]
+    if settings.free_running:
+        words.append("--free-running")
+    return " ".join(words)
 
 
 def events_executor() -> Executor:

@@ -48,3 +48,6 @@ def test_the_same_seed_twice_in_lockstep_gives_the_same_report(tmp_path: Path) -
         steps = {round(b - a, 6) for a, b in itertools.pairwise(times)}
         assert steps == {0.1}, f"ticks not 0.1 sim s apart: {sorted(steps)[:5]}"
         assert report["lockstep_stalls"] == 0
+    replay = run_module("bt_servicesim.replay", str(tmp_path / "first"), timeout=60)
+    again = f"this mission again: {first['reproduce']}"
+    assert again in replay.stdout and "--seed 3 " in first["reproduce"]
