@@ -195,7 +195,7 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
     def make_tree(node: Node) -> Executive:
         from bt_servicesim.tree.executive import MissionExecutive
 
-        return MissionExecutive(node=node, root=root, phases=phases)
+        return MissionExecutive(node=node, root=root, phases=phases, run_seed=settings.seed)
 
     return make_tree
 

@@ -48,10 +48,14 @@ class MissionExecutive:
         root: py_trees.behaviour.Behaviour,
         tick_period_s: float = 0.1,
         phases: str = DEFAULT_PHASES,
+        run_seed: int | None = None,
     ) -> None:
         """``phases`` names the composite whose children are the mission's phases
-        (:func:`~bt_servicesim.tree.loading.phases_of` reads it from the tree file)."""
+        (:func:`~bt_servicesim.tree.loading.phases_of` reads it from the tree file);
+        ``run_seed``, the run's seed, is handed to every behaviour's ``setup`` (as
+        ``run_seed``): a behaviour that draws random numbers draws them from it."""
         self.node = node
+        self.run_seed = run_seed
         self.phases = phases
         self.tree = LeanBehaviourTree(root=root)
         self.tick_period_s = tick_period_s
@@ -64,7 +68,7 @@ class MissionExecutive:
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
         """Create every behaviour's ROS handles (publishers, clients, subscriptions)."""
-        self.tree.setup(timeout=timeout_s, node=self.node)
+        self.tree.setup(timeout=timeout_s, node=self.node, run_seed=self.run_seed)
 
     def add_post_tick_handler(self, handler: TickHandler) -> None:
         self.tree.add_post_tick_handler(handler)
