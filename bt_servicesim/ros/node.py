@@ -12,6 +12,11 @@ simulator runs 50 times faster than real time (the run itself uses the ``EventsE
 * the default QoS-event handlers rclpy gives each subscription and publisher (two waitables
   each, about forty on the mission tree's node); mismatched QoS still shows in
   ``ros2 topic info --verbose``, and an explicit ``event_callbacks`` argument is kept;
+* nothing of lockstep's bookkeeping in the behaviours: the node counts what passes its doors
+  (:mod:`bt_servicesim.ros.traffic`: messages per subscription, requests and answers per
+  endpoint, messages per published topic) for :mod:`bt_servicesim.ros.lockstep`, and in
+  lockstep makes a subscription asked for best effort reliable (``reliable_subscriptions``),
+  since a count needs every message;
 * duplicate clients: behaviours that call the same service or the same action share one
   client per node (:func:`shared_client`, :func:`shared_action_client`). A client serves any
   number of requests or goals at once, each with its own future, so sharing changes nothing

@@ -43,7 +43,6 @@ class Traffic:
         self.endpoints: set[str] = set()
         """The endpoints this node has a client for."""
         self.on_arrival: Callable[[], None] | None = None
-        self._forgotten: set[int] = set()
 
     def _arrived(self, table: dict[Any, int], name: Any) -> None:
         table[name] = table.get(name, 0) + 1
@@ -59,7 +58,7 @@ class Traffic:
         """
         if topic.startswith(PROTOCOL_PREFIX):
             return None, callback
-        key = len(self.received) + len(self._forgotten)
+        key = len(self.received)  # never shrinks: keys are unique
         self.received[key] = 0
 
         def receive(*args: Any) -> Any:
@@ -79,7 +78,6 @@ class Traffic:
         for key, reader in list(self.readers.items()):
             if reader is subscription:
                 del self.readers[key]
-                self._forgotten.add(key)
 
     def took_more(self, subscription: Any, count: int) -> None:
         """``count`` more messages taken by a callback from its own subscription's queue."""

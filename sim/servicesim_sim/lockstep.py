@@ -212,7 +212,9 @@ class CountingActionServer(ActionServer):
     """rclpy's action server, counting the requests it takes and the results it sends.
 
     Goal and cancel answers go out as the request is taken, so they count then; a result goes
-    out when the goal ends (or at once for a goal the server does not know).
+    out when the goal ends (or at once for a goal the server does not know). The result is
+    counted in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it:
+    no public callback sees it go.
     """
 
     def __init__(self, node: Node, action_type: Any, action_name: str, *,
