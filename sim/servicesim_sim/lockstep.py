@@ -128,11 +128,7 @@ class LockstepServer:
         and result due in this period goes out before the announcement that counts it.
         """
         if self.gate.active:
-            budget, executor.drain_budget_s = executor.drain_budget_s, math.inf
-            try:
-                executor.drain()
-            finally:
-                executor.drain_budget_s = budget
+            drain_completely(executor)
         self._last = self._announcement(period, sim_time_ns)
         self._announcer.publish(self._last)
         self.gate.announced(period)
@@ -173,11 +169,7 @@ class LockstepServer:
         for admission in self.gate.due_admissions():
             admission.serve()
             executor.note_resumable()
-            budget, executor.drain_budget_s = executor.drain_budget_s, math.inf
-            try:
-                executor.drain()
-            finally:
-                executor.drain_budget_s = budget
+            drain_completely(executor)
 
     # ------------------------------------------------------------- protocol
     def _announcement(self, period: int, sim_time_ns: int) -> LockstepPeriod:
@@ -206,6 +198,15 @@ class LockstepServer:
             return
         requests = dict(zip(message.endpoints, (int(n) for n in message.requests), strict=False))
         self.gate.done(int(message.client), int(message.period), requests)
+
+
+def drain_completely(executor: DrainingExecutor) -> None:
+    """Run everything ready, with no wall budget; nothing at all when nothing is ready."""
+    budget, executor.drain_budget_s = executor.drain_budget_s, math.inf
+    try:
+        executor.run_ready()
+    finally:
+        executor.drain_budget_s = budget
 
 
 class CountingActionServer(ActionServer):

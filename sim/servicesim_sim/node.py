@@ -68,7 +68,7 @@ from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.localisation import Estimate, Pose
-from servicesim_sim.lockstep import CountingActionServer, LockstepServer
+from servicesim_sim.lockstep import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.pacing import Pacer
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
@@ -235,7 +235,7 @@ class SimulatorNode:
             future.set_result(True)
             if self.lockstep.active:
                 executor.note_resumable()
-                executor.drain()
+                drain_completely(executor)
         return bool(due)
 
     async def _latency(self) -> None:
