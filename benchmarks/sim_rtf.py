@@ -1,7 +1,7 @@
 """The simulator's real-time factor: alone, and with one executive driving a full mission.
 
 ``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]
-[--missions N]`` prints
+[--missions N] [--timing lockstep|free|both]`` prints
 
 * alone: the simulator as fast as it can run (speed 0) with its task started (before
   ``new_task`` it never runs faster than real time) but nobody driving the robot and nobody
@@ -15,6 +15,11 @@
   fewer when it falls behind (it ticks at most once per /clock message it gets to). A factor
   of 50 with the tree ticking 10 times a sim second is the target met; flat out the pair goes
   faster, but the tree falls behind;
+* with ``--timing both`` (the default) each mission is run twice, in lockstep with the
+  simulator (the run's default) and free running (``run --free-running``, as on Gazebo), one
+  after the other, so that the two are measured on the same machine at the same time; in
+  lockstep the tree ticks exactly 10 times a sim second by construction, and the factor says
+  what that costs;
 * the CPU time the executive's and the simulator's processes spent over the task (from
   ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
   second cannot keep X times real time even with a core of its own, so these say which of
@@ -53,6 +58,9 @@ def build_parser() -> OneLineArgumentParser:
                              "0: as fast as the pair can go)")
     parser.add_argument("--executive", choices=("bt", "baseline"), default="bt",
                         help="the executive driving the mission (default bt)")
+    parser.add_argument("--timing", choices=("lockstep", "free", "both"), default="both",
+                        help="run the missions in lockstep, free running, or each both ways "
+                             "(default both)")
     parser.add_argument("--missions", type=int, default=5,
                         help="driven missions to run one after another (default 5): a "
                              "mission's cost per sim second depends on what happens in it")
@@ -144,7 +152,7 @@ class ProcessCpu:
         return (int(fields[11]) + int(fields[12])) / self.TICKS
 
 
-def measure_mission(*, speed: float, executive: str) -> float:
+def measure_mission(*, speed: float, executive: str, free_running: bool = False) -> float:
     """Run one mission, print its figures; the real-time factor over its task.
 
     The run claims a ROS domain of its own and names it in the report it writes as it starts;
@@ -157,7 +165,8 @@ def measure_mission(*, speed: float, executive: str) -> float:
 
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
         command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed",
-                   repr(speed), "--executive", executive, "--out", out]
+                   repr(speed), "--executive", executive, "--out", out,
+                   *(["--free-running"] if free_running else [])]
         started = time.monotonic()
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                env=os.environ.copy())
@@ -180,8 +189,9 @@ def measure_mission(*, speed: float, executive: str) -> float:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()
     verdict = "completed" if report["completed"] else f"failed ({report['failure']})"
-    print(f"driven by {executive} (speed {speed:g}): {sim_s:7.1f} sim s of task in {wall_s:5.1f} "
-          f"wall s  real-time factor {factor:6.1f}")
+    timing = "free running" if free_running else report.get("timing", "?")
+    print(f"driven by {executive} ({timing}, speed {speed:g}): {sim_s:7.1f} sim s of task in "
+          f"{wall_s:5.1f} wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
@@ -278,12 +288,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.add_node(node)
     try:
         measure_alone(node, executor, speed=0.0, seconds=args.seconds)
-        factors = [measure_mission(speed=args.speed, executive=args.executive)
-                   for _mission in range(args.missions)]
-        if len(factors) > 1:
-            print(f"driven by {args.executive}, {len(factors)} missions: real-time factor "
-                  f"median {statistics.median(factors):.1f}, min {min(factors):.1f}, "
-                  f"max {max(factors):.1f}")
+        timings = {"lockstep": [False], "free": [True], "both": [False, True]}[args.timing]
+        factors: dict[bool, list[float]] = {free: [] for free in timings}
+        for _mission in range(args.missions):
+            for free in timings:
+                factors[free].append(measure_mission(speed=args.speed,
+                                                     executive=args.executive,
+                                                     free_running=free))
+        for free, values in factors.items():
+            if len(values) > 1:
+                print(f"driven by {args.executive}, {'free running' if free else 'lockstep'}, "
+                      f"{len(values)} missions: real-time factor median "
+                      f"{statistics.median(values):.1f}, min {min(values):.1f}, "
+                      f"max {max(values):.1f}")
     finally:
         executor.shutdown()
         node.destroy_node()

@@ -14,6 +14,7 @@ the first record.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from collections.abc import Sequence
@@ -21,6 +22,7 @@ from pathlib import Path
 from typing import TextIO
 
 from bt_servicesim.cli import OneLineArgumentParser
+from bt_servicesim.mission.settings import REPORT_NAME
 from bt_servicesim.records.tree_log import (
     LOG_NAME,
     TreeHistory,
@@ -120,7 +122,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_OK
     sys.stdout.write(frame(shadow, history.states[start], symbols=symbols,
                            running_only=args.running_only, colour=sys.stdout.isatty()))
+    command = reproduce_command(path.parent)
+    if command:
+        print(f"this mission again: {command}")
     return EXIT_OK
+
+
+def reproduce_command(run: Path) -> str | None:
+    """The command the run's report names for playing its mission again, if it names one."""
+    try:
+        report = json.loads((run / REPORT_NAME).read_text())
+    except (OSError, ValueError):
+        return None
+    command = report.get("reproduce") if isinstance(report, dict) else None
+    if not command:
+        return None
+    return command if report.get("timing") == "lockstep" else f"{command} (ran free: may differ)"
 
 
 if __name__ == "__main__":

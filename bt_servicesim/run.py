@@ -93,6 +93,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--foxglove", nargs="?", const=str(FOXGLOVE_PORT), metavar="[ADDR:]PORT",
                         help="serve the live topics to Foxglove over WebSocket on "
                         f"127.0.0.1:PORT (default {FOXGLOVE_PORT}), or on ADDR:PORT")
+    parser.add_argument("--free-running", action="store_true",
+                        help="do not join the simulator's lockstep even where it offers it: "
+                        "the tree ticks on /clock as it would on Gazebo (runs may not replay)")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -100,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Simulator options the run sets itself; --sim-arg may not set them behind its back.
-RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world")
+RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world", "--await-lockstep")
 MAX_TIME_LIMIT_S = 1e6
 """The longest mission time limit, in sim seconds (eleven days): longer is a typo."""
 
@@ -124,7 +127,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         out=_run_directory(args.out, overwrite=args.overwrite),
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
-        foxglove=_live_address(args.foxglove),
+        foxglove=_live_address(args.foxglove), free_running=args.free_running,
     )
 
 
@@ -271,7 +274,7 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
     def make_tree(node: Node) -> Executive:
         from bt_servicesim.tree.executive import MissionExecutive
 
-        return MissionExecutive(node=node, root=root, phases=phases)
+        return MissionExecutive(node=node, root=root, phases=phases, run_seed=settings.seed)
 
     return make_tree
 

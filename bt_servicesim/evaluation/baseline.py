@@ -52,7 +52,7 @@ from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.ros.initial_pose import INITIAL_POSE_QOS, initial_pose_message
 from bt_servicesim.ros.messages import pose_from_msg, pose_to_msg
 from bt_servicesim.ros.sim_clock import SimStopwatch, sim_now_s
-from bt_servicesim.ros.sim_ticker import SimTicker
+from bt_servicesim.ros.sim_ticker import sim_ticker
 
 __all__ = ["SEED_STATES", "SeedStateMachine", "seed_goal"]
 
@@ -102,13 +102,13 @@ class SeedStateMachine:
         self.states_entered: list[str] = []
         self.goals_sent: list[Pose2D] = []
         self.ignored_answers: list[tuple[str, bool]] = []
-        self._jitter = random.Random(seed).uniform
+        self._jitter = random.Random(0 if seed is None else seed).uniform  # never OS entropy
         self._state = "-"
         self._activity = ""
         self._clients: dict[str, Client] = {}
         self._navigator: ActionClient | None = None
         self._initial_pose: Publisher | None = None
-        self._ticker: SimTicker | None = None
+        self._ticker: Any = None
         self._clock: SimStopwatch | None = None
         self._body: Iterator[None] | None = None
         self._pending_call: tuple[Client, Future] | None = None
@@ -137,7 +137,7 @@ class SeedStateMachine:
         self._clock = SimStopwatch(self.node.get_clock())
         self._clock.restart()
         self._body = self._run_states()
-        self._ticker = SimTicker(self.node, POLL_PERIOD_S, self.poll)
+        self._ticker = sim_ticker(self.node, POLL_PERIOD_S, self.poll)
 
     @property
     def finished(self) -> bool:

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import json
 import subprocess
-from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.evaluation.summary import (
     episode_wall_s,
@@ -132,16 +132,32 @@ def _below(first: list[float], second: list[float]) -> str:
 
 
 def failure_table(rows: list[dict[str, Any]]) -> list[str]:
-    """Failed episodes by executive, set, how far the referee saw them get, and reason."""
-    reasons = Counter((row["executive"], row["scenario"], _checkpoints_done(row),
-                       str(row["failure"])) for row in played(rows) if not row["completed"])
-    if not reasons:
+    """Failed episodes by executive, set, how far the referee saw them get, and reason, with
+    the seeds and knobs that play each again (``run`` replays it exactly in lockstep)."""
+    groups: dict[tuple[str, str, str, str], list[dict[str, Any]]] = {}
+    for row in played(rows):
+        if not row["completed"]:
+            key = (row["executive"], row["scenario"], _checkpoints_done(row), str(row["failure"]))
+            groups.setdefault(key, []).append(row)
+    if not groups:
         return ["No episode failed."]
-    lines = ["| executive | set | episodes | checkpoints | reason |", "|---|---|---|---|---|"]
-    for (executive, scenario, done, reason), count in sorted(reasons.items()):
-        lines.append(f"| {executive} | {scenario} | {count} | {done} | "
-                     f"{reason.replace('|', '/')} |")
+    lines = ["| executive | set | episodes | checkpoints | reason | run again with |",
+             "|---|---|---|---|---|---|"]
+    for (executive, scenario, done, reason), group in sorted(groups.items()):
+        lines.append(f"| {executive} | {scenario} | {len(group)} | {done} | "
+                     f"{reason.replace('|', '/')} | {_rerun(executive, scenario, group)} |")
     return lines
+
+
+def _rerun(executive: str, scenario: str, group: list[dict[str, Any]]) -> str:
+    """The run options that play the group's episodes again: seeds, then the set's knobs."""
+    seeds = sorted({row.get("episode_seed") for row in group}, key=lambda s: (s is None, s))
+    tasks = ", ".join("the shipped task" if seed is None else f"`--seed {seed}`"
+                      for seed in seeds)
+    scenario_set = SCENARIO_SETS.get(scenario)
+    knobs = " ".join(f"`--sim-arg={argument}`"
+                     for argument in (scenario_set.sim_args if scenario_set else ()))
+    return f"`--executive {executive}` {tasks} {knobs}".strip()
 
 
 def _checkpoints_done(row: dict[str, Any]) -> str:

@@ -53,6 +53,7 @@ from bt_servicesim.mission.stopping import (
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
+from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
@@ -80,16 +81,22 @@ class MissionRun:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
         closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to."""
         self.settings = settings
+        self.extra_sim_args = extra_sim_args
         self.make_executive = make_executive
         self.monitor = monitor
         self.live_server = live_server
+        await_lockstep = () if settings.free_running else (
+            "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
         self.simulator = None if settings.attach else SimulatorProcess(
             world=settings.world, seed=settings.seed, speed=settings.speed,
-            log_path=settings.out / "sim.log", extra_args=extra_sim_args,
+            log_path=settings.out / "sim.log", extra_args=(*await_lockstep, *extra_sim_args),
         )
         self.started_wall = time.monotonic()
         self.failure: str | None = None
         self.traceback: str | None = None
+        self.timing = "free running"
+        self.lockstep: lockstep.LockstepClient | None = None
+        """How the executive keeps time with the backend, as the report says it."""
 
     def execute(self) -> int:
         """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
@@ -138,6 +145,8 @@ class MissionRun:
             self.traceback = "".join(traceback.format_exception(error))
             code = EXIT_FAILED
         stops.hold()
+        if self.lockstep is not None:
+            self.lockstep.leave()
         if self.simulator is not None:
             self.simulator.stop()
         records.finish(title=self._title(monitor))
@@ -151,9 +160,11 @@ class MissionRun:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
             return refused
+        client = self._lockstep_offer(node, executor)
         executive.setup()
         self._wait_for_servers(node, executor)
         self._spin_for(executor, DISCOVERY_SETTLE_S)
+        self._join_lockstep(client, executor)
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
@@ -172,6 +183,8 @@ class MissionRun:
                     return self._fail(self.simulator.describe_exit(), executive, node)
             if now_ns > limit_ns:
                 return self._fail("the mission tree outlived its time limit", executive, node)
+            if node.lockstep is not None:
+                node.lockstep.check_stalled()
         if _succeeded(executive):  # the referee books checkpoint 4 a moment after the tree
             self._spin_until(executor, lambda: monitor.completed, FINAL_STATE_WAIT_S)
         monitor.freeze()  # the report is the referee's books when the mission ended
@@ -215,6 +228,32 @@ class MissionRun:
         node.destroy_client(client)
         return None
 
+    def _lockstep_offer(self, node: ExecutiveNode,
+                        executor: Executor) -> lockstep.LockstepClient | None:
+        """A lockstep client if the backend offers lockstep (and the run wants it), else None.
+
+        Decided before the tree sets up: in lockstep every subscription is reliable, so that
+        the client can count every message the simulator announces.
+        """
+        if self.settings.free_running:
+            print("free running: --free-running asked for it", flush=True)
+            return None
+        if not lockstep.offered(node, executor):
+            print("free running: the backend offers no lockstep", flush=True)
+            return None
+        node.reliable_subscriptions = True
+        return lockstep.LockstepClient(node, name=node.get_fully_qualified_name())
+
+    def _join_lockstep(self, client: lockstep.LockstepClient | None,
+                       executor: Executor) -> None:
+        if client is None:
+            return
+        if client.join(executor):
+            self.timing, self.lockstep = "lockstep", client
+            print("lockstep with the simulator", flush=True)
+        else:
+            print("free running: the simulator did not answer the lockstep join", flush=True)
+
     @staticmethod
     def _wait_for_servers(node: Node, executor: Executor) -> None:
         """Until every service and action the executive set up a client for has a server.
@@ -253,6 +292,8 @@ class MissionRun:
             "executive": self.settings.executive,
             "ros_domain_id": int(os.environ.get("ROS_DOMAIN_ID", "0") or 0),
             "attached": self.settings.attach,
+            "timing": self.timing,
+            "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
 
     def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
@@ -271,6 +312,8 @@ class MissionRun:
             "last_activity": (f"{executive.phase()}: {executive.activity()}"
                               if self.failure else None),
             "traceback": TRACEBACK_NAME if self.traceback else None,
+            "ticks": getattr(executive, "ticks", None),
+            "lockstep_stalls": self.lockstep.stalls if self.lockstep else None,
         }
         write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"
@@ -287,6 +330,21 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
+
+
+def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:
+    """The run command that plays this run's mission again: in lockstep, exactly."""
+    words = ["python -m bt_servicesim.run"]
+    if settings.seed is not None:
+        words.append(f"--seed {settings.seed}")
+    if settings.world is not None:
+        words.append(f"--world {settings.world}")
+    words += [f"--tree {settings.tree}", f"--executive {settings.executive}",
+              f"--speed {settings.speed:g}", f"--time-limit {settings.time_limit_s:g}"]
+    words += [f"--sim-arg={argument}" for argument in sim_args]
+    if settings.free_running:
+        words.append("--free-running")
+    return " ".join(words)
 
 
 def events_executor() -> Executor:

@@ -49,3 +49,5 @@ class RunSettings:
     """Where the Groot2 monitor listens (address, port), or ``None`` for no monitor."""
     foxglove: LiveAddress | None = None
     """Serve the live topics to Foxglove on this address (``run --foxglove``); None: no server."""
+    free_running: bool = False
+    """Do not join the backend's lockstep even if it offers one (for comparisons)."""

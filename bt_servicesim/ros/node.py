@@ -12,6 +12,11 @@ simulator runs 50 times faster than real time (the run itself uses the ``EventsE
 * the default QoS-event handlers rclpy gives each subscription and publisher (two waitables
   each, about forty on the mission tree's node); mismatched QoS still shows in
   ``ros2 topic info --verbose``, and an explicit ``event_callbacks`` argument is kept;
+* nothing of lockstep's bookkeeping in the behaviours: the node counts what passes its doors
+  (:mod:`bt_servicesim.ros.traffic`: messages per subscription, requests and answers per
+  endpoint, messages per published topic) for :mod:`bt_servicesim.ros.lockstep`, and in
+  lockstep makes a subscription asked for best effort reliable (``reliable_subscriptions``),
+  since a count needs every message;
 * duplicate clients: behaviours that call the same service or the same action share one
   client per node (:func:`shared_client`, :func:`shared_action_client`). A client serves any
   number of requests or goals at once, each with its own future, so sharing changes nothing
@@ -42,6 +47,9 @@ from rclpy.client import Client
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from bt_servicesim.ros.traffic import Traffic
 
 __all__ = ["ExecutiveNode", "shared_action_client", "shared_client"]
 
@@ -57,6 +65,13 @@ class ExecutiveNode(Node):
             Parameter("use_sim_time", Parameter.Type.BOOL, use_sim_time),
             Parameter("start_type_description_service", Parameter.Type.BOOL, False),
         ]
+        self.traffic = Traffic()
+        """What the node sent and received, for lockstep (:mod:`bt_servicesim.ros.traffic`)."""
+        self.reliable_subscriptions = False
+        """Whether subscriptions asked for best effort get reliable ones: set in lockstep,
+        whose backend publishes reliably and whose counts need every message."""
+        self.lockstep: Any = None
+        """The :class:`~bt_servicesim.ros.lockstep.LockstepClient` once joined, else None."""
         super().__init__(name, start_parameter_services=False,
                          parameter_overrides=overrides, **kwargs)
         self.callback_error: str | None = None
@@ -95,8 +110,29 @@ class ExecutiveNode(Node):
                             qos_profile: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks",
                           SubscriptionEventCallbacks(use_default_callbacks=False))
-        return super().create_subscription(msg_type, topic, self.guarded(callback),
-                                           qos_profile, **kwargs)
+        if self.reliable_subscriptions:
+            qos_profile = reliable(qos_profile)
+        # counted around the guard: a message whose reader raised has still arrived
+        key, counted = self.traffic.counted_callback(self.resolve_topic_name(topic),
+                                                     self.guarded(callback))
+        subscription = super().create_subscription(msg_type, topic, counted, qos_profile,
+                                                   **kwargs)
+        self.traffic.add_reader(key, subscription)
+        return subscription
+
+    def destroy_subscription(self, subscription: Any) -> bool:
+        self.traffic.forget(subscription)
+        return super().destroy_subscription(subscription)
+
+    def create_client(self, *args: Any, **kwargs: Any) -> Client:
+        client = super().create_client(*args, **kwargs)
+        self.traffic.watch_client(client)
+        return client
+
+    def add_waitable(self, waitable: Any) -> None:
+        if isinstance(waitable, ActionClient):
+            self.traffic.watch_action_client(waitable)
+        super().add_waitable(waitable)
 
     def create_timer(self, timer_period_sec: float, callback: Callable[..., Any] | None,
                      *args: Any, **kwargs: Any) -> Any:
@@ -105,7 +141,17 @@ class ExecutiveNode(Node):
 
     def create_publisher(self, *args: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))
-        return super().create_publisher(*args, **kwargs)
+        publisher = super().create_publisher(*args, **kwargs)
+        self.traffic.watch_publisher(publisher)
+        return publisher
+
+
+def reliable(qos: QoSProfile | int) -> QoSProfile | int:
+    """``qos``, reliable and at least 10 deep if it was best effort (depth alone: as it is)."""
+    if isinstance(qos, int) or qos.reliability != ReliabilityPolicy.BEST_EFFORT:
+        return qos
+    return QoSProfile(history=qos.history, depth=max(qos.depth, 10),
+                      reliability=ReliabilityPolicy.RELIABLE, durability=qos.durability)
 
 
 def shared_client(node: Node, service_type: type, service: str) -> Client:

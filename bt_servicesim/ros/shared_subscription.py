@@ -105,6 +105,9 @@ class SharedSubscription:
         burst = [data]
         if self.subscription is not None:
             burst.extend(queued_raw_messages(self.subscription))
+            traffic = getattr(self.node, "traffic", None)
+            if traffic is not None and len(burst) > 1:  # taken here, past the node's count
+                traffic.took_more(self.subscription, len(burst) - 1)
         if self._kept is not None:
             self._kept.extend(burst)
         newest = len(burst) - 1

@@ -26,12 +26,13 @@ On a node without sim time (its clock never jumps) the ticker falls back to a pl
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from rclpy.clock import JumpThreshold, ROSClock
 from rclpy.duration import Duration
 from rclpy.node import Node
 
-__all__ = ["SimTicker"]
+__all__ = ["SimTicker", "sim_ticker"]
 
 _LIVE: dict[int, set[SimTicker]] = {}
 """Tickers registered on a clock, by node, kept alive until cancelled."""
@@ -114,3 +115,13 @@ class SimTicker:
                 note(error, where="a tick")
             else:
                 self.node.get_logger().error(f"tick raised {type(error).__name__}: {error}")
+
+
+def sim_ticker(node: Node, period_s: float, callback: Callable[[], None]) -> Any:
+    """A ticker on the node's sim time: in lockstep once the node has joined one
+    (:mod:`bt_servicesim.ros.lockstep`: exactly once per announced period), else a
+    :class:`SimTicker`. Either has ``cancel()`` and ``error``."""
+    lockstep = getattr(node, "lockstep", None)
+    if lockstep is not None:
+        return lockstep.ticker(period_s, callback)
+    return SimTicker(node, period_s, callback)

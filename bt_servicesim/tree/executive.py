@@ -10,12 +10,12 @@ Interrupting it stops the tree, so behaviours cancel whatever they have in fligh
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import py_trees
 from rclpy.node import Node
 
-from bt_servicesim.ros.sim_ticker import SimTicker
+from bt_servicesim.ros.sim_ticker import sim_ticker
 from bt_servicesim.tree.lean_tree import LeanBehaviourTree
 from bt_servicesim.tree.loading import DEFAULT_PHASES
 from bt_servicesim.tree.shape import short_label
@@ -48,10 +48,14 @@ class MissionExecutive:
         root: py_trees.behaviour.Behaviour,
         tick_period_s: float = 0.1,
         phases: str = DEFAULT_PHASES,
+        run_seed: int | None = None,
     ) -> None:
         """``phases`` names the composite whose children are the mission's phases
-        (:func:`~bt_servicesim.tree.loading.phases_of` reads it from the tree file)."""
+        (:func:`~bt_servicesim.tree.loading.phases_of` reads it from the tree file);
+        ``run_seed``, the run's seed, is handed to every behaviour's ``setup`` (as
+        ``run_seed``): a behaviour that draws random numbers draws them from it."""
         self.node = node
+        self.run_seed = run_seed
         self.phases = phases
         self.tree = LeanBehaviourTree(root=root)
         self.tick_period_s = tick_period_s
@@ -59,19 +63,19 @@ class MissionExecutive:
         self.error: str | None = None
         """What a tick raised, as one line, when the mission failed because of it."""
         self.ticks = 0
-        self._ticker: SimTicker | None = None
+        self._ticker: Any = None
         self._phase: tuple[int, str] = (-1, "-")
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
         """Create every behaviour's ROS handles (publishers, clients, subscriptions)."""
-        self.tree.setup(timeout=timeout_s, node=self.node)
+        self.tree.setup(timeout=timeout_s, node=self.node, run_seed=self.run_seed)
 
     def add_post_tick_handler(self, handler: TickHandler) -> None:
         self.tree.add_post_tick_handler(handler)
 
     def start(self) -> None:
         """Tick every ``tick_period_s`` of the node's clock (sim time under ``use_sim_time``)."""
-        self._ticker = SimTicker(self.node, self.tick_period_s, self.tick)
+        self._ticker = sim_ticker(self.node, self.tick_period_s, self.tick)
 
     @property
     def finished(self) -> bool:

@@ -52,6 +52,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--guest-path", choices=("trail", "straight"),
                         help="how the guest follows: along the robot's trail (default) or "
                              "straight at the robot through walls (the original)")
+    parser.add_argument("--await-lockstep", type=float, default=0.0, metavar="SECONDS",
+                        help="hold at the first period until a lockstep client joins, for up "
+                        "to SECONDS of wall time, so that the task starts at the same sim "
+                        "time in every run (default 0: do not wait)")
     return parser
 
 

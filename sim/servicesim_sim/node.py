@@ -11,6 +11,11 @@ Service answers and navigation results are coroutines that wait in *sim* time (f
 service-latency knob and for navigation to finish), so no request ever blocks the loop, and a
 request the original made fail is answered at once with a documented error answer.
 
+A client may join the simulator's lockstep (:mod:`servicesim_sim.lockstep`): the loop then
+announces each period's end and holds until every joined client has finished its tick for it,
+and serves the period's requests in a fixed order; the node's handlers are counted and gated
+for that, and with nobody joined they run exactly as before.
+
 Every request gets an answer, however many come at once: the services and the action's goal,
 cancel and result services hold every request of a burst (:data:`EVERY_REQUEST`; with ROS's
 default depth of 10 a burst of 1000 ``room_info`` requests got 12-25 answers), and the loop's
@@ -37,7 +42,7 @@ from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped, Twist
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid, Odometry
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.impl.implementation_singleton import rclpy_implementation
@@ -64,6 +69,7 @@ from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.localisation import Estimate, Pose
+from servicesim_sim.lockstep import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.marker_topics import MarkerTopics
 from servicesim_sim.pacing import Pacer
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
@@ -97,12 +103,19 @@ MAP_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"  # as the or
 BASE_LINK_HEIGHT_M = 0.749  # servicebot.urdf: base_footprint -> base_link
 LIDAR_FRAME = "lidar_frame"
 GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
+NAVIGATION_ACTION = "/servicebot/navigate_to_pose"
+INITIAL_POSE_TOPIC = "/servicebot/initialpose"
+CMD_VEL_TOPIC = "/servicebot/cmd_vel"
 """The robot's true pose in map, as Gazebo's model state would give it: for records and
 tests, never for an executive (a real robot has no such topic)."""
 
 
+def stamp_ns(seconds: float) -> int:
+    return round(max(seconds, 0.0) * 1e9)
+
+
 def stamp(seconds: float) -> Time:
-    whole, nanoseconds = divmod(round(max(seconds, 0.0) * 1e9), 1_000_000_000)
+    whole, nanoseconds = divmod(stamp_ns(seconds), 1_000_000_000)
     return Time(sec=whole, nanosec=nanoseconds)
 
 
@@ -130,22 +143,30 @@ class SimulatorNode:
         self._dropped = 0
         self._camera_next = 0.0
         self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
+        self.lockstep = LockstepServer(node)
+        callbacks = self.lockstep.callback_group
         self._make_publishers()
         self._make_services()
-        self._navigation = ActionServer(
-            node, NavigateToPose, "/servicebot/navigate_to_pose",
+        self._navigation = CountingActionServer(
+            node, NavigateToPose, NAVIGATION_ACTION, lockstep=self.lockstep,
             execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
-            handle_accepted_callback=self._on_goal_accepted,
+            handle_accepted_callback=self.lockstep.gated(
+                f"{NAVIGATION_ACTION}:goal", self._on_goal_accepted, count=False,
+                answers=False),
             cancel_callback=lambda _: CancelResponse.ACCEPT,
             goal_service_qos_profile=EVERY_REQUEST, result_service_qos_profile=EVERY_REQUEST,
-            cancel_service_qos_profile=EVERY_REQUEST,
+            cancel_service_qos_profile=EVERY_REQUEST, callback_group=callbacks,
         )
-        node.create_subscription(PoseWithCovarianceStamped, "/servicebot/initialpose",
-                                 self._on_initial_pose, LATCHED,
-                                 event_callbacks=NO_SUBSCRIPTION_EVENTS)
-        node.create_subscription(Twist, "/servicebot/cmd_vel", self._on_cmd_vel, 10,
-                                 event_callbacks=NO_SUBSCRIPTION_EVENTS)
-        self._map_publisher.publish(self._map_message())
+        node.create_subscription(PoseWithCovarianceStamped, INITIAL_POSE_TOPIC,
+                                 self.lockstep.gated_message(INITIAL_POSE_TOPIC,
+                                                             self._on_initial_pose),
+                                 LATCHED, event_callbacks=NO_SUBSCRIPTION_EVENTS,
+                                 callback_group=callbacks)
+        node.create_subscription(Twist, CMD_VEL_TOPIC,
+                                 self.lockstep.gated_message(CMD_VEL_TOPIC, self._on_cmd_vel),
+                                 10, event_callbacks=NO_SUBSCRIPTION_EVENTS,
+                                 callback_group=callbacks)
+        self._send(self._map_publisher, self._map_message())
 
     # ----------------------------------------------------------------- wiring
     def _make_publishers(self) -> None:
@@ -179,7 +200,7 @@ class SimulatorNode:
         self._truth_message.header.frame_id = MAP_FRAME
         self._truth_message.child_frame_id = BASE_FRAME
         self._scan_next = 0.0
-        self._tf_static.publish(TFMessage(transforms=[
+        self._send(self._tf_static, TFMessage(transforms=[
             transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
             transform("base_link", LIDAR_FRAME, LIDAR_OFFSET,
                       z=LIDAR_HEIGHT_M - BASE_LINK_HEIGHT_M)]))
@@ -194,8 +215,10 @@ class SimulatorNode:
             (Drift, "/servicesim/drift", self._drift),
             (Empty, "/servicebot/move_base/clear_costmaps", self._clear_costmaps),
         ]
-        self._services = [self.node.create_service(kind, name, callback,
-                                                   qos_profile=EVERY_REQUEST)
+        self._services = [self.node.create_service(kind, name,
+                                                   self.lockstep.gated(name, callback),
+                                                   qos_profile=EVERY_REQUEST,
+                                                   callback_group=self.lockstep.callback_group)
                           for kind, name, callback in services]
 
     # ------------------------------------------------------------- sim sleep
@@ -205,13 +228,20 @@ class SimulatorNode:
         self._sleepers.append((self.engine.sim_time + max(seconds, 0.0), future))
         return future
 
-    def _wake_sleepers(self) -> bool:
-        """Complete the sleeps that are over; whether any was."""
+    def _wake_sleepers(self, executor: DrainingExecutor) -> bool:
+        """Complete the sleeps that are over; whether any was.
+
+        In lockstep each sleeper runs on before the next wakes, in the order they fell asleep
+        (which the gate fixed): rclpy would resume them in the order their requests arrived.
+        """
         now = self.engine.sim_time
         due = [future for when, future in self._sleepers if when <= now]
         self._sleepers = [(when, future) for when, future in self._sleepers if when > now]
         for future in due:
             future.set_result(True)
+            if self.lockstep.active:
+                executor.note_resumable()
+                drain_completely(executor)
         return bool(due)
 
     async def _latency(self) -> None:
@@ -357,6 +387,7 @@ class SimulatorNode:
         if self.engine.sim_time >= navigation.feedback_due - 1e-9:
             navigation.feedback_due = self.engine.sim_time + FEEDBACK_PERIOD_S
             handle.publish_feedback(self._feedback(state, navigation.started))
+            self.lockstep.answered(f"{NAVIGATION_ACTION}:feedback")
         if state.status == "succeeded":
             handle.succeed()
             return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE)
@@ -457,6 +488,7 @@ class SimulatorNode:
         """
         try:
             publisher.publish(message)
+            self.lockstep.published(publisher.topic_name)
         except RCLError as error:
             self._dropped += 1
             if self._dropped in (1, 10, 100) or self._dropped % 1000 == 0:
@@ -565,6 +597,7 @@ class SimulatorNode:
     def run(self, executor: DrainingExecutor) -> None:
         """Step, publish and serve until the context shuts down, paced by the speed factor."""
         pacer = Pacer()
+        period = 0
         while rclpy.ok(context=self.node.context):
             scores: list[float] = []
             for _ in range(self.steps_per_io):
@@ -572,29 +605,42 @@ class SimulatorNode:
                 self._capture_camera()
                 if self.engine.task_running():
                     scores.append(float(self.engine.score()))
+            period += 1
             self._publish_scores(scores)
             self._publish_io()
             goals_ended = self._advance_navigation()
-            sleeps_over = self._wake_sleepers()
+            sleeps_over = self._wake_sleepers(executor)
             if goals_ended or sleeps_over:
                 executor.note_resumable()
-            wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
-            if wait_s <= 0.0:  # flat out or behind: only look for requests
-                executor.run_ready()
-                continue
-            due = time.monotonic() + wait_s  # waiting for the wall clock, serve requests
-            while (remaining := due - time.monotonic()) > 0.0:
-                executor.wait_and_run(timeout_sec=remaining)
+            self.lockstep.end_period(period=period, sim_time_ns=stamp_ns(self.engine.sim_time),
+                                     executor=executor)
+            if period == 1 and self.settings.await_lockstep_s > 0.0:
+                self.lockstep.await_client(
+                    executor, wall_s=self.settings.await_lockstep_s,
+                    meanwhile=lambda: self._send(self._clock, self._clock_message))
+            self._wait_for_wall_clock(pacer, executor)
+            self.lockstep.hold(executor)
+
+    def _wait_for_wall_clock(self, pacer: Pacer, executor: DrainingExecutor) -> None:
+        """Serve requests until the speed factor lets the next period start."""
+        wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
+        if wait_s <= 0.0:  # flat out or behind: only look for requests
+            executor.run_ready()
+            return
+        due = time.monotonic() + wait_s
+        while (remaining := due - time.monotonic()) > 0.0:
+            executor.wait_and_run(timeout_sec=remaining)
 
     def _pace(self) -> float:
         """The speed factor now: at most real time until a task starts.
 
         Before ``new_task`` nothing is scored, and running flat out would only flood the
         machine while the executive starts and DDS discovers its endpoints — a response
-        written before the server has matched the client's reader is lost.
+        written before the server has matched the client's reader is lost. A lockstep client
+        has found its endpoints before it joins, and the gate holds the world for it anyway.
         """
         speed = self.settings.speed
-        if self.engine.task_started or 0.0 < speed <= 1.0:
+        if self.engine.task_started or self.lockstep.active or 0.0 < speed <= 1.0:
             return speed
         return 1.0
 
@@ -672,9 +718,12 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     shut-down (which deletes the DDS participant and its shared-memory segment) is not cut
     short: a run that dies sends one SIGTERM per thread it had (``PR_SET_PDEATHSIG``).
     """
-    def stop(_number: int, _frame: object) -> None:
-        for number in STOP_SIGNALS:
-            signal.signal(number, signal.SIG_IGN)
+    stopped: list[int] = []
+
+    def stop(number: int, _frame: object) -> None:
+        stopped.append(number)
+        for each in STOP_SIGNALS:
+            signal.signal(each, signal.SIG_IGN)
         raise KeyboardInterrupt
 
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -692,6 +741,9 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
         simulator.run(executor)
     except KeyboardInterrupt:
         pass
+    except RuntimeError:  # the stop raised inside a pybind11 call, which turns it into this
+        if not stopped:
+            raise
     finally:
         for number in STOP_SIGNALS:  # a stop that came before the handler ran: clean up anyway
             signal.signal(number, signal.SIG_IGN)

@@ -33,6 +33,8 @@ class SimSettings:
     speed: float
     difficulty: Difficulty
     camera_rate_hz: float
+    await_lockstep_s: float = 0.0
+    """Wall seconds to hold at the first period for a lockstep client to join."""
 
 
 _KNOBS = {
@@ -51,6 +53,9 @@ def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
         raise SettingsError(f"--seed {args.seed}: must be 0 or more")
     if not args.speed >= 0.0:
         raise SettingsError(f"--speed {args.speed}: must be 0 or more")
+    await_lockstep = getattr(args, "await_lockstep", 0.0)
+    if not 0.0 <= await_lockstep <= 3600.0:
+        raise SettingsError(f"--await-lockstep {await_lockstep}: must be within 0..3600")
     if not 0.0 <= args.camera_rate <= 30.0:
         raise SettingsError(f"--camera-rate {args.camera_rate}: must be within 0..30")
     try:
@@ -60,7 +65,8 @@ def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
     except OSError as error:
         raise SettingsError(f"{args.world}: {error.strerror or error}") from error
     return SimSettings(world=world, seed=args.seed, speed=args.speed,
-                       difficulty=difficulty_from(args), camera_rate_hz=args.camera_rate)
+                       difficulty=difficulty_from(args), camera_rate_hz=args.camera_rate,
+                       await_lockstep_s=await_lockstep)
 
 
 def playable_engine(settings: SimSettings) -> SimEngine:

@@ -180,6 +180,7 @@ def test_attach_runs_against_the_backend_already_on_the_shells_domain(
     assert result.returncode == 0, result.stderr[-2000:]
     report = report_of(tmp_path / "run")
     assert report["completed"] and report["attached"]
+    assert report["timing"] == "lockstep" and "lockstep with the simulator" in result.stdout
     assert report["ros_domain_id"] == int(os.environ["ROS_DOMAIN_ID"])
     assert not (tmp_path / "run" / "sim.log").exists()
 

@@ -163,7 +163,8 @@ class JitterGoal(_Computation):
 
     Args:
         name: the behaviour's name
-        seed: the random seed; by default derived from the name, so runs repeat
+        seed: the random seed; by default derived from the name and the run's seed (given to
+            ``setup`` as ``run_seed``), so that a run repeats and another seed jitters anew
     """
 
     INPUT_PORTS: ClassVar[Ports] = {"goal": PortInformation(data_type=Pose2D),
@@ -172,8 +173,16 @@ class JitterGoal(_Computation):
 
     def __init__(self, name: str = "JitterGoal", seed: int | None = None, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
+        self._seed_given = seed is not None
         self.seed = zlib.crc32(name.encode()) if seed is None else int(seed)
         self.rng = random.Random(self.seed)
+
+    def setup(self, **kwargs: Any) -> None:
+        super().setup(**kwargs)
+        run_seed = kwargs.get("run_seed")
+        if run_seed is not None and not self._seed_given:
+            self.seed = zlib.crc32(f"{self.name}:{int(run_seed)}".encode())
+            self.rng = random.Random(self.seed)
 
     def compute(self, goal: Pose2D, occupancy: OccupancyGrid2D) -> Pose2D:
         jittered = jitter_goal(goal, occupancy, self.rng)

@@ -301,6 +301,26 @@ def test_jitter_goal_moves_the_goal_a_little_onto_free_space_reproducibly() -> N
     assert jitters(None, grid, goal) == jitters(None, grid, goal)  # seeded from the name
 
 
+def test_jitter_goal_draws_from_the_runs_seed_unless_given_its_own() -> None:
+    grid, goal = open_room(), Pose2D(3.0, 5.0)
+
+    def draws(run_seed: int | None, seed: int | None = None) -> list[Pose2D]:
+        Blackboard.clear()
+        behaviour = JitterGoal(name="JitterGoal", seed=seed)
+        behaviour.setup(run_seed=run_seed)
+        wire(behaviour, goal=goal, occupancy=grid)
+        results = []
+        for _ in range(4):
+            behaviour.tick_once()
+            results.append(output(behaviour))
+        return results
+
+    assert draws(3) == draws(3)
+    assert draws(3) != draws(4)
+    assert draws(None) == jitters(None, grid, goal, count=4)  # no run seed: from the name
+    assert draws(3, seed=7) == draws(4, seed=7)  # a seed of its own wins
+
+
 def test_jitter_goal_keeps_the_goal_when_there_is_no_room() -> None:
     values = cells(14.0, 14.0)
     fill(values, 0.0, 0.0, 14.0, 14.0)

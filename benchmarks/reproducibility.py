@@ -1,0 +1,124 @@
+"""Does a seed replay? Pairs of identical runs, two at once, compared report by report.
+
+``python benchmarks/reproducibility.py [--pairs N] [--sets default,random,hard] [--speeds 0,20]
+[--executive bt|baseline] [--first-seed S] [--time-limit T] [--free-running]`` runs, for each
+scenario set and speed, ``N`` pairs: the two runs of a pair are the same command (the shipped
+task for ``default``, seed ``S + i`` for the seeded sets, ``--difficulty hard`` for ``hard``),
+started together so that they share the 2-core machine and load each other. It prints, per set
+and speed, the share of pairs whose ``report.json`` agree on what an episode is judged by --
+completed, each checkpoint's time, the penalties, the score -- and the commands of the pairs
+that differ, which ``run`` replays. ``--free-running`` measures the same without lockstep.
+
+Wall-clock figures vary with the machine's load; nothing here is asserted. Bad arguments give
+one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from bt_servicesim.cli import OneLineArgumentParser
+
+SETS = {"default": (False, ()), "random": (True, ()), "hard": (True, ("--difficulty", "hard"))}
+WALL_LIMIT_S = 1800.0
+
+
+def build_parser() -> OneLineArgumentParser:
+    parser = OneLineArgumentParser(prog="benchmarks/reproducibility.py",
+                                   description="Share of identical report pairs.")
+    parser.add_argument("--pairs", type=int, default=20, help="pairs per set and speed (20)")
+    parser.add_argument("--sets", default="default,random,hard",
+                        help="comma list of scenario sets: default, random, hard")
+    parser.add_argument("--speeds", default="0,20", help="comma list of speed factors (0,20)")
+    parser.add_argument("--executive", choices=("bt", "baseline"), default="bt")
+    parser.add_argument("--first-seed", type=int, default=1,
+                        help="the seeded sets use seeds S, S+1, ... (default 1)")
+    parser.add_argument("--time-limit", type=float, default=900.0,
+                        help="mission time limit in sim seconds (default 900)")
+    parser.add_argument("--free-running", action="store_true",
+                        help="run without lockstep, for comparison")
+    return parser
+
+
+def judged(report: dict[str, Any]) -> tuple[Any, ...]:
+    """What an episode is judged by, and what must replay."""
+    return (report.get("completed"),
+            [(c.get("done"), c.get("sim_time_s")) for c in report.get("checkpoints", [])],
+            report.get("penalties"), report.get("score"))
+
+
+def command_for(args: Any, scenario: str, speed: float, index: int) -> list[str]:
+    seeded, sim_args = SETS[scenario]
+    command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", repr(speed),
+               "--executive", args.executive, "--time-limit", repr(args.time_limit)]
+    if seeded:
+        command += ["--seed", str(args.first_seed + index)]
+    command += [f"--sim-arg={argument}" for argument in sim_args]
+    if args.free_running:
+        command.append("--free-running")
+    return command
+
+
+def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Both runs of a pair, started together; their reports."""
+    outs = [root / "a", root / "b"]
+    runs = [subprocess.Popen([*command, "--out", str(out)], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL) for out in outs]
+    for run in runs:
+        run.wait(timeout=WALL_LIMIT_S)
+    reports = []
+    for out in outs:
+        try:
+            reports.append(json.loads((out / "report.json").read_text()))
+        except (OSError, ValueError):
+            reports.append({"failure": "no report"})
+    return reports[0], reports[1]
+
+
+def measure(args: Any, scenario: str, speed: float) -> None:
+    identical, differing, started = 0, [], time.monotonic()
+    for index in range(args.pairs):
+        command = command_for(args, scenario, speed, index)
+        with tempfile.TemporaryDirectory(prefix="reproducibility-") as root:
+            first, second = run_pair(command, Path(root))
+        if judged(first) == judged(second) and first.get("failure") != "no report":
+            identical += 1
+        else:
+            differing.append((command, first.get("score"), second.get("score")))
+    share = 100.0 * identical / args.pairs
+    print(f"{scenario:8s} speed {speed:g}: {identical}/{args.pairs} pairs identical "
+          f"({share:.0f}%), {time.monotonic() - started:.0f} s wall", flush=True)
+    for command, score_a, score_b in differing:
+        print(f"  differs ({score_a} vs {score_b}): {' '.join(command[1:])}", flush=True)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    sets = [name.strip() for name in args.sets.split(",") if name.strip()]
+    unknown = [name for name in sets if name not in SETS]
+    if unknown:
+        build_parser().error(f"--sets: unknown set {unknown[0]!r} (default, random, hard)")
+    try:
+        speeds = [float(value) for value in args.speeds.split(",")]
+    except ValueError:
+        build_parser().error(f"--speeds {args.speeds}: must be numbers")
+    if args.pairs < 1 or any(not speed >= 0.0 for speed in speeds):
+        build_parser().error("--pairs must be 1 or more and every speed 0 or more")
+    timing = "free running" if args.free_running else "lockstep"
+    print(f"{args.executive} executive, {timing}, {args.pairs} pairs per set and speed, "
+          "the two runs of a pair at once", flush=True)
+    for speed in speeds:
+        for scenario in sets:
+            measure(args, scenario, speed)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,271 @@
+"""Lockstep with a simulator that offers it: the executive's side of the extension protocol.
+
+The simulator (docs/simulator.md, "Lockstep") announces the end of each period with how much it
+has published on each topic and answered on each endpoint so far, and does not step past the
+period until every joined client has said it is done with it. A :class:`LockstepClient` ticks
+the executive exactly once per announced period, and only once everything the announcement
+counts that this node can receive has arrived -- the messages on every topic it subscribes
+to reliably, the answers to its requests -- so a tick never depends on which message DDS
+happened to deliver first. After the tick it sends its *done* with the number of requests it
+has sent since it joined (those its callbacks sent between ticks included), and the simulator
+serves them before it steps on.
+
+Counting happens in the node (:mod:`bt_servicesim.ros.traffic`). Counts of messages are
+cumulative since the simulator started, so at the join the client learns its offsets: the
+simulator, holding the period it joined at, has nothing more in flight once a short settle
+has passed, and what the client has then received stands for everything announced so far.
+Answers are totals per endpoint: the client takes every answer on an endpoint it has a client
+for as its own (the evaluation runs one executive per simulator).
+
+Lockstep is an extension only this project's simulator offers: :func:`offered` finds out
+within a bounded wall time, and a backend without it (Gazebo, a real robot) is run free, on
+:class:`~bt_servicesim.ros.sim_ticker.SimTicker`, exactly as before.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from rclpy.executors import Executor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import ReliabilityPolicy as Reliability
+from rclpy.time import Time
+from servicesim_competition.msg import LockstepDone, LockstepPeriod
+from servicesim_competition.srv import LockstepJoin
+
+from bt_servicesim.ros.traffic import Traffic
+
+__all__ = ["LockstepClient", "LockstepTicker", "offered"]
+
+JOIN_SERVICE = "/servicesim/lockstep/join"
+PERIOD_TOPIC = "/servicesim/lockstep/period"
+DONE_TOPIC = "/servicesim/lockstep/done"
+PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                          reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+OFFER_WAIT_S = 3.0
+"""Wall seconds a run waits for the join service once the simulator's own services are up."""
+JOIN_SETTLE_S = 0.5
+"""Wall seconds after the join for what the simulator sent before it to arrive."""
+FINAL_PERIODS = 2
+"""Periods the client stays in step after its last ticker stopped: what the last tick sent is
+served and answered; then it holds the simulator still until :meth:`LockstepClient.leave`,
+so that what the run reports of the end does not depend on how long it takes to report."""
+STALL_WARNING_S = 10.0
+"""Wall seconds a period may wait for its messages before the client ticks anyway and says so."""
+DUE_TOLERANCE_NS = 10_000_000
+"""A period's sim time within this of a tick's due time counts as reaching it."""
+
+
+def offered(node: Node, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+    """Whether the backend offers lockstep: its join service appears within ``wait_s``."""
+    client = node.create_client(LockstepJoin, JOIN_SERVICE)
+    try:
+        deadline = time.monotonic() + wait_s
+        while not client.service_is_ready() and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        return client.service_is_ready()
+    finally:
+        node.destroy_client(client)
+
+
+class LockstepTicker:
+    """Calls ``callback`` every ``period_s`` of announced sim time; ``cancel`` stops it."""
+
+    def __init__(self, client: LockstepClient, period_s: float,
+                 callback: Callable[[], None]) -> None:
+        if not period_s > 0.0:
+            raise ValueError(f"tick period {period_s}: must be more than 0")
+        self.client = client
+        self.callback = callback
+        self.period_ns = round(period_s * 1e9)
+        self.due_ns: int | None = None
+        self.error: Exception | None = None
+
+    def cancel(self) -> None:
+        self.client.remove(self)
+
+    def tick_if_due(self, sim_time_ns: int) -> None:
+        if self.due_ns is None:  # the first call a period on, as a timer's
+            self.due_ns = sim_time_ns + self.period_ns
+            return
+        if sim_time_ns + DUE_TOLERANCE_NS < self.due_ns:
+            return
+        self.due_ns += self.period_ns * max(1, (sim_time_ns + DUE_TOLERANCE_NS - self.due_ns)
+                                            // self.period_ns + 1)
+        try:
+            self.callback()
+        except Exception as error:  # escaping an executor's callback kills the process
+            self.cancel()
+            self.error = error
+            note = getattr(self.client.node, "note_error", None)
+            if note is not None:
+                note(error, where="a tick")
+
+
+class LockstepClient:
+    """One node's lockstep with the simulator; see the module docstring."""
+
+    def __init__(self, node: Node, *, name: str) -> None:
+        traffic = getattr(node, "traffic", None)
+        if not isinstance(traffic, Traffic):
+            raise TypeError(f"{node.get_name()}: lockstep needs a node that counts its traffic")
+        self.node = node
+        self.name = name
+        self.traffic = traffic
+        self.client_id: int | None = None
+        self.periods = 0
+        """Periods this client has ticked for since it joined."""
+        self.stalls = 0
+        """Periods ticked without every counted message (after :data:`STALL_WARNING_S`)."""
+        self._tickers: list[LockstepTicker] = []
+        self._idle_periods: int | None = None
+        """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
+        self._pending: LockstepPeriod | None = None
+        self._pending_since = 0.0
+        self._scheduled = False
+        self._reader_offsets: dict[int, tuple[str, int]] = {}
+        self._answer_offsets: dict[str, int] = {}
+        self._sent_at_join: dict[str, int] = {}
+        self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
+        node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
+
+    # ------------------------------------------------------------------ join
+    def join(self, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+        """Join the simulator's lockstep; whether it took us (bounded in wall time)."""
+        client = self.node.create_client(LockstepJoin, JOIN_SERVICE)
+        try:
+            future = client.call_async(LockstepJoin.Request(name=self.name))
+            deadline = time.monotonic() + wait_s
+            while not future.done() and time.monotonic() < deadline:
+                executor.spin_once(timeout_sec=0.05)
+            if not future.done() or future.result() is None:
+                return False
+            answer = future.result()
+            settle = time.monotonic() + JOIN_SETTLE_S
+            while time.monotonic() < settle:
+                executor.spin_once(timeout_sec=0.05)
+        finally:
+            self.node.destroy_client(client)
+        self._synchronise(answer.joined_at)
+        self.client_id = int(answer.client)
+        self._publish_done(int(answer.joined_at.period))
+        if self._pending is not None and self._pending.period <= answer.joined_at.period:
+            self._pending = None  # announced before the join: done with it above
+        self.traffic.on_arrival = self._check
+        self.node.lockstep = self
+        self._check()
+        return True
+
+    def _synchronise(self, joined_at: LockstepPeriod) -> None:
+        """Offsets: what was announced at the join against what has arrived by now."""
+        announced = dict(zip(joined_at.topics, joined_at.messages, strict=False))
+        self._reader_offsets = {
+            key: (topic, int(announced.get(topic, 0)) - self.traffic.received[key])
+            for key, topic in self._counted_readers()}
+        answers = dict(zip(joined_at.endpoints, joined_at.answers, strict=False))
+        self._answer_offsets = {
+            endpoint: int(answers.get(endpoint, 0)) - self.traffic.answered.get(endpoint, 0)
+            for endpoint in self.traffic.endpoints}
+        self._sent_at_join = dict(self.traffic.sent)
+
+    def _counted_readers(self) -> list[tuple[int, str]]:
+        """The subscriptions that receive every message of their topic: reliable, matched."""
+        return [(key, subscription.topic_name)
+                for key, subscription in self.traffic.readers.items()
+                if subscription.qos_profile.reliability == Reliability.RELIABLE
+                and subscription.get_publisher_count() > 0]
+
+    # --------------------------------------------------------------- tickers
+    def ticker(self, period_s: float, callback: Callable[[], None]) -> LockstepTicker:
+        ticker = LockstepTicker(self, period_s, callback)
+        self._tickers.append(ticker)
+        self._idle_periods = None
+        return ticker
+
+    def remove(self, ticker: LockstepTicker) -> None:
+        if ticker in self._tickers:
+            self._tickers.remove(ticker)
+            if not self._tickers:
+                self._idle_periods = 0
+
+    @property
+    def holding(self) -> bool:
+        """Whether the client holds the simulator still (its executive has finished)."""
+        return self._idle_periods is not None and self._idle_periods >= FINAL_PERIODS
+
+    def leave(self) -> None:
+        """Leave the lockstep: the simulator no longer waits for this client."""
+        if self.client_id is not None:
+            self._done.publish(LockstepDone(client=self.client_id, leaving=True))
+            self.client_id = None
+            self.traffic.on_arrival = None
+
+    # ---------------------------------------------------------------- period
+    def _on_period(self, message: LockstepPeriod) -> None:
+        if self._pending is not None and self._pending.period >= message.period:
+            return
+        if self._pending is None:
+            self._pending_since = time.monotonic()
+        self._pending = message
+        if self.client_id is not None:
+            self._check()
+
+    def missing(self) -> list[str]:
+        """What the pending period still waits for, in words; empty when it may tick."""
+        period = self._pending
+        if period is None:
+            return ["no period announced"]
+        announced = dict(zip(period.topics, period.messages, strict=False))
+        lacking = [topic for key, (topic, offset) in self._reader_offsets.items()
+                   if key in self.traffic.readers
+                   and self.traffic.received[key] + offset < announced.get(topic, 0)]
+        for endpoint, count in zip(period.endpoints, period.answers, strict=False):
+            offset = self._answer_offsets.get(endpoint)
+            if offset is not None and self.traffic.answered.get(endpoint, 0) + offset < count:
+                lacking.append(endpoint)
+        return lacking
+
+    def _check(self) -> None:
+        if (self._pending is None or self._scheduled or self.holding
+                or self.client_id is None or self.missing()):
+            return
+        self._scheduled = True
+        # a task, so that callbacks of what just arrived (a future's) run before the tick
+        self.node.executor.create_task(self._run_period)
+
+    def check_stalled(self) -> None:
+        """Tick a period that waited too long for its messages anyway, and say what lacked."""
+        if (self._pending is None or self._scheduled or self.holding or self.client_id is None
+                or time.monotonic() - self._pending_since < STALL_WARNING_S):
+            return
+        self.stalls += 1
+        self.node.get_logger().warning(
+            f"lockstep: period {self._pending.period} ticked without "
+            f"{', '.join(self.missing())} after {STALL_WARNING_S:.0f} s: this run may not replay")
+        self._scheduled = True
+        self.node.executor.create_task(self._run_period)
+
+    def _run_period(self) -> None:
+        self._scheduled = False
+        period, self._pending = self._pending, None
+        if period is None:
+            return
+        now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
+        self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
+        for ticker in list(self._tickers):
+            ticker.tick_if_due(now_ns)
+        if self._idle_periods is not None:
+            self._idle_periods += 1
+        self.periods += 1
+        self._publish_done(int(period.period))
+
+    def _publish_done(self, period: int) -> None:
+        sent = {endpoint: count - self._sent_at_join.get(endpoint, 0)
+                for endpoint, count in self.traffic.sent.items()}
+        endpoints = sorted(sent)
+        self._done.publish(LockstepDone(client=self.client_id or 0, period=period,
+                                        endpoints=endpoints,
+                                        requests=[sent[e] for e in endpoints]))

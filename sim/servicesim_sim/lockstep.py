@@ -1,0 +1,243 @@
+"""Lockstep with the simulator's clients: the simulator's side of the extension protocol.
+
+An extension beside the competition's interfaces (docs/simulator.md, "Lockstep"): a client
+joins with ``/servicesim/lockstep/join``; after each period the simulator announces on
+``/servicesim/lockstep/period`` how many messages it has published on each topic and how many
+answers it has sent on each endpoint so far; a joined client says on
+``/servicesim/lockstep/done`` that it finished its tick for a period and how many requests it
+has sent. The rule (:mod:`servicesim_sim.lockstep_gate`) decides when the simulator may step
+on and in which order the period's requests are served.
+
+:class:`LockstepServer` counts what the node publishes and answers, and wraps the node's
+request handlers so that, while a client is joined, a request taken is served only when the
+gate admits it -- one at a time, in the gate's order, each run to its first wait before the
+next starts. With nobody joined every handler runs as it always did: a backend client that
+never joins (a ``ros2`` command, an executive that runs free) sees no difference.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+from rclpy.action import ActionServer
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+from servicesim_competition.msg import LockstepDone, LockstepPeriod
+from servicesim_competition.srv import LockstepJoin
+
+from servicesim_sim.executor import DrainingExecutor
+from servicesim_sim.lockstep_gate import Admission, LockstepGate
+
+__all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
+           "LockstepServer"]
+
+JOIN_SERVICE = "/servicesim/lockstep/join"
+PERIOD_TOPIC = "/servicesim/lockstep/period"
+DONE_TOPIC = "/servicesim/lockstep/done"
+PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                          reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+GATE_WAIT_S = 0.05
+"""Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
+
+
+class LockstepServer:
+    """The simulator's side of lockstep on ``node``; see the module docstring."""
+
+    def __init__(self, node: Node, *, gate: LockstepGate | None = None) -> None:
+        self.node = node
+        self.gate = gate or LockstepGate()
+        self.messages: dict[str, int] = {}
+        self.answers: dict[str, int] = {}
+        self._last = LockstepPeriod(period=0)
+        self.callback_group = ReentrantCallbackGroup()
+        """For every handler of the node: a handler waiting for its turn (or for sim time)
+        must not keep the others from running, as one mutually exclusive group would -- the
+        done message that opens the gate among them. The loop is one thread all the same."""
+        self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
+        node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
+                            callback_group=self.callback_group)
+        node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS,
+                                 callback_group=self.callback_group)
+
+    @property
+    def active(self) -> bool:
+        return self.gate.active
+
+    # ------------------------------------------------------------- counting
+    def published(self, topic: str) -> None:
+        self.messages[topic] = self.messages.get(topic, 0) + 1
+
+    def answered(self, endpoint: str) -> None:
+        self.answers[endpoint] = self.answers.get(endpoint, 0) + 1
+
+    def took(self, endpoint: str) -> int:
+        return self.gate.take(endpoint)
+
+    # ------------------------------------------------------------- wrapping
+    def gated(self, endpoint: str, handler: Callable[..., Any], *, count: bool = True,
+              answers: bool = True) -> Callable[..., Any]:
+        """``handler`` (a service callback or an accepted-goal callback), counted and gated.
+
+        ``count``: the request is counted here (False where the action server counts it);
+        ``answers``: the handler's return is the endpoint's answer.
+        """
+        self.gate.endpoints.add(endpoint)
+
+        async def call(*args: Any) -> Any:
+            number = self.gate.take(endpoint) if count else self.gate.taken.get(endpoint, 0)
+            if self.gate.active:
+                turn = Future()
+                self.gate.admit_later(Admission(endpoint=endpoint, number=number,
+                                                serve=lambda: turn.set_result(True)))
+                await turn
+            result = handler(*args)
+            if inspect.isawaitable(result):
+                result = await result
+            if answers:
+                self.answered(endpoint)
+            return result
+
+        return call
+
+    def gated_message(self, topic: str, callback: Callable[[Any], None]) -> Callable[[Any], None]:
+        """A subscription callback, counted and, while a client is joined, gated."""
+        self.gate.endpoints.add(topic)
+
+        def receive(message: Any) -> None:
+            number = self.gate.take(topic)
+            if self.gate.active:
+                self.gate.admit_later(Admission(endpoint=topic, number=number,
+                                                serve=lambda: callback(message)))
+            else:
+                callback(message)
+
+        return receive
+
+    # ----------------------------------------------------------------- loop
+    def end_period(self, *, period: int, sim_time_ns: int, executor: DrainingExecutor) -> None:
+        """Serve what the period made ready, then announce the period.
+
+        With a client joined the drain is complete (no wall budget): every answer, feedback
+        and result due in this period goes out before the announcement that counts it.
+        """
+        if self.gate.active:
+            drain_completely(executor)
+        self._last = self._announcement(period, sim_time_ns)
+        self._announcer.publish(self._last)
+        self.gate.announced(period)
+
+    def await_client(self, executor: DrainingExecutor, *, wall_s: float,
+                     meanwhile: Callable[[], None]) -> None:
+        """Serve requests until a client joins or ``wall_s`` of wall time has passed.
+
+        Held at the first period, every run that joins meets the same world: the task then
+        starts at the same sim time whenever the client's process got going. ``meanwhile``
+        runs every :data:`GATE_WAIT_S` (the node repeats its clock for late subscribers).
+        """
+        deadline = time.monotonic() + wall_s
+        while not self.gate.active and time.monotonic() < deadline:
+            meanwhile()
+            executor.wait_and_run(timeout_sec=GATE_WAIT_S)
+        if not self.gate.active:
+            self.node.get_logger().warning(
+                f"lockstep: no client joined within {wall_s:.0f} s of wall time; running on")
+
+    def hold(self, executor: DrainingExecutor) -> None:
+        """Until every joined client is done with the period, then serve its requests in order.
+
+        A client the gate waited on for too long is dropped, with one warning naming it.
+        """
+        while self.gate.active and not self.gate.is_open():
+            executor.wait_and_run(timeout_sec=GATE_WAIT_S)
+            missing = self.gate.missing()
+            for name in self.gate.drop_silent(time.monotonic()):
+                self.node.get_logger().warning(
+                    f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
+                    f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
+                    f"{'running free' if not self.gate.active else 'going on with the rest'}")
+        self.admit(executor)
+
+    def admit(self, executor: DrainingExecutor) -> None:
+        """Serve the admitted requests one at a time, in the gate's order."""
+        for admission in self.gate.due_admissions():
+            admission.serve()
+            executor.note_resumable()
+            drain_completely(executor)
+
+    # ------------------------------------------------------------- protocol
+    def _announcement(self, period: int, sim_time_ns: int) -> LockstepPeriod:
+        message = LockstepPeriod(period=period)
+        message.sim_time.sec, message.sim_time.nanosec = divmod(sim_time_ns, 1_000_000_000)
+        message.topics = sorted(self.messages)
+        message.messages = [self.messages[topic] for topic in message.topics]
+        message.endpoints = sorted(self.answers)
+        message.answers = [self.answers[endpoint] for endpoint in message.endpoints]
+        return message
+
+    def _on_join(self, request: LockstepJoin.Request,
+                 response: LockstepJoin.Response) -> LockstepJoin.Response:
+        response.client = self.gate.join(request.name)
+        response.joined_at = self._last
+        self.node.get_logger().info(
+            f"lockstep: client {request.name!r} joined at period {self._last.period} "
+            f"(id {response.client})")
+        return response
+
+    def _on_done(self, message: LockstepDone) -> None:
+        if message.leaving:
+            name = self.gate.leave(int(message.client))
+            if name is not None:
+                self.node.get_logger().info(f"lockstep: client {name!r} left")
+            return
+        requests = dict(zip(message.endpoints, (int(n) for n in message.requests), strict=False))
+        self.gate.done(int(message.client), int(message.period), requests)
+
+
+def drain_completely(executor: DrainingExecutor) -> None:
+    """Run everything ready, with no wall budget; nothing at all when nothing is ready."""
+    budget, executor.drain_budget_s = executor.drain_budget_s, math.inf
+    try:
+        executor.run_ready()
+    finally:
+        executor.drain_budget_s = budget
+
+
+class CountingActionServer(ActionServer):
+    """rclpy's action server, counting the requests it takes and the results it sends.
+
+    Goal and cancel answers go out as the request is taken, so they count then; a result goes
+    out when the goal ends (or at once for a goal the server does not know). The result is
+    counted in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it:
+    no public callback sees it go.
+    """
+
+    def __init__(self, node: Node, action_type: Any, action_name: str, *,
+                 lockstep: LockstepServer, **kwargs: Any) -> None:
+        self._lockstep = lockstep
+        self._endpoint = action_name
+        lockstep.gate.endpoints.update(f"{action_name}:{kind}"
+                                       for kind in ("goal", "cancel", "result"))
+        super().__init__(node, action_type, action_name, **kwargs)
+
+    async def execute(self, taken_data: Any) -> None:
+        for kind in ("goal", "cancel"):
+            if kind in taken_data:
+                self._lockstep.took(f"{self._endpoint}:{kind}")
+                self._lockstep.answered(f"{self._endpoint}:{kind}")
+        if "result" in taken_data:
+            self._lockstep.took(f"{self._endpoint}:result")
+            _, request = taken_data["result"]
+            if bytes(request.goal_id.uuid) not in self._goal_handles:
+                self._lockstep.answered(f"{self._endpoint}:result")
+        await super().execute(taken_data)
+
+    def _send_result_response(self, request_header: Any, future: Any) -> None:
+        super()._send_result_response(request_header, future)
+        self._lockstep.answered(f"{self._endpoint}:result")

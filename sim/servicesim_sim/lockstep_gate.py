@@ -1,0 +1,168 @@
+"""The lockstep gate: when may the simulator step past a period, and in which order are the
+requests of that period served. No ROS here; :mod:`servicesim_sim.lockstep` wires it up.
+
+Design intent: a seed is a replayable fact only if the world's history does not depend on how
+fast the processes run. So, once a client has joined, the simulator does not step past period
+*k* until
+
+* every joined client has said it finished its tick for *k* (its *done*, with the number of
+  requests it has sent on each endpoint since it joined), and
+* the simulator has taken at least that many requests on each endpoint.
+
+DDS orders nothing across topics and writers, so the gate never relies on arrival order: the
+done message and the requests it counts may arrive in any order, and a request taken while
+the gate is shut is not served at once but *admitted* later, when the gate opens, in a fixed
+order: by endpoint (sorted by name), then in the order the endpoint took them (one writer's
+order, which DDS keeps). Requests beyond what the clients announced wait for the period whose
+done announces them, so a request sent from a callback between two ticks is served with the
+tick whose done counted it, never earlier by luck.
+
+A client that goes silent -- the gate waiting on it for :data:`DROP_AFTER_S` of wall time --
+is dropped, so a dead client never hangs the simulator; the caller says so. Counts are totals
+per endpoint: with several lockstep clients on one endpoint the gate still waits for all of
+their requests, but cannot tell whose request is whose (rclpy hides the request's writer
+from a service callback); the evaluation runs one client per simulator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+__all__ = ["DROP_AFTER_S", "Admission", "LockstepGate"]
+
+DROP_AFTER_S = 10.0
+"""Wall seconds the gate waits on a client before it drops the client."""
+
+
+@dataclass
+class _Client:
+    name: str
+    baseline: dict[str, int]
+    """What the simulator had taken on each endpoint when the client joined."""
+    done_period: int = -1
+    requests: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass(order=True)
+class Admission:
+    """A request taken while the gate was shut, served when the gate admits it."""
+
+    endpoint: str
+    number: int
+    """Its place in the endpoint's requests (1 for the first the simulator ever took)."""
+    serve: Callable[[], None] = field(compare=False)
+
+
+class LockstepGate:
+    """Who joined, what they announced, what was taken; see the module docstring."""
+
+    def __init__(self, *, drop_after_s: float = DROP_AFTER_S) -> None:
+        self.drop_after_s = drop_after_s
+        self.period = -1
+        """The last period announced."""
+        self.taken: dict[str, int] = {}
+        self.endpoints: set[str] = set()
+        """The endpoints the simulator serves; a client's counts on others (a topic it
+        publishes for someone else) are ignored."""
+        self._clients: dict[int, _Client] = {}
+        self._next_id = 1
+        self._waiting_since: float | None = None
+        self._admissions: list[Admission] = []
+
+    @property
+    def active(self) -> bool:
+        """Whether any client is joined: only then does the gate hold anything."""
+        return bool(self._clients)
+
+    def client_names(self) -> list[str]:
+        return [client.name for client in self._clients.values()]
+
+    def join(self, name: str) -> int:
+        """A new client, held to the period last announced; its id."""
+        client_id = self._next_id
+        self._next_id += 1
+        self._clients[client_id] = _Client(name=name or f"client {client_id}",
+                                           baseline=dict(self.taken))
+        return client_id
+
+    def done(self, client_id: int, period: int, requests: dict[str, int]) -> bool:
+        """A client finished its tick for ``period``; False if nobody by that id is joined."""
+        client = self._clients.get(client_id)
+        if client is None:
+            return False
+        if period >= client.done_period:
+            client.done_period = period
+            client.requests = {endpoint: count for endpoint, count in requests.items()
+                               if endpoint in self.endpoints}
+        return True
+
+    def leave(self, client_id: int) -> str | None:
+        """A client leaves: the gate no longer waits for it; its name, None if unknown."""
+        client = self._clients.pop(client_id, None)
+        return None if client is None else client.name
+
+    def take(self, endpoint: str) -> int:
+        """The simulator took a request on ``endpoint``; its number on that endpoint."""
+        number = self.taken.get(endpoint, 0) + 1
+        self.taken[endpoint] = number
+        return number
+
+    def admit_later(self, admission: Admission) -> None:
+        self._admissions.append(admission)
+
+    def announced(self, period: int) -> None:
+        """Period ``period`` is over and announced; the gate waits on it from now."""
+        self.period = period
+        self._waiting_since = None
+
+    def allowed(self) -> dict[str, int]:
+        """Per endpoint, the requests the joined clients' done messages account for."""
+        allowed: dict[str, int] = {}
+        for client in self._clients.values():
+            for endpoint in set(client.baseline) | set(client.requests):
+                allowed[endpoint] = (allowed.get(endpoint, 0) + client.baseline.get(endpoint, 0)
+                                     + client.requests.get(endpoint, 0))
+        return allowed
+
+    def missing(self) -> list[str]:
+        """What the gate still waits for before the next step, in words; empty when open."""
+        lacking = [f"done {self.period} from {client.name}"
+                   for client in self._clients.values() if client.done_period < self.period]
+        if lacking:
+            return lacking
+        return [f"{count - self.taken.get(endpoint, 0)} request(s) on {endpoint}"
+                for endpoint, count in sorted(self.allowed().items())
+                if self.taken.get(endpoint, 0) < count]
+
+    def is_open(self) -> bool:
+        return not self.missing()
+
+    def due_admissions(self) -> list[Admission]:
+        """The admissions to serve now, in their fixed order; the rest wait."""
+        allowed = self.allowed() if self.active else None
+        due = sorted(admission for admission in self._admissions
+                     if allowed is None or admission.number <= allowed.get(admission.endpoint, 0))
+        for admission in due:
+            self._admissions.remove(admission)
+        return due
+
+    def drop_silent(self, now_s: float) -> list[str]:
+        """Drop the clients the gate has waited on for too long (wall ``now_s``); their names.
+
+        If every client has done its tick and requests are missing, the gate cannot tell whose
+        they are: then every client is dropped.
+        """
+        if self.is_open():
+            self._waiting_since = None
+            return []
+        if self._waiting_since is None:
+            self._waiting_since = now_s
+            return []
+        if now_s - self._waiting_since < self.drop_after_s:
+            return []
+        silent = [client_id for client_id, client in self._clients.items()
+                  if client.done_period < self.period] or list(self._clients)
+        names = [self._clients.pop(client_id).name for client_id in silent]
+        self._waiting_since = None
+        return names

@@ -1,0 +1,25 @@
+"""The evaluation's failure table names how ``run`` plays each failed episode again."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from bt_servicesim.evaluation.report import failure_table
+
+
+def row(scenario: str, seed: int | None, *, completed: bool = False) -> dict[str, Any]:
+    return {"executive": "bt", "scenario": scenario, "episode_seed": seed,
+            "completed": completed, "failure": "the mission tree ended with FAILURE",
+            "checkpoints": [{"done": True}, {"done": False}]}
+
+
+def test_failed_episodes_name_their_seeds_and_the_sets_knobs() -> None:
+    table = failure_table([row("hard", 41), row("hard", 23), row("hard", 7, completed=True),
+                           row("default", None)])
+    hard = next(line for line in table if "| hard |" in line)
+    assert "| 2 |" in hard
+    assert ("`--executive bt` `--seed 23`, `--seed 41` `--sim-arg=--difficulty` "
+            "`--sim-arg=hard` |") in hard
+    assert "--seed 7" not in hard  # it completed
+    default = next(line for line in table if "| default |" in line)
+    assert default.endswith("| `--executive bt` the shipped task |")

@@ -1,0 +1,89 @@
+"""Lockstep on a live graph: a client that dies does not hang the simulator.
+
+The simulator runs in its own process, held at its first period for a client to join; the
+client, in a process of its own, joins and is then killed with SIGKILL before it says it is
+done. The simulator must drop it after its bound of wall time, say so naming it, and go on.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+from typing import Any
+
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from servicesim_competition.msg import LockstepPeriod
+
+from servicesim_sim.lockstep import JOIN_SERVICE, PERIOD_TOPIC
+
+JOINING_CLIENT = textwrap.dedent(f"""
+    import rclpy, time
+    from servicesim_competition.srv import LockstepJoin
+    rclpy.init()
+    node = rclpy.create_node("doomed_client")
+    client = node.create_client(LockstepJoin, "{JOIN_SERVICE}")
+    client.wait_for_service(timeout_sec=60.0)
+    future = client.call_async(LockstepJoin.Request(name="doomed"))
+    rclpy.spin_until_future_complete(node, future, timeout_sec=60.0)
+    print("joined at", future.result().joined_at.period, flush=True)
+    time.sleep(600)
+""")
+
+
+def wait_for_line(path: Path, text: str, limit_s: float) -> str | None:
+    deadline = time.monotonic() + limit_s
+    while time.monotonic() < deadline:
+        for line in path.read_text().splitlines():
+            if text in line:
+                return line
+        time.sleep(0.2)
+    return None
+
+
+def test_a_killed_lockstep_client_is_dropped_and_the_simulator_goes_on(
+        tmp_path: Path, ros_context: Any) -> None:
+    sim_log, client_log = tmp_path / "sim.log", tmp_path / "client.log"
+    with sim_log.open("w") as sim_out, client_log.open("w") as client_out:
+        simulator = subprocess.Popen(
+            [sys.executable, "-m", "servicesim_sim", "--speed", "0", "--await-lockstep", "60"],
+            stdout=sim_out, stderr=subprocess.STDOUT)
+        client = subprocess.Popen([sys.executable, "-c", JOINING_CLIENT], stdout=client_out,
+                                  stderr=subprocess.STDOUT)
+        try:
+            assert wait_for_line(client_log, "joined at", 90.0), client_log.read_text()
+            client.send_signal(signal.SIGKILL)
+            client.wait(timeout=10)
+            dropped = wait_for_line(sim_log, "dropped client 'doomed'", 60.0)
+            assert dropped is not None, sim_log.read_text()[-2000:]
+            assert "at period 1 " in dropped
+            assert periods_seen_beyond(1, context=ros_context, limit_s=30.0), \
+                "the simulator did not go on"
+        finally:
+            for process in (client, simulator):
+                if process.poll() is None:
+                    process.send_signal(signal.SIGINT)
+                    process.wait(timeout=30)
+
+
+def periods_seen_beyond(period: int, *, context: Any, limit_s: float) -> bool:
+    """Whether the simulator announces a period past ``period`` within ``limit_s``."""
+    node = Node("lockstep_probe", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    seen: list[int] = []
+    node.create_subscription(LockstepPeriod, PERIOD_TOPIC, lambda m: seen.append(m.period),
+                             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+    try:
+        deadline = time.monotonic() + limit_s
+        while time.monotonic() < deadline and not any(p > period + 10 for p in seen):
+            executor.spin_once(timeout_sec=0.1)
+        return any(p > period + 10 for p in seen)
+    finally:
+        executor.shutdown()
+        node.destroy_node()

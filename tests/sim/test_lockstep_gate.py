@@ -1,0 +1,105 @@
+"""The lockstep gate's rule: when the simulator may step on, and in which order it serves."""
+
+from __future__ import annotations
+
+from servicesim_sim.lockstep_gate import Admission, LockstepGate
+
+ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
+
+
+def gate_with_client(*endpoints: str) -> tuple[LockstepGate, int]:
+    gate = LockstepGate(drop_after_s=10.0)
+    gate.endpoints.update(endpoints or (ROOM, PICKUP, CMD_VEL))
+    client = gate.join("executive")
+    gate.announced(1)
+    return gate, client
+
+
+def admit(gate: LockstepGate, endpoint: str, served: list[str], label: str) -> None:
+    number = gate.take(endpoint)
+    gate.admit_later(Admission(endpoint=endpoint, number=number,
+                               serve=lambda: served.append(label)))
+
+
+def test_nobody_joined_holds_nothing() -> None:
+    gate = LockstepGate()
+    gate.announced(1)
+    assert not gate.active and gate.is_open()
+
+
+def test_the_gate_waits_for_the_clients_done_then_for_the_requests_it_counts() -> None:
+    gate, client = gate_with_client()
+    assert gate.missing() == ["done 1 from executive"]
+    gate.done(client, 1, {ROOM: 1})
+    assert gate.missing() == [f"1 request(s) on {ROOM}"]
+    gate.take(ROOM)
+    assert gate.is_open()
+    gate.announced(2)
+    assert not gate.is_open()  # each period needs its own done
+
+
+def test_requests_arriving_before_the_done_are_served_in_a_fixed_order() -> None:
+    """Arrival order across endpoints does not matter: by endpoint name, then within one."""
+    for arrivals in ([ROOM, PICKUP, ROOM], [PICKUP, ROOM, ROOM], [ROOM, ROOM, PICKUP]):
+        gate, client = gate_with_client()
+        served: list[str] = []
+        for index, endpoint in enumerate(arrivals):
+            admit(gate, endpoint, served, f"{endpoint}#{arrivals[:index].count(endpoint)}")
+        gate.done(client, 1, {ROOM: 2, PICKUP: 1})
+        assert gate.is_open()
+        for admission in gate.due_admissions():
+            admission.serve()
+        assert served == [f"{PICKUP}#0", f"{ROOM}#0", f"{ROOM}#1"]
+
+
+def test_a_request_no_done_has_counted_yet_waits_for_the_period_that_counts_it() -> None:
+    gate, client = gate_with_client()
+    served: list[str] = []
+    admit(gate, ROOM, served, "first")
+    admit(gate, ROOM, served, "early")  # sent from a callback after the done went out
+    gate.done(client, 1, {ROOM: 1})
+    assert [a.serve() for a in gate.due_admissions()] == [None] and served == ["first"]
+    gate.announced(2)
+    gate.done(client, 2, {ROOM: 2})
+    for admission in gate.due_admissions():
+        admission.serve()
+    assert served == ["first", "early"]
+
+
+def test_counts_on_endpoints_the_simulator_does_not_serve_are_ignored() -> None:
+    gate, client = gate_with_client()
+    gate.done(client, 1, {"/bt_servicesim/tree": 3})  # a topic published for someone else
+    assert gate.is_open()
+
+
+def test_a_client_joining_later_only_counts_from_its_join() -> None:
+    gate = LockstepGate()
+    gate.endpoints.add(ROOM)
+    for _ in range(5):
+        gate.take(ROOM)  # served before anyone joined
+    client = gate.join("late")
+    gate.announced(7)
+    gate.done(client, 7, {ROOM: 1})
+    assert gate.missing() == [f"1 request(s) on {ROOM}"]
+    gate.take(ROOM)
+    assert gate.is_open()
+
+
+def test_a_silent_client_is_dropped_after_the_bound_and_the_gate_opens() -> None:
+    gate, client = gate_with_client()
+    assert gate.drop_silent(100.0) == []  # starts the wait
+    assert gate.drop_silent(109.9) == []
+    assert gate.drop_silent(110.0) == ["executive"]
+    assert not gate.active and gate.is_open()
+    assert gate.done(client, 1, {}) is False  # a dropped client's late word is ignored
+
+
+def test_only_the_silent_client_is_dropped_when_another_is_done() -> None:
+    gate = LockstepGate(drop_after_s=1.0)
+    alive = gate.join("alive")
+    gate.join("dead")
+    gate.announced(3)
+    gate.done(alive, 3, {})
+    gate.drop_silent(0.0)
+    assert gate.drop_silent(1.0) == ["dead"]
+    assert gate.client_names() == ["alive"] and gate.is_open()
