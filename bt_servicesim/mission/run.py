@@ -54,7 +54,7 @@ from bt_servicesim.mission.stopping import (
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.ros import lockstep
-from bt_servicesim.ros.node import ExecutiveNode
+from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
 
@@ -130,7 +130,12 @@ class MissionRun:
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
                              tree_file=self.settings.tree, live_server=self.live_server)
         try:
-            code = self._run(node, executor, monitor, executive, records)
+            try:
+                code = self._run(node, executor, monitor, executive, records)
+            except Exception as error:
+                if (stop := stop_behind(error)) is not None:
+                    raise stop from error  # a signal that landed inside rclpy's C++
+                raise
         except (KeyboardInterrupt, Terminated) as stop:
             stops.hold(stop)
             monitor.freeze()

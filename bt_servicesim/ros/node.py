@@ -84,6 +84,8 @@ class ExecutiveNode(Node):
             try:
                 return callback(*args)
             except Exception as error:  # anything escaping kills the process: keep it instead
+                if (stop := stop_behind(error)) is not None:
+                    raise stop from error
                 self.note_error(error, where=getattr(callback, "__qualname__", repr(callback)))
                 return None
 
@@ -144,6 +146,23 @@ class ExecutiveNode(Node):
         publisher = super().create_publisher(*args, **kwargs)
         self.traffic.watch_publisher(publisher)
         return publisher
+
+
+def stop_behind(error: BaseException) -> BaseException | None:
+    """The stop signal that caused ``error``, if one did.
+
+    A signal's exception (``KeyboardInterrupt``, or any ``BaseException`` that is not an
+    ``Exception``) raised while rclpy's C++ runs Python code -- a message's field setter while
+    it converts a message it took -- comes out of the call as pybind11's ``TypeError`` ("Unable
+    to convert function return value"), with the stop as its cause. That is the stop, not a bug.
+    """
+    seen: set[int] = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        if not isinstance(error, Exception):
+            return error
+        error = error.__cause__ or error.__context__
+    return None
 
 
 def reliable(qos: QoSProfile | int) -> QoSProfile | int:
