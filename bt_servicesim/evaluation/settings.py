@@ -2,7 +2,8 @@
 
 :class:`EvaluationSettings` is the evaluate command's checked input; everything the batch, the
 statistics and the report need comes from it. :func:`load_warning` says when the requested
-load would make the machine, not the mission logic, decide the outcomes.
+load asks for more cores than the machine has: in lockstep (the simulator's default) that makes
+the evaluation slower, never different; a free-running backend would lag behind.
 """
 
 from __future__ import annotations
@@ -69,12 +70,13 @@ class EvaluationSettings:
 
 
 def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
-    """Why these settings will overload the machine, or None.
+    """Why these settings ask for more cores than the machine has, or None.
 
     An episode at speed X needs about X times :data:`EPISODE_CPU_S_PER_SIM_S` of CPU per wall
-    second (simulator and executive together); past the machine's cores the executives fall
-    behind the worlds they steer (they tick late, then seconds apart), and the results measure
-    the machine rather than the mission logic.
+    second (simulator and executive together). In lockstep, the default with our simulator,
+    an overloaded machine only makes every episode take longer: the simulator waits for each
+    tick. Free running (a backend without lockstep), the executives would fall behind the
+    worlds they steer, and the results would measure the machine rather than the mission logic.
     """
     if speed <= 0.0:  # each simulator runs flat out on a core, its executive beside it
         if 2 * jobs <= cores:
@@ -85,5 +87,6 @@ def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
         if needed <= cores:
             return None
         need_text = f"--jobs {jobs} at --speed {speed:g} needs about {needed:.1f} cores"
-    return (f"{need_text}; this machine has {cores}: the executives will lag behind their "
-            f"simulators (use fewer --jobs or a lower --speed)")
+    return (f"{need_text}; this machine has {cores}: in lockstep the episodes only run "
+            f"slower, free running their executives would lag behind (fewer --jobs or a lower "
+            f"--speed avoids both)")
