@@ -264,7 +264,8 @@ def play_episode(settings: EvaluationSettings, command: EpisodeCommand, episode:
     if stop.is_set():
         return None
     attempt = _attempt(Variable(attempts_name, client=client))
-    scratch = Path(tempfile.mkdtemp(prefix="bt_servicesim-episode-"))
+    scratch = Path(tempfile.mkdtemp(prefix="bt_servicesim-episode-",
+                                    dir=get_worker().local_directory))
     here = replace(episode, out=scratch / "run")
     try:
         if attempt > RETRIES + 1:

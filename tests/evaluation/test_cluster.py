@@ -11,7 +11,6 @@ worker that dies mid-episode.
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -22,9 +21,10 @@ from typing import Any
 
 import pytest
 
-from bt_servicesim.evaluation.cluster import cluster_address
 from bt_servicesim.cli import UsageError
-from tests.evaluation.test_evaluate import alive, files_under, start_evaluation, wait_for
+from bt_servicesim.evaluation.cluster import cluster_address
+from bt_servicesim.evaluation.episodes import descendants, start_time
+from tests.evaluation.test_evaluate import alive, files_under, start_evaluation
 
 CLUSTER_UP_S = 60.0
 
@@ -135,3 +135,99 @@ def test_a_cluster_of_two_workers_gives_the_local_pools_results(
         assert json.loads((out / "episode.json").read_text())["out"] == str(out)
         assert (out / "run.log").is_file() and (out / "sim.log").is_file()
     assert "2/2 episodes" in remote.stderr and "results:" in remote.stderr
+
+
+def episodes_on(workers: list[subprocess.Popen[bytes]], evaluation: subprocess.Popen[str],
+                limit_s: float = 60.0) -> dict[int, int]:
+    """Once every worker plays a fake episode that has written its first report and started
+    its orphan: each of their processes, by pid, with its start time."""
+    deadline = time.monotonic() + limit_s
+    while True:
+        found = {worker.pid: [pid for pid in descendants(worker.pid)
+                              if b"report.json" in _command_line(pid)] for worker in workers}
+        if all(len(pids) >= 2 for pids in found.values()):
+            return {pid: start_time(pid) or 0 for pids in found.values() for pid in pids}
+        if evaluation.poll() is not None or time.monotonic() > deadline:
+            evaluation.kill()
+            pytest.fail(f"no episode on every worker: {evaluation.communicate()}")
+        time.sleep(0.1)
+
+
+def _command_line(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
+def still_running(processes: dict[int, int]) -> list[int]:
+    return [pid for pid, started in processes.items() if start_time(pid) == started
+            and alive(pid)]
+
+
+def test_sigterm_stops_the_episodes_under_way_on_every_worker(
+        tmp_path: Path, cluster: Cluster) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
+                               "--cluster", cluster.address)
+    played = episodes_on(cluster.processes[1:], process)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 143, stderr
+    assert "Traceback" not in stderr and "(stopped by SIGTERM)" in stderr
+    assert not still_running(played), "every episode and its orphan are gone"
+    out = tmp_path / "evaluation"
+    summary = json.loads((out / "summary.json").read_text())
+    for executive in ("bt", "baseline"):
+        (row,) = summary[executive]["rows"]
+        assert row["not_run"] and row["failure"] == "evaluation interrupted"
+        report = json.loads((Path(row["out"]) / "report.json").read_text())
+        assert (report["run_id"], report["status"]) == (row["run_id"], "interrupted")
+        assert summary[executive]["not_run"] == 3 and summary[executive]["episodes"] == 0
+    written = files_under(out)
+    time.sleep(2.0)
+    assert files_under(out) == written, "nothing writes into --out after the evaluation exited"
+
+
+def test_an_episode_whose_worker_dies_is_played_again_on_another(
+        tmp_path: Path, cluster: Cluster) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "1", "--scenarios", "random",
+                               "--episode-timeout", "4", "--cluster", cluster.address)
+    doomed = cluster.processes[1]
+    played = episodes_on(cluster.processes[1:], process)
+    on_the_doomed = {pid: started for pid, started in played.items()
+                     if pid in descendants(doomed.pid)}
+    doomed.send_signal(signal.SIGKILL)
+    doomed.wait()
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 0, stderr
+    assert not still_running(on_the_doomed), "the dead worker's episode died with it"
+    summary = json.loads((tmp_path / "evaluation" / "summary.json").read_text())
+    for executive in ("bt", "baseline"):
+        (row,) = summary[executive]["rows"]
+        assert row["failure"] == "episode wall-time limit of 4 s exceeded; stopped", row
+        report = json.loads((Path(row["out"]) / "report.json").read_text())
+        assert report["run_id"] == row["run_id"], "played to its end, and shipped back"
+
+
+@pytest.mark.parametrize("address", ["localhost:8786", "http://127.0.0.1:8786",
+                                     "tcp://127.0.0.1", "tcp://127.0.0.1:99999",
+                                     "tcp://:8786", "tcp://127.0.0.1:8786/x"])
+def test_an_address_that_is_no_scheduler_address_is_refused(address: str) -> None:
+    with pytest.raises(UsageError, match="not a scheduler address"):
+        cluster_address(address)
+    assert cluster_address("tcp://127.0.0.1:8786") == "tcp://127.0.0.1:8786"
+
+
+@pytest.mark.parametrize(("address", "problem"), [
+    ("tcp://127.0.0.1:9", "no Dask scheduler answered within 10 s"),
+    ("127.0.0.1:9", "not a scheduler address"),
+])
+def test_a_bad_cluster_gives_one_line_and_starts_nothing(
+        tmp_path: Path, address: str, problem: str) -> None:
+    out = tmp_path / "evaluation"
+    finished = evaluation(out, "--episodes", "1", "--cluster", address)
+    assert finished.returncode == 2
+    (line,) = finished.stderr.splitlines()
+    assert line.startswith("python -m bt_servicesim.evaluate: error: --cluster " + address)
+    assert problem in line
+    assert not out.exists(), "nothing started"
