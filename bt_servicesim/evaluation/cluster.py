@@ -26,6 +26,7 @@ run at all (the scheduler lost, a task error) is failed with the reason; none is
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import io
 import json
@@ -43,6 +44,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from distributed import Client, Event, Future, Variable, get_client, get_worker
+from distributed.comm import connect as comm_connect
 
 from bt_servicesim.cli import UsageError
 from bt_servicesim.evaluation.episodes import (
@@ -90,15 +92,26 @@ def cluster_address(text: str) -> str:
 
 def connect(address: str) -> Client:
     """A client of the scheduler at ``address`` with at least one worker, within
-    :data:`CONNECT_TIMEOUT_S`; :class:`ClusterError` otherwise, with nothing started."""
+    :data:`CONNECT_TIMEOUT_S` each; :class:`ClusterError` otherwise, with nothing started.
+
+    The server is asked who it is before a client is made: what answers may be no scheduler
+    (a worker, or no Dask server at all), and a client that fails to start leaves noise behind.
+    """
     quiet = logging.getLogger("distributed")
     level = quiet.level
-    quiet.setLevel(logging.CRITICAL)  # the one line below says it all
+    quiet.setLevel(logging.CRITICAL)  # the one line of the ClusterError says it all
     try:
+        kind = asyncio.run(_server_kind(address))
+        if kind != "Scheduler":
+            raise ClusterError(f"--cluster {address}: the server there is a Dask {kind}, not "
+                               "a scheduler")
         client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError) as error:
         raise ClusterError(f"--cluster {address}: no Dask scheduler answered within "
                            f"{CONNECT_TIMEOUT_S:g} s ({' '.join(str(error).split())})") from None
+    except (ValueError, TypeError, KeyError, MemoryError) as error:  # another protocol
+        raise ClusterError(f"--cluster {address}: what answers there does not speak Dask's "
+                           f"protocol ({type(error).__name__} on its answer)") from None
     finally:
         quiet.setLevel(level)
     try:
@@ -109,6 +122,17 @@ def connect(address: str) -> Client:
                            f"within {CONNECT_TIMEOUT_S:g} s; start one with `dask worker "
                            f"{address}`)") from None
     return client
+
+
+async def _server_kind(address: str) -> str:
+    """What the Dask server at ``address`` says it is: ``Scheduler``, ``Worker``, ..."""
+    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S)
+    try:
+        await comm.write({"op": "identity", "reply": True})
+        identity = await asyncio.wait_for(comm.read(), timeout=CONNECT_TIMEOUT_S)
+    finally:
+        await comm.close()
+    return str(identity.get("type", "server of unknown kind"))
 
 
 def run_on_cluster(settings: EvaluationSettings, episodes: Iterable[Episode], client: Client,

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,7 +24,7 @@ from typing import Any
 import pytest
 
 from bt_servicesim.cli import UsageError
-from bt_servicesim.evaluation.cluster import cluster_address
+from bt_servicesim.evaluation.cluster import ClusterError, cluster_address, connect
 from bt_servicesim.evaluation.episodes import descendants, start_time
 from tests.evaluation.test_evaluate import alive, files_under, start_evaluation
 
@@ -231,3 +233,17 @@ def test_a_bad_cluster_gives_one_line_and_starts_nothing(
     assert line.startswith("python -m bt_servicesim.evaluate: error: --cluster " + address)
     assert problem in line
     assert not out.exists(), "nothing started"
+
+
+def test_a_server_that_is_no_dask_scheduler_is_refused_in_one_line() -> None:
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        def answer_in_http() -> None:
+            connection, _ = server.accept()
+            with connection:
+                connection.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 3)
+
+        threading.Thread(target=answer_in_http, daemon=True).start()
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        with pytest.raises(ClusterError, match="does not speak Dask's protocol") as refused:
+            connect(address)
+    assert "\n" not in str(refused.value)
