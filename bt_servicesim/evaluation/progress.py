@@ -1,12 +1,13 @@
 """How far an evaluation has got, for a person watching it and for its logs.
 
 On a terminal, one live bar drawn by tqdm: episodes done of all, the rate, the time left and the
-failures so far, redrawn in place. Anywhere else (a log file, CI, a pipe) no bar is drawn: each
-finished episode prints one plain line, which says the same and which episode it was and how it
-ended -- logs and CI read those lines, so their text is kept as it has always been (one line)::
+failures so far, redrawn in place (its clock every second, even while no episode ends).
+Anywhere else (a log file, CI, a pipe) no bar is drawn: each finished episode prints one plain
+line, which says the same and which episode it was and how it ended -- logs and CI read those
+lines, so their text is kept as it has always been (one line, broken here at the ``|``)::
 
-    [######........................] 2/10 episodes, 1 failed, 0m41s elapsed, ~2m44s left \
-      bt random #0 (seed 0): completed, score 2209.8
+    [######........................] 2/10 episodes, 1 failed, 0m41s elapsed, ~2m44s left  |
+    bt random #0 (seed 0): completed, score 2209.8
 
 A stream that fails (the terminal hung up, the pipe closed) ends the progress output, never the
 evaluation.
@@ -16,7 +17,9 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import threading
 import time
+from collections.abc import Callable
 from typing import Any, TextIO
 
 from tqdm import tqdm
@@ -25,7 +28,8 @@ __all__ = ["Progress", "as_minutes", "row_line"]
 
 BAR_WIDTH = 30  # characters of the plain line's bar
 LIVE_FORMAT = ("{percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} episodes "
-               "[{elapsed}<{remaining}, {rate_fmt}] {postfix}")
+               "[{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+TICK_S = 1.0  # wall seconds between redraws of the live bar's clock while no episode ends
 
 
 class Progress:
@@ -37,6 +41,9 @@ class Progress:
         self.started = time.monotonic()
         self.bar: tqdm[Any] | None = _live_bar(total, self.stream) if _is_terminal(
             self.stream) else None
+        self._closed = threading.Event()
+        if self.bar is not None:
+            threading.Thread(target=self._tick, name="progress-clock", daemon=True).start()
 
     @property
     def live(self) -> bool:
@@ -54,6 +61,7 @@ class Progress:
 
     def close(self) -> None:
         """Leave the bar as it ended, on a line of its own."""
+        self._closed.set()
         if self.bar is not None:
             self._guarded(self.bar.close)
             self.bar = None
@@ -72,12 +80,20 @@ class Progress:
         self.bar.set_postfix_str(f"{self.failed} failed", refresh=False)
         self.bar.update(1)
 
-    def _guarded(self, action: Any) -> None:
+    def _tick(self) -> None:
+        while not self._closed.wait(TICK_S):
+            bar = self.bar
+            if bar is None:
+                return
+            self._guarded(bar.refresh)
+
+    def _guarded(self, action: Callable[[], object]) -> None:
         """Do ``action`` on the bar; a failing stream ends the progress output."""
         try:
             action()
         except (OSError, ValueError):
             self.stream, self.bar = None, None
+            self._closed.set()
 
     def _write(self, text: str) -> None:
         if self.stream is None:
