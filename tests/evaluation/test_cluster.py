@@ -18,15 +18,23 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from bt_servicesim.cli import UsageError
+from bt_servicesim.evaluate import evaluate
 from bt_servicesim.evaluation.cluster import ClusterError, cluster_address, connect
 from bt_servicesim.evaluation.episodes import descendants, start_time
-from tests.evaluation.test_evaluate import alive, files_under, start_evaluation
+from tests.evaluation.test_evaluate import (
+    alive,
+    fake,
+    files_under,
+    settings,
+    start_evaluation,
+)
 
 CLUSTER_UP_S = 60.0
 
@@ -76,7 +84,8 @@ class Cluster:
 
     def _wait_for_workers(self, count: int) -> None:
         deadline = time.monotonic() + CLUSTER_UP_S
-        while not self.scheduler_file.exists():
+        while not (self.scheduler_file.exists() and self.scheduler_file.stat().st_size
+                   and "address" in self.scheduler_file.read_text()):
             assert time.monotonic() < deadline, "the scheduler did not come up"
             time.sleep(0.1)
         from distributed import Client
@@ -247,3 +256,30 @@ def test_a_server_that_is_no_dask_scheduler_is_refused_in_one_line() -> None:
         with pytest.raises(ClusterError, match="does not speak Dask's protocol") as refused:
             connect(address)
     assert "\n" not in str(refused.value)
+
+
+def test_the_rows_come_back_in_plan_order_and_resume_keeps_them(
+        tmp_path: Path, cluster: Cluster) -> None:
+    modes = {("baseline", 1): "crash"}  # one episode with no report of its own
+    local = settings(tmp_path, out=tmp_path / "local")
+    remote = settings(tmp_path, out=tmp_path / "remote")
+    with (tmp_path / "progress.log").open("w") as stream:
+        local_rows, _ = evaluate(local, command=fake(modes), stream=stream)
+        with connect(cluster.address) as client:
+            remote_rows, _ = evaluate(remote, command=fake(modes), stream=stream, cluster=client)
+            played = files_under(remote.out)
+            again, _ = evaluate(replace(remote, resume=True), command=fake(modes),
+                                stream=stream, cluster=client)
+    assert [judged(row) for row in remote_rows] == [judged(row) for row in local_rows]
+    assert [row["failure"] for row in remote_rows] == [row["failure"] for row in local_rows]
+    assert len(remote_rows) == 8 and any(not row["completed"] for row in remote_rows)
+    assert [row.get("resumed") for row in again] == [True] * 8, "a crash is an outcome, kept"
+    assert [judged(row) for row in again] == [judged(row) for row in remote_rows]
+    assert episode_files(remote.out) == episode_files(remote.out, played), \
+        "the kept episodes were not played again"
+
+
+def episode_files(out: Path, files: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The episodes' files (not the evaluation's summary and results), as ``files_under``."""
+    return {path: stamp for path, stamp in (files or files_under(out)).items()
+            if Path(path).parent != out}
