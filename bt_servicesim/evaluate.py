@@ -36,7 +36,13 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
-from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, UsageError, error_line
+from bt_servicesim.cli import (
+    EXIT_FAILED,
+    EXIT_OK,
+    OneLineArgumentParser,
+    UsageError,
+    error_line,
+)
 from bt_servicesim.evaluation.episodes import (
     EpisodeCommand,
     plan_episodes,
@@ -194,7 +200,18 @@ def _main(argv: Sequence[str] | None, command: EpisodeCommand) -> int:
         if warning is not None:
             print(f"{PROG}: warning: {warning}", file=sys.stderr)
         _, stopped_by = evaluate(settings, command, cluster=cluster)
+        if cluster is not None and stopped_by is None and _lost(cluster):
+            print(f"{PROG}: error: --cluster {args.cluster}: the scheduler was lost during the "
+                  "evaluation; the episodes under way are not_run, those not started were not "
+                  "played", file=sys.stderr)
+            return EXIT_FAILED
     return EXIT_OK if stopped_by is None else 128 + stopped_by
+
+
+def _lost(cluster: Client) -> bool:
+    from bt_servicesim.evaluation.cluster import lost
+
+    return lost(cluster)
 
 
 def _connect(address: str) -> Client:

@@ -59,7 +59,7 @@ from bt_servicesim.evaluation.progress import Progress
 from bt_servicesim.evaluation.settings import EPISODE_NAME, STOP_GRACE_S, EvaluationSettings
 from bt_servicesim.mission.stopping import StopSignals, Terminated
 
-__all__ = ["ClusterError", "cluster_address", "connect", "run_on_cluster"]
+__all__ = ["LOST", "ClusterError", "cluster_address", "connect", "lost", "run_on_cluster"]
 
 CONNECT_TIMEOUT_S = 10.0  # wall seconds to reach the scheduler and find a worker there
 POLL_S = 0.2  # wall seconds between the client's looks at the episodes under way
@@ -69,7 +69,15 @@ STOP_WAIT_S = STOP_GRACE_S + 50.0
 """Wall seconds the client waits, once stopped, for the workers to stop their episodes and send
 them back (each episode gets :data:`STOP_GRACE_S` to write its report, then is killed)."""
 
+LOST = "the cluster's scheduler was lost"
+"""The failure of an episode under way when the client lost the scheduler (a ``not_run`` row)."""
+
 Row = dict[str, Any]
+
+
+def lost(client: Client) -> bool:
+    """Whether the client lost its scheduler (its futures are then cancelled)."""
+    return client.status != "running"
 
 
 class ClusterError(Exception):
@@ -121,7 +129,8 @@ def connect(address: str) -> Client:
         raise ClusterError(f"--cluster {address}: the scheduler has no worker (none joined "
                            f"within {CONNECT_TIMEOUT_S:g} s; start one with `dask worker "
                            f"{address}`)") from None
-    return client
+    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)  # a lost scheduler:
+    return client  # the evaluation's rows and its one line say so
 
 
 async def _server_kind(address: str) -> str:
@@ -171,6 +180,8 @@ class ClusterBatch:
             for number, episode in enumerate(episodes):
                 while len(self.under_way) >= self.capacity():
                     self.collect(timeout=POLL_S)
+                if lost(self.client):
+                    break  # the rest are not played: not_run in the summary
                 self.start(number, episode)
             while self.under_way:
                 self.collect(timeout=POLL_S)
@@ -220,6 +231,8 @@ class ClusterBatch:
         try:
             played = future.result()
         except Exception as error:  # the cluster could not run it: failed, never dropped
+            if future.cancelled():  # the scheduler was lost: no verdict on the executive
+                return dict(self.failed(episode, LOST), not_run=True)
             return self.failed(episode, f"the cluster could not run it: "
                                         f"{type(error).__name__}: {error}")
         finally:

@@ -283,3 +283,23 @@ def episode_files(out: Path, files: dict[str, Any] | None = None) -> dict[str, A
     """The episodes' files (not the evaluation's summary and results), as ``files_under``."""
     return {path: stamp for path, stamp in (files or files_under(out)).items()
             if Path(path).parent != out}
+
+
+def test_a_lost_scheduler_ends_the_evaluation_with_one_line_and_its_results(
+        tmp_path: Path, cluster: Cluster) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
+                               "--cluster", cluster.address)
+    played = episodes_on(cluster.processes[1:], process)
+    scheduler = cluster.processes[0]
+    scheduler.send_signal(signal.SIGKILL)
+    scheduler.wait()
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 1, stderr
+    assert "Traceback" not in stderr
+    assert "error: --cluster tcp://127.0.0.1:" in stderr and "the scheduler was lost" in stderr
+    assert not still_running(played), "the workers stopped their episodes"
+    summary = json.loads((tmp_path / "evaluation" / "summary.json").read_text())
+    for executive in ("bt", "baseline"):
+        (row,) = summary[executive]["rows"]
+        assert row["not_run"] and row["failure"] == "the cluster's scheduler was lost"
+        assert summary[executive]["not_run"] == 3 and summary[executive]["episodes"] == 0
