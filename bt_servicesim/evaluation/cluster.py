@@ -56,7 +56,12 @@ from bt_servicesim.evaluation.episodes import (
     run_command,
 )
 from bt_servicesim.evaluation.progress import Progress
-from bt_servicesim.evaluation.settings import EPISODE_NAME, STOP_GRACE_S, EvaluationSettings
+from bt_servicesim.evaluation.settings import (
+    EPISODE_NAME,
+    INTERRUPTED,
+    STOP_GRACE_S,
+    EvaluationSettings,
+)
 from bt_servicesim.mission.stopping import StopSignals, Terminated
 
 __all__ = ["LOST", "ClusterError", "cluster_address", "connect", "lost", "run_on_cluster"]
@@ -178,7 +183,7 @@ class ClusterBatch:
         """Keep the workers' threads busy until the plan is done or a stop signal comes."""
         try:
             for number, episode in enumerate(episodes):
-                while len(self.under_way) >= self.capacity():
+                while not lost(self.client) and len(self.under_way) >= self.capacity():
                     self.collect(timeout=POLL_S)
                 if lost(self.client):
                     break  # the rest are not played: not_run in the summary
@@ -195,9 +200,12 @@ class ClusterBatch:
             raise
 
     def capacity(self) -> int:
-        """Episodes the workers can run at once: their threads, all together."""
-        workers = self.client.scheduler_info().get("workers", {})
-        return max(1, sum(worker.get("nthreads", 1) for worker in workers.values()))
+        """Episodes the workers can run at once: their threads, all together (at least one,
+        which waits on the scheduler for a worker to join); none if the scheduler cannot say."""
+        try:
+            return max(1, sum(self.client.nthreads().values()))
+        except Exception:  # the scheduler is being lost: the caller looks again
+            return 0
 
     def start(self, number: int, episode: Episode) -> None:
         if self.settings.resume and (kept := self.local.finished_row(episode)) is not None:
@@ -221,8 +229,9 @@ class ClusterBatch:
                 return
             time.sleep(POLL_S / 4)
         for future in done:
-            number, episode = self.under_way.pop(future)
+            number, episode = self.under_way[future]
             row = self.take(future, number, episode)
+            del self.under_way[future]  # only now: a stop during take() takes it again
             if row is not None:
                 self.record(number, row)
 
@@ -232,17 +241,16 @@ class ClusterBatch:
             played = future.result()
         except Exception as error:  # the cluster could not run it: failed, never dropped
             if future.cancelled():  # the scheduler was lost: no verdict on the executive
-                return dict(self.failed(episode, LOST), not_run=True)
-            return self.failed(episode, f"the cluster could not run it: "
-                                        f"{type(error).__name__}: {error}")
-        finally:
-            future.release()
-            with contextlib.suppress(Exception):  # its count of plays is done with
-                Variable(f"{self.token}-{number}", client=self.client).delete()
-        if played is None:
-            return None  # the evaluation was stopped before the episode started
-        row, archive = played
-        return unpack(episode, row, archive)
+                row: Row | None = dict(self.failed(episode, LOST), not_run=True)
+            else:
+                row = self.failed(episode, f"the cluster could not run it: "
+                                           f"{type(error).__name__}: {error}")
+        else:
+            row = None if played is None else unpack(episode, *played)
+        future.release()
+        with contextlib.suppress(Exception):  # its count of plays is done with
+            Variable(f"{self.token}-{number}", client=self.client).delete()
+        return row  # None: the evaluation was stopped before the episode started
 
     def failed(self, episode: Episode, reason: str) -> Row:
         episode.out.mkdir(parents=True, exist_ok=True)
@@ -264,8 +272,9 @@ class ClusterBatch:
             self.collect(timeout=POLL_S)
         for future, (number, episode) in list(self.under_way.items()):
             future.cancel()
-            self.record(number, self.failed(episode, (
-                f"evaluation interrupted; the worker did not answer within {STOP_WAIT_S:g} s")))
+            self.record(number, dict(self.failed(episode, (
+                f"{INTERRUPTED}; the worker did not answer within {STOP_WAIT_S:g} s")),
+                not_run=True))
         self.under_way.clear()
 
 
