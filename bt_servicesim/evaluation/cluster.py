@@ -361,14 +361,9 @@ def _watching(stop: Event, stopping: threading.Event) -> Iterator[None]:
 
     def watch() -> None:
         while not done.is_set():
-            try:
-                if stop.wait(timeout=WATCH_S) or _released(worker, key):
-                    break
-            except Exception:  # the scheduler is lost: nobody can take the episode back
-                break
-        else:
-            return
-        stopping.set()
+            if _stop_asked(stop, worker, key):
+                stopping.set()
+                return
 
     watcher = threading.Thread(target=watch, name="episode-stop-watch", daemon=True)
     watcher.start()
@@ -379,7 +374,14 @@ def _watching(stop: Event, stopping: threading.Event) -> Iterator[None]:
         watcher.join()
 
 
-def _released(worker: Any, key: Any) -> bool:
-    """Whether the scheduler no longer wants the task's result (its client is gone)."""
+def _stop_asked(stop: Event, worker: Any, key: Any) -> bool:
+    """Whether the episode must stop: the evaluation set the stop event (waited for on the
+    scheduler, :data:`WATCH_S` at most), the scheduler no longer wants the task's result (its
+    client is gone), or the scheduler is lost (nobody can take the episode back)."""
+    try:
+        if stop.wait(timeout=WATCH_S):
+            return True
+    except Exception:
+        return True
     task = worker.state.tasks.get(key)
     return task is None or task.state in ("cancelled", "released", "forgotten")

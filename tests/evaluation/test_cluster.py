@@ -303,3 +303,17 @@ def test_a_lost_scheduler_ends_the_evaluation_with_one_line_and_its_results(
         (row,) = summary[executive]["rows"]
         assert row["not_run"] and row["failure"] == "the cluster's scheduler was lost"
         assert summary[executive]["not_run"] == 3 and summary[executive]["episodes"] == 0
+
+
+def test_an_evaluation_killed_outright_leaves_no_episode_running_on_the_workers(
+        tmp_path: Path, cluster: Cluster) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
+                               "--cluster", cluster.address)
+    played = episodes_on(cluster.processes[1:], process)
+    process.kill()  # SIGKILL: no clean-up of its own; its client just leaves the scheduler
+    process.communicate(timeout=30)
+    deadline = time.monotonic() + 60.0
+    while still_running(played) and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert not still_running(played), "the workers stopped the episodes nobody would take"
+    assert all(worker.poll() is None for worker in cluster.processes), "the cluster lives on"
