@@ -4,7 +4,9 @@ The claim of this project is that the behaviour tree completes missions the seed
 does not, faster and with a lower score. Evaluation checks that claim with numbers: for every
 scenario set and episode number it runs *each* executive on the *same* seed, each episode a
 ``python -m bt_servicesim.run --headless`` subprocess (its own simulator, its own run directory,
-a ROS domain the run claims for itself), several at once. It writes
+a ROS domain the run claims for itself), several at once -- on this machine, or with
+``--cluster tcp://HOST:PORT`` on the workers of a Dask cluster, with the same results
+(:mod:`bt_servicesim.evaluation.cluster`). It writes
 
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
