@@ -3,9 +3,10 @@
 The cluster is the real thing, on loopback only: ``dask scheduler`` and two ``dask worker``
 processes of one thread each, bound to 127.0.0.1, no dashboard. Real episodes (short missions of
 the bt executive, in lockstep, so a seed replays) run once on the cluster and once in the local
-pool, and must give the same rows and summary; fake episodes (those of ``test_evaluate.py``)
-check what only timing can show: a stop reaching every episode under way on any worker, and a
-worker that dies mid-episode.
+pool, and must give the same rows and summary. Fake episodes (those of ``test_evaluate.py``)
+check the rest quickly: the rows' order and ``--resume``, a stop reaching every episode under
+way on any worker, a worker that dies mid-episode, a lost scheduler, an evaluation killed
+outright; and bad addresses are refused before anything starts.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import time
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import pytest
 
@@ -46,6 +47,7 @@ class Cluster:
         self.directory = directory
         self.scheduler_file = directory / "scheduler.json"
         self.processes: list[subprocess.Popen[bytes]] = []
+        self.logs: list[IO[bytes]] = []
 
     def start(self) -> Cluster:
         self.processes.append(self._dask("scheduler", "--host", "127.0.0.1", "--port", "0",
@@ -76,9 +78,12 @@ class Cluster:
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
+        for log in self.logs:
+            log.close()
 
     def _dask(self, *arguments: str) -> subprocess.Popen[bytes]:
         log = (self.directory / f"{arguments[0]}-{len(self.processes)}.log").open("wb")
+        self.logs.append(log)
         return subprocess.Popen([sys.executable, "-m", "dask", *arguments], stdout=log,
                                 stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
 
