@@ -322,3 +322,41 @@ def test_an_evaluation_killed_outright_leaves_no_episode_running_on_the_workers(
         time.sleep(0.5)
     assert not still_running(played), "the workers stopped the episodes nobody would take"
     assert all(worker.poll() is None for worker in cluster.processes), "the cluster lives on"
+
+
+def test_an_episode_whose_workers_die_twice_is_failed_not_played_a_third_time(
+        tmp_path: Path, cluster: Cluster) -> None:
+    process = start_evaluation(tmp_path, "hang", "--episodes", "1", "--scenarios", "random",
+                               "--episode-timeout", "4", "--cluster", cluster.address)
+    workers = cluster.processes[1:]
+    for _ in range(2):  # kill whichever worker plays the bt episode, twice
+        playing = playing_worker(workers, process, b"-bt-random-0")
+        playing.send_signal(signal.SIGKILL)
+        playing.wait()
+        workers.remove(playing)
+    cluster.processes.append(cluster.start_worker(2))
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 0, stderr
+    summary = json.loads((tmp_path / "evaluation" / "summary.json").read_text())
+    (bt,) = summary["bt"]["rows"]
+    assert bt["failure"] == "the worker playing it died mid-episode, 2 times; not played again"
+    assert not bt["completed"] and not bt["not_run"]
+    (baseline,) = summary["baseline"]["rows"]
+    assert baseline["failure"] == "episode wall-time limit of 4 s exceeded; stopped"
+
+
+def playing_worker(workers: list[subprocess.Popen[bytes]], evaluation: subprocess.Popen[str],
+                   run_id_part: bytes, limit_s: float = 60.0) -> subprocess.Popen[bytes]:
+    """The worker whose episode ``run_id_part`` has written its first report (its orphan is
+    up)."""
+    deadline = time.monotonic() + limit_s
+    while True:
+        for worker in workers:
+            lines = [_command_line(pid) for pid in descendants(worker.pid)]
+            if any(run_id_part in line for line in lines) and len(lines) >= 2:
+                return worker
+        if evaluation.poll() is not None or time.monotonic() > deadline:
+            evaluation.kill()
+            pytest.fail(f"episode {run_id_part!r} not seen on a worker: "
+                        f"{evaluation.communicate()}")
+        time.sleep(0.1)
