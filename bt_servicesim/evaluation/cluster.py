@@ -213,6 +213,7 @@ class ClusterBatch:
             return
         if episode.out.exists():
             shutil.rmtree(episode.out)  # whatever an earlier run left is not this episode's
+        Variable(f"{self.token}-{number}", client=self.client).set(0)  # played so far
         future = self.client.submit(
             play_episode, replace(self.settings, resume=False), self.command, episode,
             f"{self.token}-stop", f"{self.token}-{number}", key=f"{self.token}-{number}",
@@ -327,10 +328,11 @@ def play_episode(settings: EvaluationSettings, command: EpisodeCommand, episode:
 
 def _attempt(attempts: Variable) -> int:
     """Which play of the episode this is: the scheduler hands an episode whose worker died to
-    another worker, and the count, kept on the scheduler, outlives the worker."""
+    another worker, and the count, kept on the scheduler (set to 0 by the client before it
+    submits the episode), outlives the worker."""
     try:
-        played = int(attempts.get(timeout=0.1))
-    except TimeoutError:
+        played = int(attempts.get(timeout=CONNECT_TIMEOUT_S))
+    except TimeoutError:  # not set: the client is not this module's
         played = 0
     attempts.set(played + 1)
     return played + 1
