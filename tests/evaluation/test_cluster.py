@@ -69,15 +69,18 @@ class Cluster:
                           "--local-directory", str(self.directory / f"worker-{number}"))
 
     def stop(self) -> None:
-        for process in reversed(self.processes):
-            if process.poll() is None:
-                process.terminate()
-        for process in self.processes:
-            try:
-                process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        """The workers first (they leave the scheduler), then the scheduler."""
+        workers, scheduler = self.processes[1:], self.processes[0]
+        for group in (workers, [scheduler]):
+            for process in group:
+                if process.poll() is None:
+                    process.terminate()
+            for process in group:
+                try:
+                    process.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait()
         for log in self.logs:
             log.close()
 
