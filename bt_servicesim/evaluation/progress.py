@@ -16,6 +16,8 @@ evaluation.
 from __future__ import annotations
 
 import contextlib
+import io
+import os
 import sys
 import threading
 import time
@@ -29,6 +31,7 @@ __all__ = ["Progress", "as_minutes", "row_line"]
 BAR_WIDTH = 30  # characters of the plain line's bar
 LIVE_FORMAT = ("{percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} episodes "
                "[{elapsed}<{remaining}, {rate_fmt}{postfix}]")
+DEFAULT_COLUMNS = 100  # of the live bar, when the terminal does not say
 TICK_S = 1.0  # wall seconds between redraws of the live bar's clock while no episode ends
 
 
@@ -92,8 +95,11 @@ class Progress:
         try:
             action()
         except (OSError, ValueError):
-            self.stream, self.bar = None, None
+            bar, self.stream, self.bar = self.bar, None, None
             self._closed.set()
+            if bar is not None:  # let tqdm forget it (its last words fail)
+                with contextlib.suppress(OSError, ValueError):
+                    bar.close()
 
     def _write(self, text: str) -> None:
         if self.stream is None:
@@ -113,11 +119,26 @@ def _is_terminal(stream: TextIO | None) -> bool:
 
 
 def _live_bar(total: int, stream: TextIO | None) -> tqdm[Any] | None:
-    """tqdm's bar on ``stream``; None if the stream fails at once."""
+    """tqdm's bar on ``stream``, as wide as the terminal; None if the stream fails at once.
+
+    The size is given, not left to tqdm: a terminal that reports no rows (a pseudo-terminal
+    nobody sized, as ``script`` makes) would make tqdm hide its only bar.
+    """
+    columns, rows = _terminal_size(stream)
     with contextlib.suppress(OSError, ValueError):
         return tqdm(total=total, file=stream, unit="episode", bar_format=LIVE_FORMAT,
-                    dynamic_ncols=True, smoothing=0.1, postfix="0 failed")
+                    ncols=columns if columns > 0 else DEFAULT_COLUMNS, nrows=max(rows, 2),
+                    position=0, smoothing=0.1, postfix="0 failed")
     return None
+
+
+def _terminal_size(stream: TextIO | None) -> tuple[int, int]:
+    """The terminal's columns and rows; zeros if it cannot say."""
+    try:
+        size = os.get_terminal_size(stream.fileno())  # type: ignore[union-attr]
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return 0, 0
+    return size.columns, size.lines
 
 
 def row_line(row: dict[str, Any]) -> str:

@@ -4,6 +4,7 @@ that fails never ends the evaluation."""
 from __future__ import annotations
 
 import io
+import os
 import re
 import time
 from typing import Any
@@ -97,3 +98,18 @@ def test_a_stream_that_fails_ends_the_progress_never_the_evaluation() -> None:
         assert stream.fails_after == 0, "it wrote until the stream failed"
     for errno in (5, 32):
         Progress(1, HungUp(fails_after=0, errno=errno)).advance(row(completed=True))
+
+
+def test_a_pseudo_terminal_that_reports_no_size_still_gets_the_bar() -> None:
+    main, child = os.openpty()  # a new pseudo-terminal: 0 columns, 0 rows
+    try:
+        with open(child, "w", closefd=False) as stream:
+            assert stream.isatty() and os.get_terminal_size(child).lines == 0
+            progress = Progress(2, stream)
+            progress.advance(row(completed=True))
+            progress.close()
+        drawn = os.read(main, 65536).decode(errors="replace")
+    finally:
+        os.close(main)
+        os.close(child)
+    assert "1/2 episodes" in drawn and "0 failed" in drawn, drawn
