@@ -21,7 +21,8 @@ started, and the stopped ones come back as ``not_run`` rows. A task whose client
 evaluation was killed) stops its episode too. A worker that dies mid-episode: the scheduler
 hands the episode to another worker, which plays it again from the start (a retry, once); if
 that worker dies too, the episode is failed with the reason. An episode the cluster could not
-run at all (the scheduler lost, a task error) is failed with the reason; none is dropped.
+run (a task error) is failed with the reason; none is dropped. A lost scheduler ends the batch:
+the episodes under way come back as ``not_run`` rows (:data:`LOST`), the rest are not started.
 """
 
 from __future__ import annotations
