@@ -4,7 +4,9 @@ The claim of this project is that the behaviour tree completes missions the seed
 does not, faster and with a lower score. Evaluation checks that claim with numbers: for every
 scenario set and episode number it runs *each* executive on the *same* seed, each episode a
 ``python -m bt_servicesim.run --headless`` subprocess (its own simulator, its own run directory,
-a ROS domain the run claims for itself), several at once. It writes
+a ROS domain the run claims for itself), several at once -- on this machine, or with
+``--cluster tcp://HOST:PORT`` on the workers of a Dask cluster, with the same results
+(:mod:`bt_servicesim.evaluation.cluster`). It writes
 
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
@@ -34,18 +36,23 @@ import sys
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
-from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, UsageError, error_line
+from bt_servicesim.cli import (
+    EXIT_FAILED,
+    EXIT_OK,
+    OneLineArgumentParser,
+    UsageError,
+    error_line,
+)
 from bt_servicesim.evaluation.episodes import (
     EpisodeCommand,
-    ProgressBar,
-    as_minutes,
     plan_episodes,
     planned_count,
     run_command,
     run_episodes,
 )
+from bt_servicesim.evaluation.progress import Progress, as_minutes
 from bt_servicesim.evaluation.report import write_results
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
@@ -59,6 +66,9 @@ from bt_servicesim.evaluation.settings import (
 from bt_servicesim.mission.settings import EXECUTIVES
 from bt_servicesim.mission.stopping import StopSignals, Terminated, signal_of
 from bt_servicesim.ros.environment import apply_localhost_defaults
+
+if TYPE_CHECKING:  # the local pool imports no distributed engine
+    from distributed import Client
 
 PROG = "python -m bt_servicesim.evaluate"
 
@@ -88,6 +98,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="keep the episodes an earlier evaluation in --out finished with "
                              "the same executive, scenario, seed, speed and time limit; run "
                              "only the rest")
+    parser.add_argument("--cluster", metavar="ADDRESS",
+                        help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
+                             "worker as many at once as it has threads (needs the 'cluster' "
+                             "extra); default: a local pool of --jobs")
     return parser
 
 
@@ -135,14 +149,21 @@ def _check(condition: bool, message: str) -> None:
 
 
 def evaluate(settings: EvaluationSettings, command: EpisodeCommand = run_command,
-             stream: TextIO | None = None) -> tuple[list[dict[str, Any]], int | None]:
+             stream: TextIO | None = None, cluster: Client | None = None,
+             ) -> tuple[list[dict[str, Any]], int | None]:
     """Run the whole evaluation and write its results: the rows, in plan order, and the signal
     that stopped it, if one did (the results of a stopped evaluation are written all the same,
-    for the episodes it played)."""
-    progress = ProgressBar(planned_count(settings), stream)
+    for the episodes it played). The episodes run on ``cluster`` if given, else locally."""
+    progress = Progress(planned_count(settings), stream)
     started = time.monotonic()
     with StopSignals() as stops:
-        rows = run_episodes(settings, plan_episodes(settings), command, progress, stops)
+        if cluster is None:
+            rows = run_episodes(settings, plan_episodes(settings), command, progress, stops)
+        else:
+            from bt_servicesim.evaluation.cluster import run_on_cluster
+
+            rows = run_on_cluster(settings, plan_episodes(settings), cluster, command, progress,
+                                  stops)
         progress.close()  # from here on a stop signal is only noted: the results are written
         write_results(settings, rows)
         stopped = f" (stopped by {signal.Signals(stops.first).name})" if stops.first else ""
@@ -167,15 +188,45 @@ def _main(argv: Sequence[str] | None, command: EpisodeCommand) -> int:
     args = build_parser().parse_args(arguments)
     try:
         settings = settings_from(args, arguments)
-        settings.out.mkdir(parents=True, exist_ok=True)
+        cluster = None if args.cluster is None else _connect(args.cluster)
     except (UsageError, OSError) as error:
         return error_line(PROG, error)
-    apply_localhost_defaults()
-    warning = load_warning(jobs=settings.jobs, speed=settings.speed, cores=os.cpu_count() or 1)
-    if warning is not None:
-        print(f"{PROG}: warning: {warning}", file=sys.stderr)
-    _, stopped_by = evaluate(settings, command)
+    with cluster or contextlib.nullcontext():
+        try:
+            settings.out.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            return error_line(PROG, error)
+        apply_localhost_defaults()
+        warning = None if cluster is not None else load_warning(
+            jobs=settings.jobs, speed=settings.speed, cores=os.cpu_count() or 1)
+        if warning is not None:
+            print(f"{PROG}: warning: {warning}", file=sys.stderr)
+        _, stopped_by = evaluate(settings, command, cluster=cluster)
+        if cluster is not None and stopped_by is None and _lost(cluster):
+            print(f"{PROG}: error: --cluster {args.cluster}: the scheduler was lost during the "
+                  "evaluation; the episodes under way are not_run, those not started were not "
+                  "played", file=sys.stderr)
+            return EXIT_FAILED
     return EXIT_OK if stopped_by is None else 128 + stopped_by
+
+
+def _lost(cluster: Client) -> bool:
+    from bt_servicesim.evaluation.cluster import lost
+
+    return lost(cluster)
+
+
+def _connect(address: str) -> Client:
+    """The cluster's client; a :class:`UsageError` naming the problem if there is none."""
+    try:
+        from bt_servicesim.evaluation.cluster import ClusterError, cluster_address, connect
+    except ImportError as error:
+        raise UsageError(f"--cluster needs Dask distributed: pip install -e '.[cluster]' "
+                         f"({error})") from None
+    try:
+        return connect(cluster_address(address))
+    except ClusterError as error:
+        raise UsageError(str(error)) from None
 
 
 if __name__ == "__main__":

@@ -35,8 +35,9 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from queue import Empty, Queue
-from typing import Any, TextIO
+from typing import Any
 
+from bt_servicesim.evaluation.progress import Progress
 from bt_servicesim.evaluation.report import source_revision
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
@@ -355,70 +356,8 @@ def _last_line(path: Path) -> str:
     return lines[-1].strip()[:200] if lines else "no output"
 
 
-class ProgressBar:
-    """One redrawn line on a terminal; one line per finished episode otherwise (logs, CI).
-
-    A stream that fails (the terminal hung up) ends the progress output, never the evaluation.
-    """
-
-    WIDTH = 30
-
-    def __init__(self, total: int, stream: TextIO | None = None) -> None:
-        self.total, self.done, self.failed = total, 0, 0
-        self.stream = stream or sys.stderr
-        try:
-            self.live = self.stream.isatty()
-        except (OSError, ValueError):
-            self.live = False
-        self.started = time.monotonic()
-
-    def advance(self, row: dict[str, Any]) -> None:
-        self.done += 1
-        self.failed += not row["completed"]
-        if self.live:
-            self._write("\r\x1b[2K" + self._bar())
-        else:
-            self._write(f"{self._bar()}  {_row_line(row)}\n")
-
-    def close(self) -> None:
-        if self.live:
-            self._write("\n")
-
-    def _write(self, text: str) -> None:
-        if self.stream is None:
-            return
-        try:
-            self.stream.write(text)
-            self.stream.flush()
-        except (OSError, ValueError):
-            self.stream = None  # type: ignore[assignment]
-
-    def _bar(self) -> str:
-        filled = round(self.WIDTH * self.done / self.total) if self.total else self.WIDTH
-        elapsed = time.monotonic() - self.started
-        left = elapsed / self.done * (self.total - self.done) if self.done else 0.0
-        return (f"[{'#' * filled}{'.' * (self.WIDTH - filled)}] {self.done}/{self.total} "
-                f"episodes, {self.failed} failed, {as_minutes(elapsed)} elapsed, "
-                f"~{as_minutes(left)} left")
-
-
-def _row_line(row: dict[str, Any]) -> str:
-    seed = "shipped" if row["episode_seed"] is None else f"seed {row['episode_seed']}"
-    verdict = (f"completed, score {row['score']:.1f}" if row["completed"]
-               else f"failed: {row['failure']}")
-    return f"{row['executive']} {row['scenario']} #{row['episode']} ({seed}): {verdict}"
-
-
-def as_minutes(seconds: float) -> str:
-    return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
-
-
-
-
-
-
 def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],
-                 command: EpisodeCommand = run_command, progress: ProgressBar | None = None,
+                 command: EpisodeCommand = run_command, progress: Progress | None = None,
                  stops: StopSignals | None = None) -> list[dict[str, Any]]:
     """Run every episode, ``settings.jobs`` at once; the rows, in plan order.
 
