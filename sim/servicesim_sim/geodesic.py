@@ -35,6 +35,7 @@ left off (reach an area, then the next one). No ROS here.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -78,7 +79,7 @@ def worst_excess_ratio(max_step: int) -> float:
     """``1 / cos(gap / 2)``: the most a staircase of the steps exceeds the segment it copies."""
     slopes = sorted({Fraction(a, b) for b in range(1, max_step + 1) for a in range(0, b + 1)})
     gap = max(math.atan(float(high)) - math.atan(float(low))
-              for low, high in zip(slopes, slopes[1:], strict=False))
+              for low, high in itertools.pairwise(slopes))
     return 1.0 / math.cos(gap / 2.0)
 
 
