@@ -56,15 +56,16 @@ class Search:
     predecessors: np.ndarray
     source: int
 
-    def seed_of(self, node: int) -> int:
-        """The seed node the shortest way to ``node`` started from."""
+    def way_to(self, node: int) -> list[int]:
+        """The nodes of the shortest way to ``node``, from the seed it started at."""
+        way = [node]
         while True:
-            previous = int(self.predecessors[node])
+            previous = int(self.predecessors[way[-1]])
             if previous == self.source:
-                return node
+                return way[::-1]
             if previous < 0:
                 raise ValueError(f"node {node} was not reached from any seed")
-            node = previous
+            way.append(previous)
 
 
 def step_directions(max_step: int) -> list[tuple[int, int]]:

@@ -43,7 +43,6 @@ entry, in order. Bad input is one line on stderr and exit status 2.
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 import sys
 from collections.abc import Sequence
@@ -126,8 +125,8 @@ def task_bound(world: World, scenario: Scenario, *,
     searches = [lattice.search(start, np.zeros(start.size))]
     for name, region in zip(CHECKPOINT_NAMES[:3], regions[:3], strict=True):
         searches.append(lattice.search(*_seeds(searches[-1], region, name)))
-    ends = _ends(searches, regions[3])
-    return _bound(lattice, searches, ends)
+    route = _route(searches, regions[3])
+    return _bound(lattice, route, _junctions(route, regions))
 
 
 def _near_box(lattice: LatticeGraph, box: AreaBox, reach: float) -> np.ndarray:
@@ -146,29 +145,43 @@ def _seeds(search: Search, region: np.ndarray, checkpoint: str) -> tuple[np.ndar
     return nodes, search.distances[nodes]
 
 
-def _ends(searches: list[Search], start_area: np.ndarray) -> list[int]:
-    """The nodes where the bound path completes each checkpoint, last to first."""
+def _route(searches: list[Search], start_area: np.ndarray) -> list[int]:
+    """The nodes of the bound path, start to end: each search's way, back from its end."""
     final = searches[-1].distances
     reached = np.flatnonzero(start_area & np.isfinite(final))
     if reached.size == 0:
         raise TaskBoundError(f"checkpoint {CHECKPOINT_NAMES[3]!r}: the robot cannot reach "
                              "the start area")
-    ends = [int(reached[np.argmin(final[reached])])]
-    for search in reversed(searches[1:]):
-        ends.append(search.seed_of(ends[-1]))
-    return ends[::-1]
+    route = [int(reached[np.argmin(final[reached])])]
+    for search in reversed(searches):
+        route = search.way_to(route[0])[:-1] + route
+    return route
 
 
-def _bound(lattice: LatticeGraph, searches: list[Search], ends: list[int]) -> TaskBound:
-    totals = [float(search.distances[end]) / lattice.ratio
-              for search, end in zip(searches, ends, strict=True)]
-    lengths = [totals[0]] + [later - earlier for earlier, later in itertools.pairwise(totals)]
+def _junctions(route: list[int], regions: tuple[np.ndarray, ...]) -> list[int]:
+    """Where on the route each checkpoint is first done (indices), in order: ties in the
+    search leave several ways of equal length, and the referee books the first."""
+    junctions, position = [], 0
+    for region in regions:
+        position = next(index for index in range(position, len(route)) if region[route[index]])
+        junctions.append(position)
+    return junctions
+
+
+def _bound(lattice: LatticeGraph, route: list[int], junctions: list[int]) -> TaskBound:
+    nodes = np.array(route)
+    steps = np.hypot(np.diff(lattice.x[nodes]), np.diff(lattice.y[nodes]))
+    along = np.concatenate([[0.0], np.cumsum(steps)]) / lattice.ratio
+    reached = [0.0] + [float(along[index]) for index in junctions]
     legs = tuple(
-        Leg(checkpoint=name, length_m=round(length, 3), bound_s=round(length / MAX_SPEED, 3),
-            end=(round(float(lattice.x[end]), 3), round(float(lattice.y[end]), 3)))
-        for name, length, end in zip(CHECKPOINT_NAMES, lengths, ends, strict=True))
+        Leg(checkpoint=name, length_m=round(later - earlier, 3),
+            bound_s=round((later - earlier) / MAX_SPEED, 3),
+            end=(round(float(lattice.x[route[index]]), 3),
+                 round(float(lattice.y[route[index]]), 3)))
+        for name, earlier, later, index in zip(CHECKPOINT_NAMES, reached[:-1], reached[1:],
+                                               junctions, strict=True))
     slack = lattice.junction_slack(JUNCTIONS)
-    length = max(0.0, totals[-1] - slack)
+    length = max(0.0, float(along[-1]) - slack)
     return TaskBound(bound_s=round(length / MAX_SPEED + FORCED_WAITS_S, 3),
                      length_m=round(length, 3), legs=legs, speed_m_s=MAX_SPEED,
                      waits_s=FORCED_WAITS_S, slack_m=round(slack, 3),
