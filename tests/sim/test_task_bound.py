@@ -132,10 +132,12 @@ def test_an_area_the_robot_cannot_reach_has_no_bound() -> None:
         task_bound(room, scenario(guest=(8.0, 1.0), start=(1.0, 1.0)))
 
 
-#: Completed missions of an earlier evaluation (commit 7ee4ae9, the office, free running):
-#: (set, seed, task sim time s), the ones closest to their bound of 66 per set and executive.
-REAL_MISSIONS = (("default", None, 153.08), ("random", 4, 99.38), ("random", 59, 89.16),
-                 ("hard", 37, 127.52), ("hard", 18, 89.9))
+#: Completed missions of an earlier evaluation (commit 7ee4ae9, the office, speed 20): (set,
+#: seed, task sim time s), those closest to their bound of the 66 per set and executive:
+#: the tree's best three on random (1.17-1.30 times the bound), on the shipped task and on
+#: hard; the seed's best on random.
+REAL_MISSIONS = (("random", 13, 132.04), ("random", 55, 158.08), ("random", 17, 97.12),
+                 ("default", None, 162.7), ("hard", 26, 180.7), ("random", 18, 188.68))
 
 
 def test_no_real_mission_beat_its_bound() -> None:
@@ -143,7 +145,7 @@ def test_no_real_mission_beat_its_bound() -> None:
     for scenario_set, seed, mission_s in REAL_MISSIONS:
         difficulty = Difficulty.hard() if scenario_set == "hard" else Difficulty.default()
         bound = task_bound(office, make_scenario(office, seed=seed, difficulty=difficulty))
-        assert 0.5 * mission_s < bound.bound_s <= mission_s, (scenario_set, seed)
+        assert 0.65 * mission_s < bound.bound_s <= mission_s, (scenario_set, seed)
 
 
 # ------------------------------------------------------------------------------ the command
