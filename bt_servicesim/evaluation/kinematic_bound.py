@@ -12,6 +12,10 @@ episode, so a paired comparison needs no more.
 
 A failing bound command (a broken install, a world that moved) costs the report its bound
 columns, never the evaluation: the rows keep no bound and :class:`Bounds` says why in a line.
+
+``python -m bt_servicesim.evaluation.kinematic_bound DIR`` does the same for an evaluation
+already run (its episodes' ``episode.json``; nothing in ``DIR`` is written) and prints the
+median and 90th percentile of time over the bound per executive and set.
 """
 
 from __future__ import annotations
@@ -20,10 +24,12 @@ import json
 import subprocess
 import sys
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bt_servicesim.cli import EXIT_FAILED, EXIT_OK, OneLineArgumentParser
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 
 BOUND_COMMAND = (sys.executable, "-m", "servicesim_sim.task_bound")
@@ -120,3 +126,60 @@ def add_kinematic_bounds(rows: list[dict[str, Any]], *,
     keys = list(dict.fromkeys(key for key in map(task_key, rows) if key is not None))
     bounds = request_bounds(keys, command=command)
     return with_bounds(rows, bounds), bounds.problem
+
+
+# ------------------------------------------------------------------------------ the command
+PROG = "python -m bt_servicesim.evaluation.kinematic_bound"
+
+
+def rows_of(directory: Path) -> list[dict[str, Any]]:
+    """The rows an evaluation directory holds: each finished episode's ``episode.json``."""
+    rows = []
+    for path in sorted(directory.glob("*/*/*/episode.json")):
+        try:
+            row = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            continue  # an episode still being written, or a broken file: not a finished row
+        if isinstance(row, dict) and {"executive", "scenario", "completed"} <= set(row):
+            rows.append(row)
+    return rows
+
+
+def bound_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """Per executive and set: completed episodes with a bound, median and p90 time over it."""
+    from bt_servicesim.evaluation.summary import time_over_bound
+
+    lines = ["executive set completed-with-bound median-bound-s median p90"]
+    for executive, scenario in sorted({(row["executive"], row["scenario"]) for row in rows}):
+        figures = time_over_bound([row for row in rows if row["executive"] == executive
+                                   and row["scenario"] == scenario])
+        lines.append(f"{executive} {scenario} {figures['episodes']} {figures['median_bound_s']} "
+                     f"{figures['median']} {figures['p90']}")
+    return lines
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m bt_servicesim.evaluation.kinematic_bound DIR [--rows FILE]``: time over the
+    bound of an evaluation's finished episodes, read from ``DIR`` (never written to); ``--rows``
+    writes the rows with their bounds as JSON."""
+    parser = OneLineArgumentParser(prog=PROG, description=main.__doc__)
+    parser.add_argument("directory", type=Path, help="an evaluation's --out directory")
+    parser.add_argument("--rows", type=Path, help="write the rows with their bounds here")
+    args = parser.parse_args(argv)
+    if not args.directory.is_dir():
+        parser.error(f"{args.directory}: not a directory")
+    rows = rows_of(args.directory)
+    if not rows:
+        parser.error(f"{args.directory}: no finished episode (no */*/*/episode.json)")
+    rows, problem = add_kinematic_bounds(rows)
+    if problem:
+        print(f"{PROG}: error: {problem}", file=sys.stderr)
+        return EXIT_FAILED
+    if args.rows is not None:
+        args.rows.write_text(json.dumps(rows, indent=1) + "\n")
+    print("\n".join(bound_lines(rows)))
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -18,6 +18,7 @@ import pytest
 from bt_servicesim.evaluation.kinematic_bound import (
     TaskKey,
     add_kinematic_bounds,
+    main,
     task_key,
 )
 from bt_servicesim.evaluation.report import markdown_report, write_results
@@ -149,3 +150,35 @@ def test_summary_of_rows_without_bounds_says_none() -> None:
     summary = summary_of(settings(Path("unused"), scenarios=("random",)), rows)
     assert summary["bt"]["time_over_bound"] == {"random": {
         "episodes": 0, "median": None, "p90": None, "median_bound_s": None}}
+
+
+def test_the_command_reads_an_evaluation_directory_without_writing_to_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    evaluation = tmp_path / "evaluation"
+    for executive, seed, sim_time in (("bt", 0, 55.0), ("bt", 1, 90.0), ("baseline", 0, 75.0)):
+        episode = evaluation / executive / "random" / str(seed)
+        episode.mkdir(parents=True)
+        (episode / "episode.json").write_text(json.dumps(
+            row(executive, "random", seed, sim_time_s=sim_time)))
+    (evaluation / "bt" / "random" / "2").mkdir()
+    (evaluation / "bt" / "random" / "2" / "episode.json").write_text('{"half written')
+    before = sorted(path.name for path in evaluation.rglob("*"))
+    assert main([str(evaluation), "--rows", str(tmp_path / "rows.json")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1:] == ["baseline random 1 50.0 1.5 1.5", "bt random 2 55.0 1.3 1.46"]
+    assert sorted(path.name for path in evaluation.rglob("*")) == before
+    rows = json.loads((tmp_path / "rows.json").read_text())
+    assert sorted(r["kinematic_bound_s"] for r in rows) == [50.0, 50.0, 60.0]
+
+
+@pytest.mark.parametrize("make", ["missing", "empty"])
+def test_the_command_refuses_a_directory_without_episodes_in_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], make: str) -> None:
+    directory = tmp_path / "evaluation"
+    if make == "empty":
+        directory.mkdir()
+    with pytest.raises(SystemExit) as stop:
+        main([str(directory)])
+    assert stop.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(directory) in lines[0], lines
