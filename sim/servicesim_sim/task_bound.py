@@ -112,21 +112,44 @@ def task_bound(world: World, scenario: Scenario, *,
     task, areas = scenario.task, world.areas
     grow = lattice.snap_radius()
     drop_off_reach = LOST_DISTANCE if scenario.difficulty.guest_path == "straight" else 0.0
-    regions = (
-        _near_box(lattice, areas[task.pick_up], grow),
-        np.hypot(lattice.x - task.guest_x, lattice.y - task.guest_y) <= PICKUP_RANGE_M + grow,
-        _near_box(lattice, areas[task.drop_off], grow + drop_off_reach),
-        _near_box(lattice, areas[task.start_area], grow),
-    )
+    drop_off = areas[task.drop_off]
+    pick_up_reach = np.hypot(lattice.x - task.guest_x,
+                             lattice.y - task.guest_y) <= PICKUP_RANGE_M + grow
+    # a guest picked up here walks straight to the robot first: through the drop-off area?
+    walked_in = pick_up_reach & _segments_meet_box(
+        (task.guest_x, task.guest_y), lattice.x, lattice.y, drop_off, grow + drop_off_reach)
+    robot_in = _near_box(lattice, drop_off, grow + drop_off_reach)
+    regions = (_near_box(lattice, areas[task.pick_up], grow), pick_up_reach,
+               robot_in | walked_in, _near_box(lattice, areas[task.start_area], grow))
     start = lattice.cell_corners(task.start_x, task.start_y)
     if start.size == 0:
         raise TaskBoundError(f"the start ({task.start_x:g}, {task.start_y:g}) is not where the "
                              "robot fits")
     searches = [lattice.search(start, np.zeros(start.size))]
-    for name, region in zip(CHECKPOINT_NAMES[:3], regions[:3], strict=True):
-        searches.append(lattice.search(*_seeds(searches[-1], region, name)))
+    for name, region in zip(CHECKPOINT_NAMES[:2], regions[:2], strict=True):
+        searches.append(lattice.search(*_seeds([(searches[-1], region)], name)))
+    searches.append(lattice.search(*_seeds([(searches[2], robot_in), (searches[1], walked_in)],
+                                           CHECKPOINT_NAMES[2])))
     route = _route(searches, regions[3])
     return _bound(lattice, route, _junctions(route, regions))
+
+
+def _segments_meet_box(start: tuple[float, float], xs: np.ndarray, ys: np.ndarray,
+                       box: AreaBox, grow: float) -> np.ndarray:
+    """Whether each straight segment from ``start`` to ``(xs, ys)`` passes through the box
+    grown by ``grow`` (clipped as Liang and Barsky do)."""
+    low, high = np.zeros(xs.shape), np.ones(xs.shape)
+    for origin, ends, lowest, highest in ((start[0], xs, box.min_x - grow, box.max_x + grow),
+                                          (start[1], ys, box.min_y - grow, box.max_y + grow)):
+        delta = ends - origin
+        with np.errstate(divide="ignore", invalid="ignore"):
+            first, second = (lowest - origin) / delta, (highest - origin) / delta
+        moving = delta != 0.0
+        low = np.where(moving, np.maximum(low, np.minimum(first, second)), low)
+        high = np.where(moving, np.minimum(high, np.maximum(first, second)), high)
+        if not lowest <= origin <= highest:
+            high = np.where(moving, high, -1.0)  # parallel to this side's slab, outside it
+    return low <= high
 
 
 def _near_box(lattice: LatticeGraph, box: AreaBox, reach: float) -> np.ndarray:
@@ -136,13 +159,21 @@ def _near_box(lattice: LatticeGraph, box: AreaBox, reach: float) -> np.ndarray:
     return np.hypot(dx, dy) <= reach
 
 
-def _seeds(search: Search, region: np.ndarray, checkpoint: str) -> tuple[np.ndarray, np.ndarray]:
-    """The region's reached nodes and their distances: where the next search starts."""
-    nodes = np.flatnonzero(region & np.isfinite(search.distances))
+def _seeds(reached: list[tuple[Search, np.ndarray]],
+           checkpoint: str) -> tuple[np.ndarray, np.ndarray]:
+    """Where the next search starts: the nodes of each region its search reached, at their
+    distances (the least, for a node in more than one)."""
+    nodes = np.concatenate([np.flatnonzero(region & np.isfinite(search.distances))
+                            for search, region in reached])
+    values = np.concatenate([search.distances[region & np.isfinite(search.distances)]
+                             for search, region in reached])
     if nodes.size == 0:
         raise TaskBoundError(f"checkpoint {checkpoint!r}: the robot cannot reach where it "
                              "is done")
-    return nodes, search.distances[nodes]
+    order = np.lexsort((values, nodes))
+    nodes, values = nodes[order], values[order]
+    first = np.concatenate([[True], nodes[1:] != nodes[:-1]])
+    return nodes[first], values[first]
 
 
 def _route(searches: list[Search], start_area: np.ndarray) -> list[int]:

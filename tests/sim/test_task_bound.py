@@ -104,6 +104,18 @@ def test_the_original_straight_guest_is_dropped_off_from_4_m() -> None:
     assert_tight_bound(bound.bound_s, 7.0 + 4.0 + 10.0)
 
 
+def test_a_guest_who_walks_through_the_drop_off_area_to_the_robot_needs_no_drive_there() -> None:
+    # the guest (out of range, east of the pick-up area) walks straight to the robot once
+    # picked up, through the drop-off area between them: the drop-off can come at once
+    hall = walled_world(width=20.0, height=2.0, areas={
+        "Start": AreaBox(0.0, 0.0, 2.0, 2.0), "PickUp": AreaBox(4.0, 0.0, 6.0, 2.0),
+        "DropOff": AreaBox(6.5, 0.0, 7.0, 2.0)})
+    bound = task_bound(hall, scenario(guest=(7.5, 1.0), start=(1.0, 1.0)))
+    # 3 m into the pick-up area, 1.5 m on to within 2 m of the guest, 3.5 m back: 8 m
+    assert 0.95 * 16.0 <= bound.bound_s <= 16.0
+    assert bound.legs[2].length_m == 0.0
+
+
 def test_diagonal_legs_in_an_open_room() -> None:
     room = walled_world(width=10.0, height=10.0, areas={
         "Start": AreaBox(0.5, 0.5, 1.5, 1.5), "PickUp": AreaBox(6.0, 6.0, 7.0, 7.0),
