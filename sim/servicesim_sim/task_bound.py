@@ -14,9 +14,11 @@ The route, checkpoint by checkpoint (the referee's rules, :mod:`servicesim_sim.e
    distance, walls or not) of the waiting guest (a pick-up is valid only after checkpoint 1);
 3. on until the robot's origin has been in the drop-off area: the drop-off needs the guest's
    origin inside it, and the guest walks the robot's trail (the default ``trail`` guest), so
-   the robot was there first. The ``straight`` guest walks through walls and is lost 4 m
-   behind (:data:`~servicesim_sim.guest.LOST_DISTANCE`), so for it the robot need only come
-   within 4 m of the area;
+   the robot was there first; but a guest picked up walks straight to where the robot stood
+   first, and if that walk crosses the area (adjoining areas) the drop-off may come at once.
+   The ``straight`` guest walks through walls and is lost 4 m behind
+   (:data:`~servicesim_sim.guest.LOST_DISTANCE`), so for it the robot need only come within
+   4 m of the area;
 4. back until its origin is in the start area (checkpoint 4).
 
 Left out, so that the bound stays a bound: the guest's lag (it stops 1.2 m behind, so a robot
