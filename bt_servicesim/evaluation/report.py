@@ -224,8 +224,9 @@ def write_plots(settings: EvaluationSettings, rows: list[dict[str, Any]],
             _success_bars(axes, settings, rows)
         else:
             _distributions(axes, settings, rows, FIELDS[name])
-        if name == "bound":
+        if name == "bound":  # the limit, dashed, with room below it
             axes.axhline(1.0, color="black", linewidth=0.8, linestyle="--")
+            axes.set_ylim(bottom=0.9)
         axes.set_title(title)
         figure.tight_layout()
         path = directory / f"results_{name}.png"
