@@ -122,8 +122,11 @@ def with_bounds(rows: list[dict[str, Any]], bounds: Bounds) -> list[dict[str, An
 def add_kinematic_bounds(rows: list[dict[str, Any]], *,
                          command: tuple[str, ...] | None = None) -> tuple[
                              list[dict[str, Any]], str | None]:
-    """The rows with their bounds (each distinct task asked once), and the problem, if any."""
-    keys = list(dict.fromkeys(key for key in map(task_key, rows) if key is not None))
+    """The rows with their bounds (each distinct task asked once), and the problem, if any.
+
+    Only played rows are asked for: an evaluation stopped at once writes its results at once."""
+    played = [row for row in rows if not row.get("not_run")]
+    keys = list(dict.fromkeys(key for key in map(task_key, played) if key is not None))
     bounds = request_bounds(keys, command=command)
     return with_bounds(rows, bounds), bounds.problem
 

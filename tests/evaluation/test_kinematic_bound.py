@@ -63,7 +63,8 @@ def test_each_task_is_asked_once_for_every_executive_and_the_ratio_is_time_over_
     rows = [row("bt", "random", 1, sim_time_s=90.0), row("baseline", "random", 1),
             row("bt", "hard", 1, sim_time_s=120.0),
             row("baseline", "hard", 1, completed=False, sim_time_s=900.0),
-            row("bt", "default", None, sim_time_s=75.0)]
+            row("bt", "default", None, sim_time_s=75.0),
+            row("bt", "random", 9, not_run=True)]  # a stopped evaluation: not asked for
     bounded, problem = add_kinematic_bounds(rows, command=fake_bound_command(log))
     assert problem is None
     calls = log.read_text().splitlines()
@@ -72,9 +73,9 @@ def test_each_task_is_asked_once_for_every_executive_and_the_ratio_is_time_over_
         {"world": None, "seed": 1, "sim_args": []},
         {"world": None, "seed": 1, "sim_args": ["--difficulty", "hard"]},
         {"world": None, "seed": None, "sim_args": []}]
-    assert [r["kinematic_bound_s"] for r in bounded] == [60.0, 60.0, 60.0, 60.0, 50.0]
-    assert [r["time_over_bound"] for r in bounded] == [1.5, pytest.approx(100 / 60, abs=1e-4), 2.0,
-                                                       None, 1.5]
+    assert [r.get("kinematic_bound_s") for r in bounded] == [60.0, 60.0, 60.0, 60.0, 50.0, None]
+    assert [r.get("time_over_bound") for r in bounded] == [
+        1.5, pytest.approx(100 / 60, abs=1e-4), 2.0, None, 1.5, None]
     assert bounded[0]["kinematic_bound_legs"][0]["checkpoint"] == "go_to_pick_up"
     assert "kinematic_bound_s" not in rows[0], "the rows given are left as they were"
 
