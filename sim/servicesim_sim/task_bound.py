@@ -111,18 +111,8 @@ def task_bound(world: World, scenario: Scenario, *,
     """The bound of ``scenario`` on ``world``; ``lattice``: :func:`free_lattice` of the world,
     when it is reused for many scenarios."""
     lattice = lattice or free_lattice(world)
-    task, areas = scenario.task, world.areas
-    grow = lattice.snap_radius()
-    drop_off_reach = LOST_DISTANCE if scenario.difficulty.guest_path == "straight" else 0.0
-    drop_off = areas[task.drop_off]
-    pick_up_reach = np.hypot(lattice.x - task.guest_x,
-                             lattice.y - task.guest_y) <= PICKUP_RANGE_M + grow
-    # a guest picked up here walks straight to the robot first: through the drop-off area?
-    walked_in = pick_up_reach & _segments_meet_box(
-        (task.guest_x, task.guest_y), lattice.x, lattice.y, drop_off, grow + drop_off_reach)
-    robot_in = _near_box(lattice, drop_off, grow + drop_off_reach)
-    regions = (_near_box(lattice, areas[task.pick_up], grow), pick_up_reach,
-               robot_in | walked_in, _near_box(lattice, areas[task.start_area], grow))
+    task = scenario.task
+    regions, robot_in, walked_in = _checkpoint_regions(lattice, world, scenario)
     start = lattice.cell_corners(task.start_x, task.start_y)
     if start.size == 0:
         raise TaskBoundError(f"the start ({task.start_x:g}, {task.start_y:g}) is not where the "
@@ -134,6 +124,24 @@ def task_bound(world: World, scenario: Scenario, *,
                                            CHECKPOINT_NAMES[2])))
     route = _route(searches, regions[3])
     return _bound(lattice, route, _junctions(route, regions))
+
+
+def _checkpoint_regions(lattice: LatticeGraph, world: World, scenario: Scenario) -> tuple[
+        tuple[np.ndarray, ...], np.ndarray, np.ndarray]:
+    """Where each checkpoint can be done (one mask per checkpoint, over the nodes, each grown
+    by the snap radius); for the drop-off also its two ways apart: the robot in the area, or a
+    pick-up from where the guest's straight walk to the robot crosses it."""
+    task, areas, grow = scenario.task, world.areas, lattice.snap_radius()
+    drop_off_reach = LOST_DISTANCE if scenario.difficulty.guest_path == "straight" else 0.0
+    drop_off = areas[task.drop_off]
+    pick_up_reach = np.hypot(lattice.x - task.guest_x,
+                             lattice.y - task.guest_y) <= PICKUP_RANGE_M + grow
+    walked_in = pick_up_reach & _segments_meet_box(
+        (task.guest_x, task.guest_y), lattice.x, lattice.y, drop_off, grow + drop_off_reach)
+    robot_in = _near_box(lattice, drop_off, grow + drop_off_reach)
+    regions = (_near_box(lattice, areas[task.pick_up], grow), pick_up_reach,
+               robot_in | walked_in, _near_box(lattice, areas[task.start_area], grow))
+    return regions, robot_in, walked_in
 
 
 def _segments_meet_box(start: tuple[float, float], xs: np.ndarray, ys: np.ndarray,
