@@ -103,8 +103,8 @@ class LatticeGraph:
             raise ValueError("the map has no cell where the robot fits")
         self._row0, self._col0 = int(rows.min()), int(cols.min())
         allowed = allowed[self._row0:rows.max() + 1, self._col0:cols.max() + 1]
-        self.index = np.full(allowed.shape, -1, dtype=np.int64)
-        self.index[allowed] = np.arange(int(allowed.sum()))
+        self.index = np.full(allowed.shape, -1, dtype=np.int32)
+        self.index[allowed] = np.arange(int(allowed.sum()), dtype=np.int32)
         self.nodes = int(allowed.sum())
         self.source = self.nodes  # the virtual node every search starts from
         node_rows, node_cols = np.nonzero(allowed)
@@ -141,7 +141,8 @@ class LatticeGraph:
         indptr[-1] += seeds.size
         graph = sparse.csr_matrix(
             (np.concatenate([base.data, values + SEED_OFFSET]),
-             np.concatenate([base.indices, seeds]), indptr), shape=base.shape)
+             np.concatenate([base.indices, seeds.astype(base.indices.dtype)]), indptr),
+            shape=base.shape)
         distances, predecessors = csgraph.dijkstra(graph, directed=True, indices=self.source,
                                                    return_predecessors=True)
         return Search(distances=distances[:self.nodes] - SEED_OFFSET,
