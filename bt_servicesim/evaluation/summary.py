@@ -1,4 +1,5 @@
-"""Statistics over episode rows: success, scores, penalties, and paired comparisons.
+"""Statistics over episode rows: success, scores, penalties, time over the kinematic bound, and
+paired comparisons.
 
 Plain functions over the rows the episodes wrote (one dict per episode), so they are tested
 without running anything. Paired figures compare two executives on the same seeds only.
@@ -54,10 +55,42 @@ def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict
     episode that was not played, started or not."""
     summaries = {}
     for executive in settings.executives:
-        summary = summarise([row for row in rows if row["executive"] == executive])
+        own = [row for row in rows if row["executive"] == executive]
+        summary = summarise(own)
         summary["not_run"] = settings.episodes * len(settings.scenarios) - summary["episodes"]
+        summary["time_over_bound"] = {
+            scenario: time_over_bound([row for row in own if row["scenario"] == scenario])
+            for scenario in settings.scenarios}
         summaries[executive] = summary
     return summaries
+
+
+def time_over_bound(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Mission time over the task's kinematic bound, over the completed episodes that have
+    one: how many, the median and the 90th percentile (None without any), and the median
+    bound itself (seconds)."""
+    ratios = sorted(float(row["time_over_bound"]) for row in played(rows)
+                    if row.get("completed") and row.get("time_over_bound") is not None)
+    bounds = [float(row["kinematic_bound_s"]) for row in played(rows)
+              if row.get("completed") and row.get("time_over_bound") is not None]
+    return {
+        "episodes": len(ratios),
+        "median": round(statistics.median(ratios), 4) if ratios else None,
+        "p90": round(percentile(ratios, 90.0), 4) if ratios else None,
+        "median_bound_s": round(statistics.median(bounds), 3) if bounds else None,
+    }
+
+
+def percentile(values: list[float], percent: float) -> float:
+    """The ``percent`` percentile by linear interpolation between the sorted values (numpy's
+    default); one value is its own every percentile."""
+    ordered = sorted(values)
+    if len(ordered) == 1:
+        return ordered[0]
+    position = (len(ordered) - 1) * percent / 100.0
+    low = int(position)
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
 
 
 def unplayed(settings: EvaluationSettings,

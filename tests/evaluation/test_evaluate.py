@@ -122,7 +122,7 @@ sys.exit(main(sys.argv[3:], command=command))
 """``python -m bt_servicesim.evaluate`` with the fake episodes: ``DRIVER fake.py mode args``."""
 
 SUMMARY_KEYS = {"episodes", "success_rate", "mean_score", "median_score", "mean_sim_time_s",
-                "penalties", "wall_time_s", "not_run", "rows"}
+                "penalties", "wall_time_s", "not_run", "rows", "time_over_bound"}
 
 
 def settings(tmp_path: Path, **changes: Any) -> EvaluationSettings:
