@@ -25,7 +25,8 @@ a report is counted only if it carries the episode's run id; a warm pair that cr
 answered garbage is stopped and replaced, its episode recorded as failed with the reason.
 Ctrl-C, SIGTERM and SIGHUP all stop an evaluation the same way: the episodes under way are
 stopped as above, none is left running or writing, the results of the episodes played are
-written, and the exit status is 128 + the signal's number. Statistics are defined in ``docs/evaluation.md``.
+written, and the exit status is 128 + the signal's number. Statistics are defined in
+``docs/evaluation.md``.
 """
 
 from __future__ import annotations

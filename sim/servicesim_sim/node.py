@@ -636,14 +636,11 @@ class SimulatorNode:
         if self.resets is not None:
             self.resets.check()
 
-    def close(self) -> None:
-        """Drop what the node's destruction leaves alive: the navigation action server (a
-        waitable) and the coroutines waiting on sim time or navigation, which no loop will
-        complete now."""
-        for _, future in self._sleepers:
-            future.cancel()
-        for navigation in self._navigations:
-            navigation.result.cancel()
+    def close(self, executor: DrainingExecutor) -> None:
+        """Drop what the node's destruction leaves alive: the coroutines waiting on sim time,
+        navigation or the gate, which no loop will resume now, and the navigation action
+        server (a waitable)."""
+        executor.drop_tasks_of(self.node)
         self._sleepers, self._navigations = [], []
         self._navigation.destroy()
 
@@ -807,6 +804,6 @@ def _start_episode(settings: SimSettings, engine: SimEngine | None,
 
 def _end_episode(simulator: SimulatorNode, executor: DrainingExecutor) -> None:
     """Drop the episode's node and everything on it."""
-    simulator.close()
+    simulator.close(executor)
     executor.remove_node(simulator.node)
     simulator.node.destroy_node()
