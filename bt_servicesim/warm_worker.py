@@ -15,7 +15,8 @@ rclpy up, and then plays the episodes it is sent one after the other. For each i
 3. destroys the node and clears the blackboard, so nothing of the episode is left for the next.
 
 Episodes come on stdin, one JSON object a line (:class:`WarmEpisode`); each gets one JSON line
-on the reply pipe (``--reply-fd``): ``{"run_id": ..., "exit_code": ...}``, after a first
+on the reply pipe (``--reply-fd``): ``{"run_id": ..., "exit_code": ..., "goes_on": ...}``
+(``goes_on`` false: the worker exits after this episode, its simulator gone), after a first
 ``{"ready": true, "ros_domain_id": ...}`` once the simulator is up. End of input ends the
 worker; so does a stop signal (the episode under way is stopped as ``run`` stops, its report
 says ``interrupted``), and a simulator that died (the reply says so, the worker exits 1: the
@@ -171,10 +172,12 @@ class WarmPair:
                 self._reply({"error": f"not an episode: {error}"})
                 continue
             code = self._play(episode, resets)
-            self._reply({"run_id": episode.run_id, "exit_code": code})
+            simulator_lives = self.simulator.exit_code() is None
+            self._reply({"run_id": episode.run_id, "exit_code": code,
+                         "goes_on": simulator_lives and code < 128})
             if code >= 128:  # stopped by a signal: so is the worker
                 return code
-            if self.simulator.exit_code() is not None:
+            if not simulator_lives:
                 print(f"{PROG}: error: {self.simulator.describe_exit()}", file=sys.stderr)
                 return EXIT_FAILED
         return EXIT_OK

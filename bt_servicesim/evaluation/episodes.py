@@ -215,9 +215,8 @@ class EpisodeRunner:
 
     def _run_warm(self, episode: Episode) -> EpisodeOutcome:
         """Play the episode on an idle warm pair, or a new one; a pair that failed is gone."""
-        try:
-            pair = self._idle_pairs.get_nowait()
-        except Empty:
+        pair = self._idle_pair()
+        if pair is None:
             pair = WarmPair(log_dir=self.settings.out / WARM_PAIRS_DIRECTORY
                             / f"pair-{next(self._pairs_started)}",
                             die_with_us=self._die_with_us)
@@ -228,6 +227,17 @@ class EpisodeRunner:
         if not pair.broken:
             self._idle_pairs.put(pair)
         return EpisodeOutcome(outcome.returncode, time.monotonic() - started, outcome.failure)
+
+    def _idle_pair(self) -> WarmPair | None:
+        """An idle pair whose worker still runs; one that ended meanwhile is let go."""
+        while True:
+            try:
+                pair = self._idle_pairs.get_nowait()
+            except Empty:
+                return None
+            if pair.alive:
+                return pair
+            pair.kill()
 
     def close(self) -> None:
         """Let every idle warm pair go: each stops its simulator and exits."""
@@ -447,6 +457,7 @@ def _run_all(settings: EvaluationSettings, episodes: Iterable[Episode], runner: 
         runner.stopping.set()
         raise
     finally:
+        runner.close()  # before the pool's threads end: a pair dies with the thread that made it
         pool.shutdown(wait=True, cancel_futures=True)  # the episodes under way stop themselves
-        runner.close()
+        runner.close()  # the pairs of the episodes that were under way
         collect()

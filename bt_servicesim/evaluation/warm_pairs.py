@@ -112,6 +112,11 @@ class WarmPair:
             self._replies = None
 
     # ---------------------------------------------------------------- play
+    @property
+    def alive(self) -> bool:
+        """Not known to be broken, and its worker (if started) still running."""
+        return not self.broken and (self.process is None or self.process.poll() is None)
+
     def play(self, line: str, *, run_id: str, timeout_s: float,
              stopping: Callable[[], bool]) -> PairOutcome:
         """Play the episode that ``line`` describes (a ``WarmEpisode`` line of the worker)
@@ -128,12 +133,13 @@ class WarmPair:
             self._stdin().write(line.encode())
             self._stdin().flush()
         except OSError as error:
-            return self._give_up(f"its stdin failed: {error}", "taking the episode")
+            return self._give_up(_Ended(f"the warm pair's worker did not take the episode: "
+                                        f"{error}"), "taking the episode")
         reply = self._reply(deadline, stopping)
         if isinstance(reply, dict) and reply.get("run_id") == run_id \
                 and isinstance(reply.get("exit_code"), int):
             code = int(reply["exit_code"])
-            if code >= 128:  # stopped by a signal; the worker is on its way out
+            if reply.get("goes_on") is not True:  # stopped, or its simulator died
                 self.kill()
             return PairOutcome(returncode=code)
         return self._give_up(reply, "playing the episode")
@@ -146,11 +152,9 @@ class WarmPair:
         """Stop the pair, and say why the episode did not end as an episode should."""
         if isinstance(reply, _Ended):
             failure = reply.text
-        elif isinstance(reply, str):
-            failure = f"the warm pair's worker failed while {doing}: {reply}"
         else:
-            failure = (f"the warm pair's worker answered garbage while {doing}: "
-                       f"{json.dumps(reply)[:160]}")
+            text = reply if isinstance(reply, str) else json.dumps(reply)
+            failure = f"the warm pair's worker answered garbage while {doing}: {text[:160]}"
         if not (isinstance(reply, _Ended) and reply.text == INTERRUPTED):
             failure += "; the pair was replaced"
         self.kill()
