@@ -190,13 +190,15 @@ class WarmPair:
         episode.out.mkdir(parents=True, exist_ok=True)
         with _output_to(episode.out / "run.log"):
             try:
-                refused = resets.reset(episode.reset_arguments(), self.simulator)
+                asked = resets.ask(episode.reset_arguments())
+                settings = episode.run_settings()
+                make_executive = executive_factory(settings)  # while the simulator resets
+                refused = resets.answer(asked, self.simulator)
                 if refused is not None:
                     print(f"{PROG}: error: the simulator refused the reset: {refused}",
                           file=sys.stderr)
                     return EXIT_BAD_INPUT
-                settings = episode.run_settings()
-                run = MissionRun(settings=settings, make_executive=executive_factory(settings),
+                run = MissionRun(settings=settings, make_executive=make_executive,
                                  extra_sim_args=episode.sim_args, backend=self.simulator,
                                  discovery_settle_s=WARM_SETTLE_S)
                 return run.play()
@@ -238,9 +240,12 @@ class _Resets:
             self.executor.spin_once(timeout_sec=0.05)
         return True
 
-    def reset(self, arguments: list[str], simulator: Any) -> str | None:
-        """Reset the simulator to these arguments; None once done, else why not."""
-        future = self.client.call_async(self.request_type(arguments=arguments))
+    def ask(self, arguments: list[str]) -> Any:
+        """Ask the simulator to reset to these arguments; the answer's future."""
+        return self.client.call_async(self.request_type(arguments=arguments))
+
+    def answer(self, future: Any, simulator: Any) -> str | None:
+        """None once the reset asked for is done, else why it was not."""
         deadline = time.monotonic() + RESET_WAIT_S
         while not future.done():
             if simulator.exit_code() is not None:
