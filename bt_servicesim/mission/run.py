@@ -126,15 +126,20 @@ class MissionRun:
                 rclpy.try_shutdown()
 
     def play(self) -> int:
-        """:meth:`execute` for a warm episode: rclpy is up and the backend is the caller's."""
+        """:meth:`execute` for a warm episode: rclpy is up and the backend is the caller's.
+
+        A stop signal that came while the run cleaned up (when it is only noted) still makes
+        the exit status 128 + its number, so that the caller stops too.
+        """
         with StopSignals() as stops:
             write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
-                return self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
+                code = self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
                 return self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
+            return code if stops.first is None or code >= 128 else 128 + stops.first
 
     def _stopped_while_starting(self, stop: BaseException, stops: StopSignals) -> int:
         stops.hold(stop)
