@@ -224,7 +224,9 @@ class EpisodeRunner:
         outcome = pair.play(warm_line(episode, self.settings), run_id=episode.run_id,
                             timeout_s=self.settings.episode_timeout_s,
                             stopping=self.stopping.is_set)
-        if not pair.broken:
+        if pair.worn_out:
+            pair.close()
+        elif not pair.broken:
             self._idle_pairs.put(pair)
         return EpisodeOutcome(outcome.returncode, time.monotonic() - started, outcome.failure)
 
