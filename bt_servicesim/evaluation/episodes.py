@@ -1,8 +1,11 @@
-"""The episodes of an evaluation: each one a ``python -m bt_servicesim.run --headless`` process.
+"""The episodes of an evaluation: each one what ``python -m bt_servicesim.run --headless`` does.
 
-Every episode runs in a subprocess of its own with its own simulator and run directory, several
-at once; each run claims a ROS domain of its own (:mod:`bt_servicesim.ros.domain`), so episodes
-running at once never hear each other, and its report says which. An episode that hangs past
+Every episode has a run directory of its own, several run at once, and each is played either on
+a warm pair (``warm``: a simulator and an executive process kept alive from one episode to the
+next, :mod:`bt_servicesim.evaluation.warm_pairs`) or, cold, in a ``run`` subprocess of its own
+with its own simulator. Each run or pair claims a ROS domain of its own
+(:mod:`bt_servicesim.ros.domain`), so episodes running at once never hear each other, and the
+report says which. An episode that hangs past
 its wall-time limit, or every running one when the evaluation is stopped, is stopped with its
 whole process tree. Each finished episode leaves its row (``episode.json``) beside its report, so
 ``--resume`` keeps what was done.
