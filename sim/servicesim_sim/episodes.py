@@ -102,6 +102,9 @@ class EpisodeResets:
     def __init__(self, node: Node) -> None:
         self.node = node
         self.pending: NextEpisode | None = None
+        self.used = False
+        """Whether a reset was ever accepted: the simulator then plays episodes one after
+        another, and holds still between them (``SimulatorNode._idle``)."""
         self.worlds = WorldShelf()
         self._answered: Future | None = None
         node.create_service(ResetEpisode, RESET_SERVICE, self._reset,
@@ -137,7 +140,7 @@ class EpisodeResets:
             self.node.get_logger().warning(f"reset refused: {response.error}")
             return response
         self._answered = Future()
-        self.pending = episode
+        self.pending, self.used = episode, True
         await self._answered
         response.accepted = True
         return response

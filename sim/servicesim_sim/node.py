@@ -81,6 +81,7 @@ RCLError = rclpy_implementation.RCLError
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
 PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
 FEEDBACK_PERIOD_S = 0.5  # navigation feedback at 2 Hz sim, as often as anyone reads it
+IDLE_WAIT_S = 0.05  # wall seconds of one wait while an episode is over (see SimulatorNode._idle)
 #: No default QoS-event handlers: each is a waitable the executor adds to every wait set, and
 #: the loop waits (with timeout 0) once per I/O period, hundreds of times a wall second.
 #: With them the idle wait costs about 4x as much. Mismatched QoS still shows in
@@ -144,6 +145,7 @@ class SimulatorNode:
         self._active_goal: ServerGoalHandle | None = None
         self._navigations: list[_Navigation] = []
         self._io_count = 0
+        self._had_client = False
         self._dropped = 0
         self._camera_next = 0.0
         self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
@@ -625,6 +627,9 @@ class SimulatorNode:
                     meanwhile=self._repeat_clock)
             self._wait_for_wall_clock(pacer, executor)
             self.lockstep.hold(executor)
+            self._had_client = self._had_client or self.lockstep.active
+            if self._had_client and not self.lockstep.active and self._resets_used():
+                self._idle(executor)
 
     def _repeat_clock(self) -> None:
         """While the loop holds at its first period for a client: the clock again, for late
@@ -635,6 +640,21 @@ class SimulatorNode:
     def _check_reset(self) -> None:
         if self.resets is not None:
             self.resets.check()
+
+    def _resets_used(self) -> bool:
+        return self.resets is not None and self.resets.used
+
+    def _idle(self, executor: DrainingExecutor) -> None:
+        """Hold still, serving requests, until a reset or a new lockstep client.
+
+        Only in a simulator that plays episodes one after another (it has taken a reset):
+        once the episode's lockstep client has left, the episode is over, and running on
+        flat out until the next reset would only take a core from the episodes running
+        beside it.
+        """
+        while not self.lockstep.active and rclpy.ok(context=self.node.context):
+            self._check_reset()
+            executor.wait_and_run(timeout_sec=IDLE_WAIT_S)
 
     def close(self, executor: DrainingExecutor) -> None:
         """Drop what the node's destruction leaves alive: the coroutines waiting on sim time,
