@@ -2,7 +2,8 @@
 
 Nothing leaks from one episode into the next: two different seeds played one after the other
 on one warm pair give, each, the report the same seed gives played cold (a process pair of its
-own), in what lockstep makes replayable (completion, checkpoint times, penalties, score). A
+own), in what lockstep makes replayable (completion, checkpoint times, penalties, score); so
+do the hard set's knobs followed by the shipped task with none. A
 pair whose worker is killed mid-episode is replaced: its episode is failed with the reason and
 the next episode is played on a new pair. Missions are short (flat out, 60 sim s), as in
 ``tests/commands/test_reproducible_runs.py``.
@@ -29,9 +30,10 @@ from bt_servicesim.mission.report import read_report
 WALL_LIMIT_S = 300.0  # a generous bound per episode on a loaded machine; not a benchmark
 
 
-def settings(out: Path, *, seed: int, episodes: int = 2) -> EvaluationSettings:
+def settings(out: Path, *, seed: int, episodes: int = 2,
+             scenarios: tuple[str, ...] = ("random",)) -> EvaluationSettings:
     return EvaluationSettings(
-        episodes=episodes, scenarios=("random",), executives=("bt",), jobs=1, seed=seed,
+        episodes=episodes, scenarios=scenarios, executives=("bt",), jobs=1, seed=seed,
         out=out, speed=0.0, episode_timeout_s=WALL_LIMIT_S, time_limit_s=60.0, docs=None,
         command_line="(test)")
 
@@ -59,6 +61,21 @@ def test_two_seeds_on_one_warm_pair_report_as_each_seed_played_cold(tmp_path: Pa
         assert (Path(warm_row["out"]) / "tree_log.jsonl").is_file()
         assert (Path(warm_row["out"]) / "run.mcap").is_file()
     assert replayed(warm[0]) != replayed(warm[1]), "two seeds, two missions"
+
+
+def test_the_hard_knobs_do_not_outlive_their_episode(tmp_path: Path) -> None:
+    """The hard set's knobs, then the shipped task with none, on one pair: as each played cold."""
+    chosen = settings(tmp_path / "warm", seed=7, episodes=1, scenarios=("hard", "default"))
+    warm = run_episodes(chosen, plan_episodes(chosen), warm=True)
+    cold_settings = settings(tmp_path / "cold", seed=7, episodes=1, scenarios=("hard", "default"))
+    cold = run_episodes(cold_settings, plan_episodes(cold_settings))
+    assert [row["scenario"] for row in warm] == ["hard", "default"]
+    assert [row["episode_seed"] for row in warm] == [7, None]
+    for warm_row, cold_row in zip(warm, cold, strict=True):
+        assert warm_row["timing"] == cold_row["timing"] == "lockstep"
+        assert replayed(warm_row) == replayed(cold_row)
+    pairs = sorted(path.name for path in (chosen.out / WARM_PAIRS_DIRECTORY).iterdir())
+    assert pairs == ["pair-1"]
 
 
 def test_a_worker_killed_mid_episode_fails_that_episode_and_is_replaced(tmp_path: Path) -> None:
