@@ -128,20 +128,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     os.environ["ROS_DOMAIN_ID"] = str(claim.domain_id)
     try:
         with StopSignals():
-            return WarmPair(log_dir=args.log_dir, replies=replies).serve(sys.stdin)
+            return WarmWorker(log_dir=args.log_dir, replies=replies).serve(sys.stdin)
     except (KeyboardInterrupt, Terminated) as stop:
         return exit_code_for(stop)
     finally:
         claim.release()
 
 
-class WarmPair:
+class WarmWorker:
     """The simulator process, rclpy and the reset client; :meth:`serve` plays the episodes."""
 
     def __init__(self, *, log_dir: Path, replies: TextIO) -> None:
         from bt_servicesim.mission.simulator_process import SimulatorProcess
 
         self.replies = replies
+        self.lost: str | None = None
+        """Why the simulator can no longer be trusted (it died, or a reset went unanswered)."""
         self.simulator = SimulatorProcess(
             world=None, seed=None, speed=1.0, log_path=log_dir / "sim.log",
             extra_args=("--await-lockstep", f"{IDLE_HOLD_S:.0f}"))
@@ -172,13 +174,14 @@ class WarmPair:
                 self._reply({"error": f"not an episode: {error}"})
                 continue
             code = self._play(episode, resets)
-            simulator_lives = self.simulator.exit_code() is None
+            if self.lost is None and self.simulator.exit_code() is not None:
+                self.lost = self.simulator.describe_exit()
             self._reply({"run_id": episode.run_id, "exit_code": code,
-                         "goes_on": simulator_lives and code < 128})
+                         "goes_on": self.lost is None and code < 128})
             if code >= 128:  # stopped by a signal: so is the worker
                 return code
-            if not simulator_lives:
-                print(f"{PROG}: error: {self.simulator.describe_exit()}", file=sys.stderr)
+            if self.lost is not None:
+                print(f"{PROG}: error: {self.lost}", file=sys.stderr)
                 return EXIT_FAILED
         return EXIT_OK
 
@@ -202,6 +205,10 @@ class WarmPair:
                                  extra_sim_args=episode.sim_args, backend=self.simulator,
                                  discovery_settle_s=WARM_SETTLE_S)
                 return run.play()
+            except SimulatorLostError as lost:
+                self.lost = str(lost)
+                print(f"{PROG}: error: {lost}", file=sys.stderr)
+                return EXIT_FAILED
             except MissionTreeError as error:
                 print(f"{PROG}: error: {error}", file=sys.stderr)
                 return EXIT_BAD_INPUT
@@ -245,18 +252,24 @@ class _Resets:
         return self.client.call_async(self.request_type(arguments=arguments))
 
     def answer(self, future: Any, simulator: Any) -> str | None:
-        """None once the reset asked for is done, else why it was not."""
+        """None once the reset asked for is done, else the simulator's refusal;
+        :class:`SimulatorLostError` if it died or did not answer."""
         deadline = time.monotonic() + RESET_WAIT_S
         while not future.done():
             if simulator.exit_code() is not None:
-                return simulator.describe_exit()
+                raise SimulatorLostError(simulator.describe_exit())
             if time.monotonic() > deadline:
-                return f"no answer within {RESET_WAIT_S:.0f} s"
+                raise SimulatorLostError(f"the simulator did not answer the reset within "
+                                     f"{RESET_WAIT_S:.0f} s")
             self.executor.spin_once(timeout_sec=0.05)
         answer = future.result()
-        if answer is None or not answer.accepted:
-            return answer.error if answer is not None else "no answer"
-        return None
+        if answer is None:
+            raise SimulatorLostError("the simulator's reset service failed")
+        return None if answer.accepted else answer.error
+
+
+class SimulatorLostError(RuntimeError):
+    """The simulator died or stopped answering: the worker cannot play on with it."""
 
 
 @contextlib.contextmanager
