@@ -2,11 +2,15 @@
 
 The claim of this project is that the behaviour tree completes missions the seed's state machine
 does not, faster and with a lower score. Evaluation checks that claim with numbers: for every
-scenario set and episode number it runs *each* executive on the *same* seed, each episode a
-``python -m bt_servicesim.run --headless`` subprocess (its own simulator, its own run directory,
-a ROS domain the run claims for itself), several at once -- on this machine, or with
-``--cluster tcp://HOST:PORT`` on the workers of a Dask cluster, with the same results
-(:mod:`bt_servicesim.evaluation.cluster`). It writes
+scenario set and episode number it runs *each* executive on the *same* seed, several episodes
+at once, each in its own run directory. By default ``--jobs`` warm pairs play them: a simulator
+and an executive process that stay alive from one episode to the next, the simulator reset to
+each episode's world, seed and knobs, the executive building a fresh tree for each
+(:mod:`bt_servicesim.warm_worker`); ``--cold`` makes each episode a ``python -m
+bt_servicesim.run --headless`` subprocess of its own (its own simulator, a ROS domain the run
+claims for itself). With ``--cluster tcp://HOST:PORT`` the workers of a Dask cluster play the
+episodes, each cold, with the same results (:mod:`bt_servicesim.evaluation.cluster`). All write
+the same reports, in lockstep the same for the same seed. It writes
 
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
@@ -18,10 +22,12 @@ a ROS domain the run claims for itself), several at once -- on this machine, or 
 An episode is never dropped: one that outlives its wall-time limit is stopped (SIGINT, so the
 run stops its simulator and writes its report, then SIGKILL for whatever is left) and recorded
 as failed with the reason; one that crashes is recorded with its exit code and last error line;
-a report is counted only if it carries the episode's run id. Ctrl-C, SIGTERM and SIGHUP all stop
-an evaluation the same way: the episodes under way are stopped as above, none is left running or
-writing, the results of the episodes played are written, and the exit status is 128 + the
-signal's number. Statistics are defined in ``docs/evaluation.md``.
+a report is counted only if it carries the episode's run id; a warm pair that crashed, hung or
+answered garbage is stopped and replaced, its episode recorded as failed with the reason.
+Ctrl-C, SIGTERM and SIGHUP all stop an evaluation the same way: the episodes under way are
+stopped as above, none is left running or writing, the results of the episodes played are
+written, and the exit status is 128 + the signal's number. Statistics are defined in
+``docs/evaluation.md``.
 """
 
 from __future__ import annotations
@@ -94,6 +100,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="mission time limit in sim seconds (default 900)")
     parser.add_argument("--docs", type=Path,
                         help="also write results.md here, with the plots in <docs>/images/")
+    parser.add_argument("--cold", action="store_true",
+                        help="run every episode as a process of its own (simulator and "
+                             "executive started and stopped per episode) instead of on warm "
+                             "pairs kept alive between episodes")
     parser.add_argument("--resume", action="store_true",
                         help="keep the episodes an earlier evaluation in --out finished with "
                              "the same executive, scenario, seed, speed and time limit; run "
@@ -130,7 +140,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         seed=args.seed, out=args.out, speed=args.speed, episode_timeout_s=args.episode_timeout,
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
-        resume=args.resume,
+        resume=args.resume, cold=args.cold,
     )
 
 
@@ -148,22 +158,28 @@ def _check(condition: bool, message: str) -> None:
         raise UsageError(message)
 
 
-def evaluate(settings: EvaluationSettings, command: EpisodeCommand = run_command,
+def evaluate(settings: EvaluationSettings, command: EpisodeCommand | None = None,
              stream: TextIO | None = None, cluster: Client | None = None,
              ) -> tuple[list[dict[str, Any]], int | None]:
     """Run the whole evaluation and write its results: the rows, in plan order, and the signal
     that stopped it, if one did (the results of a stopped evaluation are written all the same,
-    for the episodes it played). The episodes run on ``cluster`` if given, else locally."""
+    for the episodes it played). The episodes run on ``cluster`` if given, else locally.
+
+    ``command``: each episode a process made by it (tests give a stand-in); by default warm
+    pairs locally, or :func:`run_command` processes with ``settings.cold`` or on a cluster.
+    """
     progress = Progress(planned_count(settings), stream)
     started = time.monotonic()
+    warm = command is None and not settings.cold
     with StopSignals() as stops:
         if cluster is None:
-            rows = run_episodes(settings, plan_episodes(settings), command, progress, stops)
+            rows = run_episodes(settings, plan_episodes(settings), command or run_command,
+                                progress, stops, warm=warm)
         else:
             from bt_servicesim.evaluation.cluster import run_on_cluster
 
-            rows = run_on_cluster(settings, plan_episodes(settings), cluster, command, progress,
-                                  stops)
+            rows = run_on_cluster(settings, plan_episodes(settings), cluster,
+                                  command or run_command, progress, stops)
         progress.close()  # from here on a stop signal is only noted: the results are written
         write_results(settings, rows)
         stopped = f" (stopped by {signal.Signals(stops.first).name})" if stops.first else ""
@@ -174,7 +190,7 @@ def evaluate(settings: EvaluationSettings, command: EpisodeCommand = run_command
     return rows, stops.first
 
 
-def main(argv: Sequence[str] | None = None, command: EpisodeCommand = run_command) -> int:
+def main(argv: Sequence[str] | None = None, command: EpisodeCommand | None = None) -> int:
     """The command; ``command`` makes each episode's command line (tests give a stand-in)."""
     with StopSignals():  # a stop before any episode started: nothing to clean up, no traceback
         try:
@@ -183,7 +199,7 @@ def main(argv: Sequence[str] | None = None, command: EpisodeCommand = run_comman
             return 128 + signal_of(stop)
 
 
-def _main(argv: Sequence[str] | None, command: EpisodeCommand) -> int:
+def _main(argv: Sequence[str] | None, command: EpisodeCommand | None) -> int:
     arguments = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(arguments)
     try:

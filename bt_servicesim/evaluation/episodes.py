@@ -1,8 +1,11 @@
-"""The episodes of an evaluation: each one a ``python -m bt_servicesim.run --headless`` process.
+"""The episodes of an evaluation: each one what ``python -m bt_servicesim.run --headless`` does.
 
-Every episode runs in a subprocess of its own with its own simulator and run directory, several
-at once; each run claims a ROS domain of its own (:mod:`bt_servicesim.ros.domain`), so episodes
-running at once never hear each other, and its report says which. An episode that hangs past
+Every episode has a run directory of its own, several run at once, and each is played either on
+a warm pair (``warm``: a simulator and an executive process kept alive from one episode to the
+next, :mod:`bt_servicesim.evaluation.warm_pairs`) or, cold, in a ``run`` subprocess of its own
+with its own simulator. Each run or pair claims a ROS domain of its own
+(:mod:`bt_servicesim.ros.domain`), so episodes running at once never hear each other, and the
+report says which. An episode that hangs past
 its wall-time limit, or every running one when the evaluation is stopped, is stopped with its
 whole process tree. Each finished episode leaves its row (``episode.json``) beside its report, so
 ``--resume`` keeps what was done.
@@ -21,6 +24,7 @@ episodes under way.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import os
 import shutil
@@ -34,18 +38,21 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from queue import Empty, Queue
+from queue import Empty, LifoQueue, Queue
 from typing import Any
 
+from bt_servicesim.evaluation.process_tree import descendants as descendants
+from bt_servicesim.evaluation.process_tree import start_time as start_time
+from bt_servicesim.evaluation.process_tree import stop_process_tree
 from bt_servicesim.evaluation.progress import Progress
 from bt_servicesim.evaluation.report import source_revision
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
     EPISODE_NAME,
     INTERRUPTED,
-    STOP_GRACE_S,
     EvaluationSettings,
 )
+from bt_servicesim.evaluation.warm_pairs import WarmPair
 from bt_servicesim.mission.report import read_report
 from bt_servicesim.mission.settings import REPORT_NAME
 from bt_servicesim.mission.stopping import (
@@ -55,10 +62,9 @@ from bt_servicesim.mission.stopping import (
 )
 from bt_servicesim.ros.environment import apply_localhost_defaults
 
-PARENT_FIELD, STATE_FIELD, START_TIME_FIELD = 4, 3, 22  # of /proc/<pid>/stat
 FINAL_STATUSES = ("completed", "failed", "interrupted")  # what a finished run's report says
-GONE_WAIT_S = 5.0  # wall seconds to wait for SIGKILLed processes to be gone
 POLL_S = 0.1  # wall seconds between looks at the episodes under way
+WARM_PAIRS_DIRECTORY = "warm-pairs"  # in the evaluation directory: each pair's own output
 
 
 @dataclass(frozen=True)
@@ -103,6 +109,14 @@ def planned_count(settings: EvaluationSettings) -> int:
     return settings.episodes * len(settings.scenarios) * len(settings.executives)
 
 
+def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
+    """The episode as a warm pair's worker takes it: what :func:`run_command` says, as JSON."""
+    return json.dumps({"out": str(episode.out), "run_id": episode.run_id,
+                       "executive": episode.executive, "seed": episode.seed,
+                       "speed": settings.speed, "time_limit_s": settings.time_limit_s,
+                       "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args)}) + "\n"
+
+
 def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
     """The run command for one episode.
 
@@ -131,16 +145,21 @@ class EpisodeOutcome:
 
 
 class EpisodeRunner:
-    """Runs episodes as subprocesses within a wall-time limit; stops them all on request."""
+    """Runs episodes within a wall-time limit, each as a subprocess of its own (``command``) or,
+    ``warm``, on warm pairs kept from one episode to the next; stops them all on request."""
 
-    def __init__(self, settings: EvaluationSettings, command: EpisodeCommand) -> None:
+    def __init__(self, settings: EvaluationSettings, command: EpisodeCommand, *,
+                 warm: bool = False) -> None:
         self.settings = settings
         self.command = command
+        self.warm = warm
         self.stopping = threading.Event()
         self.finished: Queue[tuple[int, dict[str, Any] | None]] = Queue()
         """Each episode's plan number and row (None: not started), as they finish."""
         self.revision = source_revision()
         self._die_with_us = parent_death_signal(os.getpid())
+        self._idle_pairs: LifoQueue[WarmPair] = LifoQueue()
+        self._pairs_started = itertools.count(1)
 
     def run(self, episode: Episode) -> dict[str, Any] | None:
         """Run the episode; its row for the summary, or None if the evaluation was stopped
@@ -185,6 +204,8 @@ class EpisodeRunner:
         return dict(row, resumed=True)
 
     def _run_process(self, episode: Episode) -> EpisodeOutcome:
+        if self.warm:
+            return self._run_warm(episode)
         environment = dict(os.environ)
         apply_localhost_defaults(environment)
         started = time.monotonic()
@@ -195,6 +216,42 @@ class EpisodeRunner:
                 preexec_fn=self._die_with_us)
             stopped = self._wait(process, started + self.settings.episode_timeout_s)
         return EpisodeOutcome(process.returncode, time.monotonic() - started, stopped)
+
+    def _run_warm(self, episode: Episode) -> EpisodeOutcome:
+        """Play the episode on an idle warm pair, or a new one; a pair that failed is gone."""
+        pair = self._idle_pair()
+        if pair is None:
+            pair = WarmPair(log_dir=self.settings.out / WARM_PAIRS_DIRECTORY
+                            / f"pair-{next(self._pairs_started)}",
+                            die_with_us=self._die_with_us)
+        started = time.monotonic()
+        outcome = pair.play(warm_line(episode, self.settings), run_id=episode.run_id,
+                            timeout_s=self.settings.episode_timeout_s,
+                            stopping=self.stopping.is_set)
+        if pair.worn_out:
+            pair.close()
+        elif not pair.broken:
+            self._idle_pairs.put(pair)
+        return EpisodeOutcome(outcome.returncode, time.monotonic() - started, outcome.failure)
+
+    def _idle_pair(self) -> WarmPair | None:
+        """An idle pair whose worker still runs; one that ended meanwhile is let go."""
+        while True:
+            try:
+                pair = self._idle_pairs.get_nowait()
+            except Empty:
+                return None
+            if pair.alive:
+                return pair
+            pair.kill()
+
+    def close(self) -> None:
+        """Let every idle warm pair go: each stops its simulator and exits."""
+        while True:
+            try:
+                self._idle_pairs.get_nowait().close()
+            except Empty:
+                return
 
     def _wait(self, process: subprocess.Popen[bytes], deadline: float) -> str | None:
         while True:
@@ -212,85 +269,6 @@ class EpisodeRunner:
                         "exceeded; stopped")
 
 
-
-
-def stop_process_tree(process: subprocess.Popen[bytes]) -> None:
-    """SIGINT the episode (it then stops its simulator and writes its report), then SIGKILL
-    whatever is left, and wait until it is gone.
-
-    The run starts its simulator in a session of its own, so the tree is collected from
-    ``/proc`` before anything is signalled, and again before the SIGKILL (a run stopped while
-    starting may have started its simulator meanwhile); a process is only killed if it is
-    still the one that was collected (same pid and start time).
-    """
-    identities = _identities([process.pid, *descendants(process.pid)])
-    _signal(process.pid, signal.SIGINT)
-    with contextlib.suppress(subprocess.TimeoutExpired):
-        process.wait(timeout=STOP_GRACE_S)
-    if process.poll() is None:
-        identities.update(_identities(descendants(process.pid)))
-    for pid, started in identities.items():
-        if _alive_as(pid, started):
-            _signal(pid, signal.SIGKILL)
-    process.wait()
-    deadline = time.monotonic() + GONE_WAIT_S
-    while any(_alive_as(pid, started) for pid, started in identities.items()):
-        if time.monotonic() > deadline:
-            break
-        time.sleep(0.02)
-
-
-def _identities(pids: Iterable[int]) -> dict[int, int]:
-    """Each pid's start time, for the pids that are running."""
-    found = {pid: start_time(pid) for pid in pids}
-    return {pid: started for pid, started in found.items() if started is not None}
-
-
-def _alive_as(pid: int, started: int) -> bool:
-    """Whether ``pid`` is still the process that started at ``started`` and not a zombie."""
-    return start_time(pid) == started and _state(pid) not in (None, "Z", "X")
-
-
-def descendants(pid: int) -> list[int]:
-    """Every process below ``pid``, found through ``/proc/<pid>/stat`` parent ids."""
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            parent = _stat_field(int(entry.name), PARENT_FIELD)
-            if parent is not None:
-                children.setdefault(int(parent), []).append(int(entry.name))
-    found, frontier = [], [pid]
-    while frontier:
-        below = children.get(frontier.pop(), [])
-        found += below
-        frontier += below
-    return found
-
-
-def start_time(pid: int) -> int | None:
-    """The process's start time in clock ticks since boot; None if it is gone."""
-    value = _stat_field(pid, START_TIME_FIELD)
-    return None if value is None else int(value)
-
-
-def _state(pid: int) -> str | None:
-    """The process's state letter (R, S, Z, ...); None if it is gone."""
-    return _stat_field(pid, STATE_FIELD)
-
-
-def _stat_field(pid: int, number: int) -> str | None:
-    """Field ``number`` (1-based, as proc(5) counts) of ``/proc/<pid>/stat``."""
-    try:
-        text = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return None
-    after_name = text[text.rfind(")") + 2:].split()  # the name (field 2) may hold spaces
-    return after_name[number - 3]
-
-
-def _signal(pid: int, signal_number: int) -> None:
-    with contextlib.suppress(ProcessLookupError):
-        os.kill(pid, signal_number)
 
 
 def episode_row(episode: Episode, outcome: EpisodeOutcome) -> dict[str, Any]:
@@ -358,8 +336,12 @@ def _last_line(path: Path) -> str:
 
 def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],
                  command: EpisodeCommand = run_command, progress: Progress | None = None,
-                 stops: StopSignals | None = None) -> list[dict[str, Any]]:
+                 stops: StopSignals | None = None, *, warm: bool = False
+                 ) -> list[dict[str, Any]]:
     """Run every episode, ``settings.jobs`` at once; the rows, in plan order.
+
+    ``warm``: on ``settings.jobs`` warm pairs (:mod:`bt_servicesim.evaluation.warm_pairs`)
+    instead of a ``command`` process per episode; a pair that failed is replaced.
 
     A stop signal (see :class:`StopSignals`) cuts the batch short: the episodes under way are
     stopped (SIGINT, so that each writes its report, then SIGKILL) and get a row saying so
@@ -367,7 +349,7 @@ def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],
     only once no episode process is left, with ``stops`` held (a stop signal is then only
     noted): the caller writes the results undisturbed.
     """
-    runner = EpisodeRunner(settings, command)
+    runner = EpisodeRunner(settings, command, warm=warm)
     finished = runner.finished
     rows: list[tuple[int, dict[str, Any]]] = []
 
@@ -419,5 +401,7 @@ def _run_all(settings: EvaluationSettings, episodes: Iterable[Episode], runner: 
         runner.stopping.set()
         raise
     finally:
+        runner.close()  # before the pool's threads end: a pair dies with the thread that made it
         pool.shutdown(wait=True, cancel_futures=True)  # the episodes under way stop themselves
+        runner.close()  # the pairs of the episodes that were under way
         collect()

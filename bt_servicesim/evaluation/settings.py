@@ -67,6 +67,8 @@ class EvaluationSettings:
     docs: Path | None
     command_line: str
     resume: bool = False
+    cold: bool = False
+    """Every episode a ``run`` process of its own, as before warm pairs (for comparisons)."""
 
 
 def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:

@@ -77,26 +77,36 @@ class MissionRun:
         extra_sim_args: tuple[str, ...] = (),
         monitor: Groot2Server | None = None,
         live_server: LiveServer | None = None,
+        backend: SimulatorProcess | None = None,
+        discovery_settle_s: float = DISCOVERY_SETTLE_S,
     ) -> None:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
-        closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to."""
+        closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to.
+
+        ``backend``: a simulator someone else started, keeps and has reset for this run (a
+        warm episode, :mod:`bt_servicesim.evaluation.warm_worker`): the run watches it but
+        never starts or stops it, and is started with :meth:`play` in a process that keeps
+        rclpy initialised. ``discovery_settle_s``: the wall time the simulator gets to
+        discover the executive's endpoints (see :meth:`_wait_for_servers`).
+        """
         self.settings = settings
         self.extra_sim_args = extra_sim_args
         self.make_executive = make_executive
         self.monitor = monitor
         self.live_server = live_server
-        await_lockstep = () if settings.free_running else (
-            "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
-        self.simulator = None if settings.attach else SimulatorProcess(
-            world=settings.world, seed=settings.seed, speed=settings.speed,
-            log_path=settings.out / "sim.log", extra_args=(*await_lockstep, *extra_sim_args),
-        )
+        self.discovery_settle_s = discovery_settle_s
+        self.owns_simulator = backend is None
+        self.simulator = backend if backend is not None else None if settings.attach else (
+            SimulatorProcess(world=settings.world, seed=settings.seed, speed=settings.speed,
+                             log_path=settings.out / "sim.log",
+                             extra_args=simulator_arguments(settings, extra_sim_args)))
         self.started_wall = time.monotonic()
         self.failure: str | None = None
         self.traceback: str | None = None
         self.timing = "free running"
         self.lockstep: lockstep.LockstepClient | None = None
         """How the executive keeps time with the backend, as the report says it."""
+        self._left_lockstep = False
 
     def execute(self) -> int:
         """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
@@ -108,16 +118,35 @@ class MissionRun:
                 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
                 return self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
-                stops.hold(stop)
-                self.failure = f"stopped by {_signal_name(stop)} while starting"
-                write_report(self.settings.out / REPORT_NAME,
-                             {**self._header("interrupted"), "failure": self.failure})
-                return exit_code_for(stop)
+                return self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
                 if self.simulator is not None:
                     self.simulator.stop()
                 rclpy.try_shutdown()
+
+    def play(self) -> int:
+        """:meth:`execute` for a warm episode: rclpy is up and the backend is the caller's.
+
+        A stop signal that came while the run cleaned up (when it is only noted) still makes
+        the exit status 128 + its number, so that the caller stops too.
+        """
+        with StopSignals() as stops:
+            write_report(self.settings.out / REPORT_NAME, self._header("running"))
+            try:
+                code = self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
+            except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
+                return self._stopped_while_starting(stop, stops)
+            finally:
+                stops.hold()
+            return code if stops.first is None or code >= 128 else 128 + stops.first
+
+    def _stopped_while_starting(self, stop: BaseException, stops: StopSignals) -> int:
+        stops.hold(stop)
+        self.failure = f"stopped by {_signal_name(stop)} while starting"
+        write_report(self.settings.out / REPORT_NAME,
+                     {**self._header("interrupted"), "failure": self.failure})
+        return exit_code_for(stop)
 
     def _execute_on(self, node: ExecutiveNode, stops: StopSignals) -> int:
         executor = events_executor()
@@ -150,15 +179,21 @@ class MissionRun:
             self.traceback = "".join(traceback.format_exception(error))
             code = EXIT_FAILED
         stops.hold()
-        if self.lockstep is not None:
-            self.lockstep.leave()
-        if self.simulator is not None:
-            self.simulator.stop()
+        if self.owns_simulator:
+            self._leave_lockstep()
+            if self.simulator is not None:
+                self.simulator.stop()
         records.finish(title=self._title(monitor))
         self._finish(monitor, code, executive)
+        self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()
         node.destroy_node()
         return code
+
+    def _leave_lockstep(self) -> None:
+        if self.lockstep is not None and not self._left_lockstep:
+            self.lockstep.leave()
+            self._left_lockstep = True
 
     def _run(self, node: ExecutiveNode, executor: Executor, monitor: RefereeMonitor,
              executive: Executive, records: RunRecords) -> int:
@@ -168,7 +203,7 @@ class MissionRun:
         client = self._lockstep_offer(node, executor)
         executive.setup()
         self._wait_for_servers(node, executor)
-        self._spin_for(executor, DISCOVERY_SETTLE_S)
+        self._spin_for(executor, self.discovery_settle_s)
         self._join_lockstep(client, executor)
         executive.start()
         view = ProgressView(headless=self.settings.headless,
@@ -335,6 +370,14 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
+
+
+def simulator_arguments(settings: RunSettings, sim_args: tuple[str, ...]) -> tuple[str, ...]:
+    """The simulator's arguments for this run but the world, seed and speed: the hold for the
+    lockstep client (unless the run runs free) and the run's ``--sim-arg`` ones."""
+    await_lockstep = () if settings.free_running else (
+        "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
+    return (*await_lockstep, *sim_args)
 
 
 def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:

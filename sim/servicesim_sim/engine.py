@@ -22,6 +22,7 @@ once the guest follows and is more than 1.2 m from the robot.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,7 +45,7 @@ from servicesim_sim.referee import Referee
 from servicesim_sim.robot import BODY_RADIUS, Robot, WallClearance
 from servicesim_sim.scan import Scanner, surface_clearance
 from servicesim_sim.scenario import Scenario
-from servicesim_sim.world import World
+from servicesim_sim.world import OccupancyMap, World
 
 PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
 ROBOT_NAME = "servicebot"
@@ -58,6 +59,24 @@ CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's d
 CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
 TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
 NAV_ABORT_WINDOW_S = (1.0, 10.0)  # when a randomly aborted goal gives up
+
+
+_WALL_CLEARANCES: weakref.WeakKeyDictionary[OccupancyMap, WallClearance] = (
+    weakref.WeakKeyDictionary())
+
+
+def wall_clearance(occupancy_map: OccupancyMap) -> WallClearance:
+    """The map's :class:`WallClearance`, computed once per loaded map (a third of a second).
+
+    Episodes a reset plays on one world (:mod:`servicesim_sim.episodes` keeps its worlds)
+    share it; its grid is made read-only, so an episode cannot change what the next one gets.
+    """
+    walls = _WALL_CLEARANCES.get(occupancy_map)
+    if walls is None:
+        walls = WallClearance(occupancy_map)
+        walls.grid.setflags(write=False)
+        _WALL_CLEARANCES[occupancy_map] = walls
+    return walls
 
 
 @dataclass(frozen=True)
@@ -78,7 +97,7 @@ class SimEngine:
         self.sim_time = 0.0
         self.task_started_at: float | None = None
         self.referee = Referee()
-        walls = WallClearance(world.map)
+        walls = wall_clearance(world.map)
         task = scenario.task
         self.robot = Robot(x=task.start_x, y=task.start_y, yaw=task.start_yaw, walls=walls)
         self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,

@@ -164,6 +164,21 @@ class DrainingExecutor(SingleThreadedExecutor):
         self._shutting_down = GuardCondition(None, None, context=self.context)
         self.context.on_shutdown(self._shutting_down.trigger)
 
+    def drop_tasks_of(self, node: Node) -> int:
+        """Cancel ``node``'s unfinished callbacks (coroutines waiting on sim time, navigation
+        or the gate) before the node is removed for good; how many there were.
+
+        rclpy keeps a removed node's unfinished tasks in its list for ever, never to run them
+        again, with everything they hold: an episode reset would keep each old episode's
+        engine alive. A cancelled task's coroutine is closed where it waits and the next pass
+        forgets it. (rclpy has no public way to list a node's tasks: this reads its ``_tasks``.)
+        """
+        with self._tasks_lock:
+            tasks = [task for task, _, owner in self._tasks if owner is node]
+        for task in tasks:
+            task.cancel()
+        return len(tasks)
+
     def note_resumable(self) -> None:
         """The loop completed a future a coroutine awaits: the next pass must resume it."""
         self._resumable = True

@@ -66,6 +66,7 @@ from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
 from servicesim_sim.engine import NavigationState, SimEngine
+from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.localisation import Estimate, Pose
@@ -80,6 +81,7 @@ RCLError = rclpy_implementation.RCLError
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
 PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
 FEEDBACK_PERIOD_S = 0.5  # navigation feedback at 2 Hz sim, as often as anyone reads it
+IDLE_WAIT_S = 0.05  # wall seconds of one wait while an episode is over (see SimulatorNode._idle)
 #: No default QoS-event handlers: each is a waitable the executor adds to every wait set, and
 #: the loop waits (with timeout 0) once per I/O period, hundreds of times a wall second.
 #: With them the idle wait costs about 4x as much. Mismatched QoS still shows in
@@ -128,10 +130,13 @@ class SimulatorNode:
     """One simulated world on one ROS node; :meth:`run` until interrupted."""
 
     def __init__(self, settings: SimSettings, *, node: Node,
-                 engine: SimEngine | None = None) -> None:
-        """``engine``: the world already set in motion for ``settings``; default: made here."""
+                 engine: SimEngine | None = None, resets: EpisodeResets | None = None) -> None:
+        """``engine``: the world already set in motion for ``settings``; default: made here.
+        ``resets``: where an episode reset is asked for; the loop then ends with
+        :class:`~servicesim_sim.episodes.ResetRequested` at the end of its period."""
         self.settings = settings
         self.node = node
+        self.resets = resets
         self.engine = engine or SimEngine(
             world=settings.world, scenario=make_scenario(settings.world, seed=settings.seed,
                                                          difficulty=settings.difficulty))
@@ -140,6 +145,7 @@ class SimulatorNode:
         self._active_goal: ServerGoalHandle | None = None
         self._navigations: list[_Navigation] = []
         self._io_count = 0
+        self._had_client = False
         self._dropped = 0
         self._camera_next = 0.0
         self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
@@ -599,6 +605,7 @@ class SimulatorNode:
         pacer = Pacer()
         period = 0
         while rclpy.ok(context=self.node.context):
+            self._check_reset()
             scores: list[float] = []
             for _ in range(self.steps_per_io):
                 self.engine.step()
@@ -617,9 +624,45 @@ class SimulatorNode:
             if period == 1 and self.settings.await_lockstep_s > 0.0:
                 self.lockstep.await_client(
                     executor, wall_s=self.settings.await_lockstep_s,
-                    meanwhile=lambda: self._send(self._clock, self._clock_message))
+                    meanwhile=self._repeat_clock)
             self._wait_for_wall_clock(pacer, executor)
             self.lockstep.hold(executor)
+            self._had_client = self._had_client or self.lockstep.active
+            if self._had_client and not self.lockstep.active and self._resets_used():
+                self._idle(executor)
+
+    def _repeat_clock(self) -> None:
+        """While the loop holds at its first period for a client: the clock again, for late
+        subscribers; a reset asked for meanwhile ends the hold."""
+        self._check_reset()
+        self._send(self._clock, self._clock_message)
+
+    def _check_reset(self) -> None:
+        if self.resets is not None:
+            self.resets.check()
+
+    def _resets_used(self) -> bool:
+        return self.resets is not None and self.resets.used
+
+    def _idle(self, executor: DrainingExecutor) -> None:
+        """Hold still, serving requests, until a reset or a new lockstep client.
+
+        Only in a simulator that plays episodes one after another (it has taken a reset):
+        once the episode's lockstep client has left, the episode is over, and running on
+        flat out until the next reset would only take a core from the episodes running
+        beside it.
+        """
+        while not self.lockstep.active and rclpy.ok(context=self.node.context):
+            self._check_reset()
+            executor.wait_and_run(timeout_sec=IDLE_WAIT_S)
+
+    def close(self, executor: DrainingExecutor) -> None:
+        """Drop what the node's destruction leaves alive: the coroutines waiting on sim time,
+        navigation or the gate, which no loop will resume now, and the navigation action
+        server (a waitable)."""
+        executor.drop_tasks_of(self.node)
+        self._sleepers, self._navigations = [], []
+        self._navigation.destroy()
 
     def _wait_for_wall_clock(self, pacer: Pacer, executor: DrainingExecutor) -> None:
         """Serve requests until the speed factor lets the next period start."""
@@ -714,9 +757,12 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> int:
     """Run until Ctrl-C, SIGTERM or SIGHUP; returns the process exit status.
 
-    The first stop signal ends the loop; from then on further ones are ignored, so that the
-    shut-down (which deletes the DDS participant and its shared-memory segment) is not cut
-    short: a run that dies sends one SIGTERM per thread it had (``PR_SET_PDEATHSIG``).
+    Each episode is a :class:`SimulatorNode` on a node of its own; an accepted reset
+    (:mod:`servicesim_sim.episodes`) ends the episode's loop, drops its node and starts the
+    next one from the reset's settings. The first stop signal ends the loop; from then on
+    further ones are ignored, so that the shut-down (which deletes the DDS participant and its
+    shared-memory segment) is not cut short: a run that dies sends one SIGTERM per thread it
+    had (``PR_SET_PDEATHSIG``).
     """
     stopped: list[int] = []
 
@@ -729,16 +775,21 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     for number in STOP_SIGNALS:
         signal.signal(number, stop)
-    node = simulator_ros_node()
-    simulator = SimulatorNode(settings, node=node, engine=engine)
     executor = DrainingExecutor()
-    executor.add_node(node)
-    task = simulator.engine.scenario.task
-    node.get_logger().info(
-        f"world {settings.world.name}: task {task.pick_up} -> {task.drop_off}, "
-        f"guest {task.guest_name}, seed {settings.seed}, speed {settings.speed}")
+    resets = EpisodeResets(episodes_ros_node())
+    executor.add_node(resets.node)
+    simulator: SimulatorNode | None = None
     try:
-        simulator.run(executor)
+        while True:
+            simulator = _start_episode(settings, engine, executor, resets)
+            try:
+                simulator.run(executor)
+                break
+            except ResetRequested:
+                _end_episode(simulator, executor)
+                simulator = None
+                episode = resets.take()
+                settings, engine = episode.settings, episode.engine
     except KeyboardInterrupt:
         pass
     except RuntimeError:  # the stop raised inside a pybind11 call, which turns it into this
@@ -747,7 +798,32 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     finally:
         for number in STOP_SIGNALS:  # a stop that came before the handler ran: clean up anyway
             signal.signal(number, signal.SIG_IGN)
+        if simulator is not None:
+            _end_episode(simulator, executor)
         executor.shutdown()
-        node.destroy_node()
+        resets.node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _start_episode(settings: SimSettings, engine: SimEngine | None,
+                   executor: DrainingExecutor, resets: EpisodeResets) -> SimulatorNode:
+    """A new simulator node for ``settings``, spun by ``executor``; a reset waiting for it
+    is answered."""
+    node = simulator_ros_node()
+    simulator = SimulatorNode(settings, node=node, engine=engine, resets=resets)
+    executor.add_node(node)
+    resets.started()
+    executor.note_resumable()  # the reset's coroutine resumes, and answers, in the next drain
+    task = simulator.engine.scenario.task
+    node.get_logger().info(
+        f"world {settings.world.name}: task {task.pick_up} -> {task.drop_off}, "
+        f"guest {task.guest_name}, seed {settings.seed}, speed {settings.speed}")
+    return simulator
+
+
+def _end_episode(simulator: SimulatorNode, executor: DrainingExecutor) -> None:
+    """Drop the episode's node and everything on it."""
+    simulator.close(executor)
+    executor.remove_node(simulator.node)
+    simulator.node.destroy_node()

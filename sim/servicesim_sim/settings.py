@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 from servicesim_sim.engine import SimEngine
 from servicesim_sim.people import CrowdError
@@ -48,7 +50,10 @@ _KNOBS = {
 }
 
 
-def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
+def settings_from_arguments(args: argparse.Namespace, *,
+                            load: Callable[[str | Path], World] = load_world) -> SimSettings:
+    """The checked settings; ``load`` loads the world file (an episode reset keeps the worlds
+    it loaded: :class:`~servicesim_sim.episodes.WorldShelf`)."""
     if args.seed is not None and args.seed < 0:
         raise SettingsError(f"--seed {args.seed}: must be 0 or more")
     if not args.speed >= 0.0:
@@ -59,7 +64,7 @@ def settings_from_arguments(args: argparse.Namespace) -> SimSettings:
     if not 0.0 <= args.camera_rate <= 30.0:
         raise SettingsError(f"--camera-rate {args.camera_rate}: must be within 0..30")
     try:
-        world = load_world(args.world or DEFAULT_WORLD)
+        world = load(args.world or DEFAULT_WORLD)
     except WorldError as error:
         raise SettingsError(str(error)) from error
     except OSError as error:
