@@ -32,7 +32,7 @@ from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
 from servicesim_sim.executor import DrainingExecutor
-from servicesim_sim.lockstep_gate import Admission, LockstepGate
+from servicesim_sim.lockstep_gate import PIPELINE_LAG, Admission, LockstepGate
 
 __all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
            "LockstepServer"]
@@ -52,7 +52,7 @@ class LockstepServer:
 
     def __init__(self, node: Node, *, gate: LockstepGate | None = None) -> None:
         self.node = node
-        self.gate = gate or LockstepGate()
+        self.gate = gate or LockstepGate(lag=PIPELINE_LAG)
         self.messages: dict[str, int] = {}
         self.answers: dict[str, int] = {}
         self._last = LockstepPeriod(period=0)
