@@ -168,8 +168,10 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False)
                    repr(speed), "--executive", executive, "--out", out,
                    *(["--free-running"] if free_running else [])]
         started = time.monotonic()
-        run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        errors = (Path(out) / "run.err").open("w")  # a pipe nobody reads would block the run
+        run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,
                                env=os.environ.copy())
+        errors.close()
         domain = run_domain(Path(out), run)
         context = Context()
         rclpy.init(context=context, domain_id=domain)
@@ -185,6 +187,12 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False)
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
         ticks = tick_times(Path(out) / "tree_log.jsonl")
+        sim_log = Path(out) / "sim.log"
+        said = (Path(out) / "run.err").read_text() + (
+            sim_log.read_text() if sim_log.is_file() else "")
+        warnings = [line for line in said.splitlines()
+                    if "lockstep: dropped" in line or "ticked without" in line
+                    or "Traceback" in line]
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()
@@ -195,6 +203,10 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False)
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
+    if report.get("lockstep_stalls"):
+        print(f"  lockstep: {report['lockstep_stalls']} period(s) ticked without every message")
+    for line in warnings[:3]:
+        print(f"  the run said: {line.strip()[:200]}")
     if len(cpu.marks) == 2:
         processes = [("executive", cpu.pid)] + [("simulator", pid) for pid in cpu.children()]
         print("  CPU over the task: " + ", ".join(
