@@ -164,6 +164,11 @@ class DrainingExecutor(SingleThreadedExecutor):
         self._shutting_down = GuardCondition(None, None, context=self.context)
         self.context.on_shutdown(self._shutting_down.trigger)
 
+    @property
+    def resumable(self) -> bool:
+        """Whether a coroutine may resume (or a task was created) since the last pass."""
+        return self._resumable
+
     def note_resumable(self) -> None:
         """The loop completed a future a coroutine awaits: the next pass must resume it."""
         self._resumable = True

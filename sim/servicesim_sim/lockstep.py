@@ -81,30 +81,31 @@ class LockstepServer:
         return self.gate.take(endpoint)
 
     # ------------------------------------------------------------- wrapping
-    def gated(self, endpoint: str, handler: Callable[..., Any], *, count: bool = True,
-              answers: bool = True) -> Callable[..., Any]:
-        """``handler`` (a service callback or an accepted-goal callback), counted and gated.
-
-        ``count``: the request is counted here (False where the action server counts it);
-        ``answers``: the handler's return is the endpoint's answer.
-        """
+    def gated(self, endpoint: str, handler: Callable[..., Any]) -> Callable[..., Any]:
+        """``handler`` (a service callback), counted and gated; its return is the answer."""
         self.gate.endpoints.add(endpoint)
 
         async def call(*args: Any) -> Any:
-            number = self.gate.take(endpoint) if count else self.gate.taken.get(endpoint, 0)
-            if self.gate.active:
-                turn = Future()
-                self.gate.admit_later(Admission(endpoint=endpoint, number=number,
-                                                serve=lambda: turn.set_result(True)))
+            turn = self.turn(endpoint, self.gate.take(endpoint))
+            if turn is not None:
                 await turn
             result = handler(*args)
             if inspect.isawaitable(result):
                 result = await result
-            if answers:
-                self.answered(endpoint)
+            self.answered(endpoint)
             return result
 
         return call
+
+    def turn(self, endpoint: str, number: int) -> Future | None:
+        """While a client is joined, a future the gate completes when it admits request
+        ``number`` on ``endpoint``; None when nobody is joined (serve at once)."""
+        if not self.gate.active:
+            return None
+        turn = Future()
+        self.gate.admit_later(Admission(endpoint=endpoint, number=number,
+                                        serve=lambda: turn.set_result(True)))
+        return turn
 
     def gated_message(self, topic: str, callback: Callable[[Any], None]) -> Callable[[Any], None]:
         """A subscription callback, counted and, while a client is joined, gated."""
@@ -127,7 +128,7 @@ class LockstepServer:
         With a client joined the drain is complete (no wall budget): every answer, feedback
         and result due in this period goes out before the announcement that counts it.
         """
-        if self.gate.active:
+        if self.gate.active and executor.resumable:  # requests wait for the gate anyway
             drain_completely(executor)
         self._last = self._announcement(period, sim_time_ns)
         self._announcer.publish(self._last)
@@ -210,33 +211,51 @@ def drain_completely(executor: DrainingExecutor) -> None:
 
 
 class CountingActionServer(ActionServer):
-    """rclpy's action server, counting the requests it takes and the results it sends.
+    """rclpy's action server, counting the requests it takes and the answers it sends, and
+    serving its requests through the gate.
 
-    Goal and cancel answers go out as the request is taken, so they count then; a result goes
-    out when the goal ends (or at once for a goal the server does not know). The result is
-    counted in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it:
-    no public callback sees it go.
+    Goal and cancel answers go out as their request is served; a result when the goal ends
+    (or at once for a goal the server does not know). While a client is joined a request is
+    served only when the gate admits it, as a service's: rclpy answers goal and cancel
+    requests as it takes them, and a request of tick *k* taken while the simulator steps
+    *k*+1 would otherwise be answered in period *k*+1 or *k*+2 by luck. The result is counted
+    in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it: no public
+    callback sees it go.
     """
+
+    KINDS = ("goal", "cancel", "result")
 
     def __init__(self, node: Node, action_type: Any, action_name: str, *,
                  lockstep: LockstepServer, **kwargs: Any) -> None:
         self._lockstep = lockstep
         self._endpoint = action_name
-        lockstep.gate.endpoints.update(f"{action_name}:{kind}"
-                                       for kind in ("goal", "cancel", "result"))
+        lockstep.gate.endpoints.update(f"{action_name}:{kind}" for kind in self.KINDS)
         super().__init__(node, action_type, action_name, **kwargs)
 
     async def execute(self, taken_data: Any) -> None:
-        for kind in ("goal", "cancel"):
-            if kind in taken_data:
-                self._lockstep.took(f"{self._endpoint}:{kind}")
-                self._lockstep.answered(f"{self._endpoint}:{kind}")
-        if "result" in taken_data:
-            self._lockstep.took(f"{self._endpoint}:result")
-            _, request = taken_data["result"]
-            if bytes(request.goal_id.uuid) not in self._goal_handles:
-                self._lockstep.answered(f"{self._endpoint}:result")
-        await super().execute(taken_data)
+        turns = {kind: self._lockstep.turn(f"{self._endpoint}:{kind}",
+                                           self._lockstep.took(f"{self._endpoint}:{kind}"))
+                 for kind in self.KINDS if kind in taken_data}
+        for kind, turn in turns.items():
+            if turn is not None:
+                await turn
+            await self._serve(kind, taken_data[kind])
+        if "expired" in taken_data:
+            await self._execute_expire_goals(taken_data["expired"])
+
+    async def _serve(self, kind: str, request: Any) -> None:
+        endpoint = f"{self._endpoint}:{kind}"
+        if kind == "goal":
+            await self._execute_goal_request(request)
+            self._lockstep.answered(endpoint)
+        elif kind == "cancel":
+            await self._execute_cancel_request(request)
+            self._lockstep.answered(endpoint)
+        else:
+            unknown = bytes(request[1].goal_id.uuid) not in self._goal_handles
+            await self._execute_get_result_request(request)
+            if unknown:
+                self._lockstep.answered(endpoint)
 
     def _send_result_response(self, request_header: Any, future: Any) -> None:
         super()._send_result_response(request_header, future)

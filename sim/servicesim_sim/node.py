@@ -150,9 +150,7 @@ class SimulatorNode:
         self._navigation = CountingActionServer(
             node, NavigateToPose, NAVIGATION_ACTION, lockstep=self.lockstep,
             execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
-            handle_accepted_callback=self.lockstep.gated(
-                f"{NAVIGATION_ACTION}:goal", self._on_goal_accepted, count=False,
-                answers=False),
+            handle_accepted_callback=self._on_goal_accepted,  # served through the gate
             cancel_callback=lambda _: CancelResponse.ACCEPT,
             goal_service_qos_profile=EVERY_REQUEST, result_service_qos_profile=EVERY_REQUEST,
             cancel_service_qos_profile=EVERY_REQUEST, callback_group=callbacks,
@@ -624,8 +622,9 @@ class SimulatorNode:
     def _wait_for_wall_clock(self, pacer: Pacer, executor: DrainingExecutor) -> None:
         """Serve requests until the speed factor lets the next period start."""
         wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
-        if wait_s <= 0.0:  # flat out or behind: only look for requests
-            executor.run_ready()
+        if wait_s <= 0.0:  # flat out or behind: only look for requests (in lockstep the
+            if not self.lockstep.active:  # gate looks, when what it waits for is not in)
+                executor.run_ready()
             return
         due = time.monotonic() + wait_s
         while (remaining := due - time.monotonic()) > 0.0:
