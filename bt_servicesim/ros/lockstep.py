@@ -143,6 +143,8 @@ class LockstepClient:
         """The last period ticked (or joined at)."""
         self._head_targets: tuple[LockstepPeriod | None, dict[int, int], dict[str, int]] = (
             None, {}, {})
+        self._ready_no_sooner = 0
+        """The arrivals the oldest pending period cannot tick before (from the last look)."""
         self._reader_offsets: dict[int, tuple[str, int]] = {}
         self._answer_offsets: dict[str, int] = {}
         self._answers_at_join: dict[str, int] = {}
@@ -249,6 +251,11 @@ class LockstepClient:
                    if self.traffic.received[key] < count]
         lacking.extend(endpoint for endpoint, count in answers.items()
                        if self.traffic.answered.get(endpoint, 0) < count)
+        shortfall = (sum(max(0, count - self.traffic.received[key])
+                         for key, count in messages.items())
+                     + sum(max(0, count - self.traffic.answered.get(endpoint, 0))
+                           for endpoint, count in answers.items()))
+        self._ready_no_sooner = self.traffic.arrivals + shortfall
         return lacking
 
     def _targets(self, period: LockstepPeriod) -> tuple[dict[int, int], dict[str, int]]:
@@ -272,8 +279,14 @@ class LockstepClient:
         return self._answers_at_join.get(endpoint, 0) if offset is None else offset
 
     def _check(self) -> None:
-        if (not self._pending or self._scheduled or self.holding
-                or self.client_id is None or self.missing()):
+        """Schedule the tick of the oldest pending period if everything it counts is in.
+
+        Called on every arrival: while fewer messages have arrived than the period lacked at
+        the last full look, nothing is looked at (each arrival makes up at most one)."""
+        if (not self._pending or self._scheduled or self.holding or self.client_id is None
+                or (self.traffic.arrivals < self._ready_no_sooner
+                    and self._head_targets[0] is self._pending[0])
+                or self.missing()):
             return
         self._scheduled = True
         # a task, so that callbacks of what just arrived (a future's) run before the tick

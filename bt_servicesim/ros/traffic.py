@@ -57,6 +57,8 @@ class Traffic:
         self.endpoints: set[str] = set()
         """The endpoints this node has a client for."""
         self.on_arrival: Callable[[], None] | None = None
+        self.arrivals = 0
+        """Messages and answers arrived in all: a cheap sign that something did."""
         self.delivered: dict[int, int] = {}
         """Messages handed to each reader's callback (arrived and, if held, released)."""
         self.answers_delivered: dict[str, int] = {}
@@ -70,6 +72,7 @@ class Traffic:
 
     def _arrived(self, table: dict[Any, int], name: Any) -> None:
         table[name] = table.get(name, 0) + 1
+        self.arrivals += 1
         if self.on_arrival is not None:
             self.on_arrival()
 
@@ -143,6 +146,7 @@ class Traffic:
                 held.append(more)
                 taken += 1
         self.received[key] += taken
+        self.arrivals += taken
         if self.on_arrival is not None:
             self.on_arrival()
 
@@ -171,6 +175,7 @@ class Traffic:
             if reader is subscription:
                 self.received[key] += count
                 self.delivered[key] += count
+                self.arrivals += count
 
     def watch_publisher(self, publisher: Any) -> None:
         topic = publisher.topic_name

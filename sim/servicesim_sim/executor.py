@@ -165,6 +165,11 @@ class DrainingExecutor(SingleThreadedExecutor):
         self.context.on_shutdown(self._shutting_down.trigger)
 
     @property
+    def shutting_down(self) -> GuardCondition:
+        """The guard condition the context's shutdown triggers: for waits of the loop's own."""
+        return self._shutting_down
+
+    @property
     def resumable(self) -> bool:
         """Whether a coroutine may resume (or a task was created) since the last pass."""
         return self._resumable

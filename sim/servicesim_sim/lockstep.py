@@ -25,6 +25,8 @@ from typing import Any
 
 from rclpy.action import ActionServer
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.exceptions import InvalidHandle
+from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -45,6 +47,9 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           durability=DurabilityPolicy.VOLATILE)
 GATE_WAIT_S = 0.05
 """Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
+LOOK_EVERY_PERIODS = 10
+"""In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
+request; at least this often it looks for other work (a join, a request from outside)."""
 
 
 class LockstepServer:
@@ -63,8 +68,9 @@ class LockstepServer:
         self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
         node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
                             callback_group=self.callback_group)
-        node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS,
-                                 callback_group=self.callback_group)
+        self._dones = node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done,
+                                               PROTOCOL_QOS, callback_group=self.callback_group)
+        self._periods_unlooked = 0
 
     @property
     def active(self) -> bool:
@@ -153,17 +159,58 @@ class LockstepServer:
     def hold(self, executor: DrainingExecutor) -> None:
         """Until every joined client is done with the period, then serve its requests in order.
 
+        The done messages are taken here, straight from their subscription, and waited for on
+        a wait set of that subscription alone: handing each over to rclpy's executor (a wait
+        set of every entity, its callback bookkeeping, a look for more) cost the loop about as
+        much as the rest of the gate. The executor runs only when the gate lacks requests
+        (they must be taken to be served) and every :data:`LOOK_EVERY_PERIODS` periods.
         A client the gate waited on for too long is dropped, with one warning naming it.
         """
-        while self.gate.active and not self.gate.is_open():
-            executor.wait_and_run(timeout_sec=GATE_WAIT_S)
-            missing = self.gate.missing()
-            for name in self.gate.drop_silent(time.monotonic()):
-                self.node.get_logger().warning(
-                    f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
-                    f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
-                    f"{'running free' if not self.gate.active else 'going on with the rest'}")
+        self._periods_unlooked += 1
+        while self.gate.active and not self._take_dones():
+            if self.gate.lacks_done():
+                self._wait_for_done(executor, timeout_s=GATE_WAIT_S)
+            else:
+                self._periods_unlooked = 0
+                executor.wait_and_run(timeout_sec=GATE_WAIT_S)
+            self._drop_silent()
+        if self._periods_unlooked >= LOOK_EVERY_PERIODS:
+            self._periods_unlooked = 0
+            executor.run_ready()
         self.admit(executor)
+
+    def _drop_silent(self) -> None:
+        missing = self.gate.missing()
+        for name in self.gate.drop_silent(time.monotonic()):
+            self.node.get_logger().warning(
+                f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
+                f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
+                f"{'running free' if not self.gate.active else 'going on with the rest'}")
+
+    def _take_dones(self) -> bool:
+        """Take the done messages waiting; whether the gate is open now."""
+        while True:
+            try:
+                with self._dones.handle:
+                    taken = self._dones.handle.take_message(LockstepDone, False)
+            except InvalidHandle:
+                return self.gate.is_open()
+            if taken is None:
+                return self.gate.is_open()
+            self._on_done(taken[0])
+
+    def _wait_for_done(self, executor: DrainingExecutor, *, timeout_s: float) -> None:
+        """Block until a done message waits, the context shuts down or ``timeout_s`` passed."""
+        guard = executor.shutting_down
+        context = self.node.context
+        with self._dones.handle, guard.handle, context.handle:
+            wait_set = rclpy_implementation.WaitSet(1, 1, 0, 0, 0, 0, context.handle)
+            try:
+                wait_set.add_subscription(self._dones.handle)
+                wait_set.add_guard_condition(guard.handle)
+                wait_set.wait(int(timeout_s * 1e9))
+            finally:
+                wait_set.destroy_when_not_in_use()
 
     def admit(self, executor: DrainingExecutor) -> None:
         """Serve the admitted requests one at a time, in the gate's order."""

@@ -170,6 +170,11 @@ class LockstepGate:
                 for endpoint, count in sorted(self.allowed().items())
                 if self.taken.get(endpoint, 0) < count]
 
+    def lacks_done(self) -> bool:
+        """Whether some client has not said it is done with the period the gate waits on."""
+        return any(client.done_period < self.waits_for(client)
+                   for client in self._clients.values())
+
     def is_open(self) -> bool:
         return not self.missing()
 
