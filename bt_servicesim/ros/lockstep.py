@@ -172,7 +172,7 @@ class LockstepClient:
         self._synchronise(answer.joined_at)
         self._ticked = int(answer.joined_at.period)
         self.client_id = int(answer.client)
-        self.traffic.hold(set(self._reader_offsets))
+        self.traffic.hold(set(self._reader_offsets), set(answer.joined_at.endpoints))
         self._publish_done(int(answer.joined_at.period))
         while self._pending and self._pending[0].period <= answer.joined_at.period:
             self._pending.popleft()  # announced before the join: done with it above

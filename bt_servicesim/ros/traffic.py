@@ -66,6 +66,7 @@ class Traffic:
         self.holding = False
         self._held_readers: set[int] = set()
         self._held_subscriptions: set[int] = set()
+        self._held_endpoints: set[str] = set()
         self._held_messages: dict[int, deque[tuple[Any, ...]]] = {}
         self._held_answers: dict[str, deque[Callable[[], None]]] = {}
         self._callbacks: dict[int, Callable[..., Any]] = {}
@@ -103,8 +104,10 @@ class Traffic:
         return key, receive
 
     # --------------------------------------------------------------- holding
-    def hold(self, readers: set[int]) -> None:
-        """Hold from now on what arrives for ``readers`` and every answer and feedback."""
+    def hold(self, readers: set[int], endpoints: set[str]) -> None:
+        """Hold from now on what arrives for ``readers`` and every answer and feedback on
+        ``endpoints``."""
+        self._held_endpoints = set(endpoints)
         self._held_readers = set(readers)
         self._held_subscriptions = {id(self.readers[key]) for key in readers
                                     if key in self.readers}
@@ -151,7 +154,7 @@ class Traffic:
             self.on_arrival()
 
     def _hold_answer(self, endpoint: str, hand_on: Callable[[], None]) -> None:
-        if not self.holding:
+        if not (self.holding and endpoint in self._held_endpoints):
             self.answers_delivered[endpoint] = self.answers_delivered.get(endpoint, 0) + 1
             hand_on()
             self._arrived(self.answered, endpoint)
@@ -223,7 +226,7 @@ class Traffic:
         def counted(*args: Any, **kwargs: Any) -> Any:
             future = send(*args, **kwargs)
             self.sent[endpoint] = self.sent.get(endpoint, 0) + 1
-            if not self.holding:
+            if not (self.holding and endpoint in self._held_endpoints):
                 future.add_done_callback(lambda _: self._hold_answer(endpoint, _nothing))
                 return future
             handed: Future[Any] = Future()

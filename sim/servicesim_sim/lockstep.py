@@ -60,6 +60,9 @@ class LockstepServer:
         self.gate = gate or LockstepGate(lag=PIPELINE_LAG)
         self.messages: dict[str, int] = {}
         self.answers: dict[str, int] = {}
+        self.served: set[str] = set()
+        """The endpoints the node answers on, announced from the start (with 0 answers): a
+        client holds answers only on those, and passes on the answers of anyone else's."""
         self._last = LockstepPeriod(period=0)
         self.callback_group = ReentrantCallbackGroup()
         """For every handler of the node: a handler waiting for its turn (or for sim time)
@@ -90,6 +93,7 @@ class LockstepServer:
     def gated(self, endpoint: str, handler: Callable[..., Any]) -> Callable[..., Any]:
         """``handler`` (a service callback), counted and gated; its return is the answer."""
         self.gate.endpoints.add(endpoint)
+        self.served.add(endpoint)
 
         async def call(*args: Any) -> Any:
             turn = self.turn(endpoint, self.gate.take(endpoint))
@@ -225,8 +229,8 @@ class LockstepServer:
         message.sim_time.sec, message.sim_time.nanosec = divmod(sim_time_ns, 1_000_000_000)
         message.topics = sorted(self.messages)
         message.messages = [self.messages[topic] for topic in message.topics]
-        message.endpoints = sorted(self.answers)
-        message.answers = [self.answers[endpoint] for endpoint in message.endpoints]
+        message.endpoints = sorted(self.served | set(self.answers))
+        message.answers = [self.answers.get(endpoint, 0) for endpoint in message.endpoints]
         return message
 
     def _on_join(self, request: LockstepJoin.Request,
@@ -277,6 +281,7 @@ class CountingActionServer(ActionServer):
         self._lockstep = lockstep
         self._endpoint = action_name
         lockstep.gate.endpoints.update(f"{action_name}:{kind}" for kind in self.KINDS)
+        lockstep.served.update(f"{action_name}:{kind}" for kind in (*self.KINDS, "feedback"))
         super().__init__(node, action_type, action_name, **kwargs)
 
     async def execute(self, taken_data: Any) -> None:

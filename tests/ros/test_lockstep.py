@@ -71,7 +71,7 @@ def test_a_held_reader_sees_only_what_the_period_counts_however_early_the_rest_a
     """Messages of period k+1 that arrive while the node waits for tick k stay held."""
     traffic, seen = Traffic(), []
     key, receive = traffic.counted_callback("/servicebot/odom", seen.append)
-    traffic.hold({key})
+    traffic.hold({key}, set())
     for message in ("period 1", "period 2 (early)", "period 2 (also early)"):
         receive(message)
     assert seen == [] and traffic.received[key] == 3  # counted on arrival, handed on later
@@ -84,7 +84,7 @@ def test_a_held_reader_sees_only_what_the_period_counts_however_early_the_rest_a
 def test_a_held_answer_completes_the_callers_future_only_when_released() -> None:
     traffic, client = Traffic(), FakeClient()
     traffic.watch_client(client)
-    traffic.hold(set())
+    traffic.hold(set(), {"/servicesim/room_info"})
     handed = client.call_async(None)
     assert handed is not client.futures[0]  # the caller's own future
     client.futures[0].set_result("answer")
@@ -98,7 +98,7 @@ def test_a_held_answer_completes_the_callers_future_only_when_released() -> None
 def test_answers_are_handed_on_in_the_order_they_arrived_and_everything_at_the_end() -> None:
     traffic, client = Traffic(), FakeClient()
     traffic.watch_client(client)
-    traffic.hold(set())
+    traffic.hold(set(), {"/servicesim/room_info"})
     first, second = client.call_async(None), client.call_async(None)
     client.futures[1].set_result("second's")  # the simulator answered the second first
     client.futures[0].set_result("first's")
@@ -106,3 +106,12 @@ def test_answers_are_handed_on_in_the_order_they_arrived_and_everything_at_the_e
     assert second.result() == "second's" and not first.done()
     traffic.stop_holding()
     assert first.result() == "first's" and not traffic.holding
+
+
+def test_answers_on_an_endpoint_the_simulator_does_not_serve_are_not_held() -> None:
+    traffic, client = Traffic(), FakeClient()
+    traffic.watch_client(client)
+    traffic.hold(set(), {"/servicesim/task_info"})  # what the simulator announced it serves
+    handed = client.call_async(None)
+    client.futures[0].set_result("someone else's answer")
+    assert handed.result() == "someone else's answer"
