@@ -310,9 +310,9 @@ class LockstepClient:
             return
         period = self._pending.popleft()
         self._pending_since = time.monotonic()
-        self._release(period)
         now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
         self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
+        self._release(period)  # on the period's clock: /clock of the next may be in already
         for ticker in list(self._tickers):
             ticker.tick_if_due(now_ns)
         if self._idle_periods is not None:

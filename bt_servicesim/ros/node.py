@@ -176,10 +176,13 @@ a period) or lose one, and lockstep counts every message. A latched reader kept 
 
 
 def deep_enough(qos: QoSProfile | int) -> QoSProfile | int:
-    """``qos`` keeping at least :data:`MIN_READER_DEPTH` messages (KEEP_ALL as it is)."""
+    """``qos`` keeping at least :data:`MIN_READER_DEPTH` messages if it is reliable (lockstep
+    counts only reliable readers; best effort ones, such as rclpy's own /clock reader, and
+    KEEP_ALL are left as they are)."""
     if isinstance(qos, int):
         return max(qos, MIN_READER_DEPTH)
-    if qos.history == HistoryPolicy.KEEP_ALL or qos.depth >= MIN_READER_DEPTH:
+    if (qos.history == HistoryPolicy.KEEP_ALL or qos.depth >= MIN_READER_DEPTH
+            or qos.reliability != ReliabilityPolicy.RELIABLE):
         return qos
     deeper = copy.copy(qos)
     deeper.depth = MIN_READER_DEPTH

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import QoSProfile
 from rclpy.task import Future
 
 from bt_servicesim.ros.lockstep import offered
@@ -115,3 +116,19 @@ def test_answers_on_an_endpoint_the_simulator_does_not_serve_are_not_held() -> N
     handed = client.call_async(None)
     client.futures[0].set_result("someone else's answer")
     assert handed.result() == "someone else's answer"
+
+
+def test_reliable_readers_keep_two_periods_of_messages_and_best_effort_ones_stay() -> None:
+    """The simulator publishes a period while the node still takes the last one's: a latched
+    reader keeping one message lost the referee's state of one of them."""
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy, qos_profile_sensor_data
+
+    from bt_servicesim.ros.node import MIN_READER_DEPTH, deep_enough
+
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    deeper = deep_enough(latched)
+    assert deeper.depth == MIN_READER_DEPTH >= 10 and latched.depth == 1
+    assert deeper.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert deep_enough(qos_profile_sensor_data).depth == qos_profile_sensor_data.depth
+    assert deep_enough(1) == MIN_READER_DEPTH
