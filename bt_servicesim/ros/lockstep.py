@@ -179,8 +179,17 @@ class LockstepClient:
         self._pending_since = time.monotonic()
         self.traffic.on_arrival = self._check
         self.node.lockstep = self
+        self._stop_following_clock_topic()
         self._check()
         return True
+
+    def _stop_following_clock_topic(self) -> None:
+        """Let only the announcements move the node's clock: rclpy's own /clock reader took
+        every period's /clock (one more wake-up a period) and set the clock to the next
+        period's time whenever that arrived before the tick."""
+        time_source = getattr(self.node, "_time_source", None)  # rclpy's, private (Kilted)
+        if time_source is not None and hasattr(time_source, "detach_node"):
+            time_source.detach_node()
 
     def _synchronise(self, joined_at: LockstepPeriod) -> None:
         """Offsets: what was announced at the join against what has arrived by now."""
