@@ -6,13 +6,17 @@ joins with ``/servicesim/lockstep/join``; after each period the simulator announ
 answers it has sent on each endpoint so far; a joined client says on
 ``/servicesim/lockstep/done`` that it finished its tick for a period and how many requests it
 has sent. The rule (:mod:`servicesim_sim.lockstep_gate`) decides when the simulator may step
-on and in which order the period's requests are served.
+on and in which order the period's requests are served: one period ahead of the clients
+(:data:`~servicesim_sim.lockstep_gate.PIPELINE_LAG`), so that the simulator steps period
+*k*+1 while a client ticks on *k*, and serves the requests of tick *k* after period *k*+1.
 
 :class:`LockstepServer` counts what the node publishes and answers, and wraps the node's
 request handlers so that, while a client is joined, a request taken is served only when the
 gate admits it -- one at a time, in the gate's order, each run to its first wait before the
-next starts. With nobody joined every handler runs as it always did: a backend client that
-never joins (a ``ros2`` command, an executive that runs free) sees no difference.
+next starts; the navigation action's goal, cancel and result requests too
+(:class:`CountingActionServer`), which rclpy would answer as it takes them. With nobody
+joined every handler runs as it always did: a backend client that never joins (a ``ros2``
+command, an executive that runs free) sees no difference.
 """
 
 from __future__ import annotations

@@ -12,9 +12,9 @@ service-latency knob and for navigation to finish), so no request ever blocks th
 request the original made fail is answered at once with a documented error answer.
 
 A client may join the simulator's lockstep (:mod:`servicesim_sim.lockstep`): the loop then
-announces each period's end and holds until every joined client has finished its tick for it,
-and serves the period's requests in a fixed order; the node's handlers are counted and gated
-for that, and with nobody joined they run exactly as before.
+announces each period's end, steps the next while the clients tick on it, holds until every
+joined client has finished that tick, and serves its requests in a fixed order; the node's
+handlers are counted and gated for that, and with nobody joined they run exactly as before.
 
 Every request gets an answer, however many come at once: the services and the action's goal,
 cancel and result services hold every request of a burst (:data:`EVERY_REQUEST`; with ROS's
