@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import os
 import time
 from collections.abc import Callable
 from typing import Any
@@ -56,12 +57,27 @@ LOOK_EVERY_PERIODS = 10
 request; at least this often it looks for other work (a join, a request from outside)."""
 
 
+LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
+"""For measuring only (``benchmarks/sim_rtf.py --lockstep-lag``): 0 makes the simulator wait
+for each tick before it steps on, as before the pipeline; unset, the pipeline's lag."""
+
+
+def pipeline_lag() -> int:
+    """:data:`PIPELINE_LAG`, or 0 or 1 from :data:`LAG_VARIABLE`; anything else is refused."""
+    value = os.environ.get(LAG_VARIABLE, "").strip()
+    if not value:
+        return PIPELINE_LAG
+    if value not in ("0", "1"):
+        raise SystemExit(f"{LAG_VARIABLE}={value!r}: must be 0 or 1")
+    return int(value)
+
+
 class LockstepServer:
     """The simulator's side of lockstep on ``node``; see the module docstring."""
 
     def __init__(self, node: Node, *, gate: LockstepGate | None = None) -> None:
         self.node = node
-        self.gate = gate or LockstepGate(lag=PIPELINE_LAG)
+        self.gate = gate or LockstepGate(lag=pipeline_lag())
         self.messages: dict[str, int] = {}
         self.answers: dict[str, int] = {}
         self.served: set[str] = set()

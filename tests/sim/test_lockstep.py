@@ -87,3 +87,20 @@ def periods_seen_beyond(period: int, *, context: Any, limit_s: float) -> bool:
     finally:
         executor.shutdown()
         node.destroy_node()
+
+
+def test_the_simulator_runs_one_period_ahead_unless_told_to_take_turns(
+        monkeypatch: Any) -> None:
+    from servicesim_sim.lockstep import LAG_VARIABLE, pipeline_lag
+
+    monkeypatch.delenv(LAG_VARIABLE, raising=False)
+    assert pipeline_lag() == 1
+    monkeypatch.setenv(LAG_VARIABLE, "0")
+    assert pipeline_lag() == 0
+    monkeypatch.setenv(LAG_VARIABLE, "2")
+    try:
+        pipeline_lag()
+    except SystemExit as refusal:
+        assert LAG_VARIABLE in str(refusal) and "must be 0 or 1" in str(refusal)
+    else:
+        raise AssertionError("a lag of 2 was taken")
