@@ -84,17 +84,22 @@ def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, 
 
 def measure(args: Any, scenario: str, speed: float) -> None:
     identical, differing, started = 0, [], time.monotonic()
+    stalled = completed = 0
     for index in range(args.pairs):
         command = command_for(args, scenario, speed, index)
         with tempfile.TemporaryDirectory(prefix="reproducibility-") as root:
             first, second = run_pair(command, Path(root))
+        stalled += sum(bool(report.get("lockstep_stalls")) for report in (first, second))
+        completed += sum(bool(report.get("completed")) for report in (first, second))
         if judged(first) == judged(second) and first.get("failure") != "no report":
             identical += 1
         else:
             differing.append((command, first.get("score"), second.get("score")))
     share = 100.0 * identical / args.pairs
     print(f"{scenario:8s} speed {speed:g}: {identical}/{args.pairs} pairs identical "
-          f"({share:.0f}%), {time.monotonic() - started:.0f} s wall", flush=True)
+          f"({share:.0f}%), {time.monotonic() - started:.0f} s wall; {completed} of "
+          f"{2 * args.pairs} runs completed, {stalled} ticked a period without every "
+          "message (lockstep stalls)", flush=True)
     for command, score_a, score_b in differing:
         print(f"  differs ({score_a} vs {score_b}): {' '.join(command[1:])}", flush=True)
 

@@ -1,7 +1,7 @@
 """The simulator's real-time factor: alone, and with one executive driving a full mission.
 
 ``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]
-[--missions N] [--timing lockstep|free|both]`` prints
+[--missions N] [--timing lockstep|free|both|all]`` prints
 
 * alone: the simulator as fast as it can run (speed 0) with its task started (before
   ``new_task`` it never runs faster than real time) but nobody driving the robot and nobody
@@ -19,7 +19,8 @@
   simulator (the run's default) and free running (``run --free-running``, as on Gazebo), one
   after the other, so that the two are measured on the same machine at the same time; in
   lockstep the tree ticks exactly 10 times a sim second by construction, and the factor says
-  what that costs;
+  what that costs; ``--timing all`` adds lockstep *taking turns* (the simulator waits for each
+  tick before it steps on, as before the pipeline), to show what the pipeline gains;
 * the CPU time the executive's and the simulator's processes spent over the task (from
   ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
   second cannot keep X times real time even with a core of its own, so these say which of
@@ -47,6 +48,12 @@ from ros_harness import Simulator, isolate, spin_until, start_task
 
 from bt_servicesim.cli import OneLineArgumentParser
 
+LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
+"""Read by the simulator (``servicesim_sim/lockstep.py``): 0 waits for each tick."""
+TIMINGS = {"lockstep": ("lockstep",), "free": ("free running",),
+           "both": ("lockstep", "free running"),
+           "all": ("lockstep", "lockstep, taking turns", "free running")}
+
 
 def build_parser() -> OneLineArgumentParser:
     parser = OneLineArgumentParser(prog="benchmarks/sim_rtf.py",
@@ -58,8 +65,9 @@ def build_parser() -> OneLineArgumentParser:
                              "0: as fast as the pair can go)")
     parser.add_argument("--executive", choices=("bt", "baseline"), default="bt",
                         help="the executive driving the mission (default bt)")
-    parser.add_argument("--timing", choices=("lockstep", "free", "both"), default="both",
-                        help="run the missions in lockstep, free running, or each both ways "
+    parser.add_argument("--timing", choices=tuple(TIMINGS), default="both",
+                        help="run the missions in lockstep, free running, each both ways, or "
+                             "all three ways (also lockstep taking turns, without the pipeline) "
                              "(default both)")
     parser.add_argument("--missions", type=int, default=5,
                         help="driven missions to run one after another (default 5): a "
@@ -152,7 +160,8 @@ class ProcessCpu:
         return (int(fields[11]) + int(fields[12])) / self.TICKS
 
 
-def measure_mission(*, speed: float, executive: str, free_running: bool = False) -> float:
+def measure_mission(*, speed: float, executive: str, free_running: bool = False,
+                    taking_turns: bool = False) -> float:
     """Run one mission, print its figures; the real-time factor over its task.
 
     The run claims a ROS domain of its own and names it in the report it writes as it starts;
@@ -168,8 +177,13 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False)
                    repr(speed), "--executive", executive, "--out", out,
                    *(["--free-running"] if free_running else [])]
         started = time.monotonic()
-        run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                               env=os.environ.copy())
+        errors = (Path(out) / "run.err").open("w")  # a pipe nobody reads would block the run
+        environment = os.environ.copy()
+        if taking_turns:  # the simulator (started by the run) waits for each tick
+            environment[LAG_VARIABLE] = "0"
+        run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,
+                               env=environment)
+        errors.close()
         domain = run_domain(Path(out), run)
         context = Context()
         rclpy.init(context=context, domain_id=domain)
@@ -185,16 +199,28 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False)
         wall = time.monotonic() - started
         report = json.loads((Path(out) / "report.json").read_text())
         ticks = tick_times(Path(out) / "tree_log.jsonl")
+        sim_log = Path(out) / "sim.log"
+        said = (Path(out) / "run.err").read_text() + (
+            sim_log.read_text() if sim_log.is_file() else "")
+        warnings = [line for line in said.splitlines()
+                    if "lockstep: dropped" in line or "ticked without" in line
+                    or "Traceback" in line]
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()
     verdict = "completed" if report["completed"] else f"failed ({report['failure']})"
     timing = "free running" if free_running else report.get("timing", "?")
+    if taking_turns:
+        timing += ", taking turns"
     print(f"driven by {executive} ({timing}, speed {speed:g}): {sim_s:7.1f} sim s of task in "
           f"{wall_s:5.1f} wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
+    if report.get("lockstep_stalls"):
+        print(f"  lockstep: {report['lockstep_stalls']} period(s) ticked without every message")
+    for line in warnings[:3]:
+        print(f"  the run said: {line.strip()[:200]}")
     if len(cpu.marks) == 2:
         processes = [("executive", cpu.pid)] + [("simulator", pid) for pid in cpu.children()]
         print("  CPU over the task: " + ", ".join(
@@ -288,18 +314,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.add_node(node)
     try:
         measure_alone(node, executor, speed=0.0, seconds=args.seconds)
-        timings = {"lockstep": [False], "free": [True], "both": [False, True]}[args.timing]
-        factors: dict[bool, list[float]] = {free: [] for free in timings}
+        factors: dict[str, list[float]] = {name: [] for name in TIMINGS[args.timing]}
         for _mission in range(args.missions):
-            for free in timings:
-                factors[free].append(measure_mission(speed=args.speed,
-                                                     executive=args.executive,
-                                                     free_running=free))
-        for free, values in factors.items():
+            for name in factors:
+                factors[name].append(measure_mission(
+                    speed=args.speed, executive=args.executive,
+                    free_running=name == "free running",
+                    taking_turns=name == "lockstep, taking turns"))
+        for name, values in factors.items():
             if len(values) > 1:
-                print(f"driven by {args.executive}, {'free running' if free else 'lockstep'}, "
-                      f"{len(values)} missions: real-time factor median "
-                      f"{statistics.median(values):.1f}, min {min(values):.1f}, "
+                print(f"driven by {args.executive}, {name}, {len(values)} missions: real-time "
+                      f"factor median {statistics.median(values):.1f}, min {min(values):.1f}, "
                       f"max {max(values):.1f}")
     finally:
         executor.shutdown()

@@ -10,6 +10,15 @@ happened to deliver first. After the tick it sends its *done* with the number of
 has sent since it joined (those its callbacks sent between ticks included), and the simulator
 serves them before it steps on.
 
+The simulator steps its next period while the client ticks on the last one (a one-period
+pipeline, docs/simulator.md "Lockstep"), so messages and answers of period *k*+1 reach the
+node while it waits for, or ticks on, period *k*. The node holds them
+(:meth:`~bt_servicesim.ros.traffic.Traffic.hold`) from the join on: before the tick for *k*
+the client hands on exactly what announcement *k* counts, reader by reader (by topic name),
+then endpoint by endpoint (by name), each in the order it arrived (one writer's order, which
+DDS keeps); whatever came after waits for the tick of its own period. Announcements are
+ticked one by one, in order, none skipped.
+
 Counting happens in the node (:mod:`bt_servicesim.ros.traffic`). Counts of messages are
 cumulative since the simulator started, so at the join the client learns its offsets: the
 simulator, holding the period it joined at, has nothing more in flight once a short settle
@@ -25,6 +34,7 @@ within a bounded wall time, and a backend without it (Gazebo, a real robot) is r
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable
 
 from rclpy.executors import Executor
@@ -49,10 +59,11 @@ OFFER_WAIT_S = 3.0
 """Wall seconds a run waits for the join service once the simulator's own services are up."""
 JOIN_SETTLE_S = 0.5
 """Wall seconds after the join for what the simulator sent before it to arrive."""
-FINAL_PERIODS = 2
+FINAL_PERIODS = 3
 """Periods the client stays in step after its last ticker stopped: what the last tick sent is
-served and answered; then it holds the simulator still until :meth:`LockstepClient.leave`,
-so that what the run reports of the end does not depend on how long it takes to report."""
+served (after the next period: the pipeline's one period later) and answered; then it holds
+the simulator still until :meth:`LockstepClient.leave`, so that what the run reports of the
+end does not depend on how long it takes to report."""
 STALL_WARNING_S = 10.0
 """Wall seconds a period may wait for its messages before the client ticks anyway and says so."""
 DUE_TOLERANCE_NS = 10_000_000
@@ -123,11 +134,20 @@ class LockstepClient:
         self._tickers: list[LockstepTicker] = []
         self._idle_periods: int | None = None
         """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
-        self._pending: LockstepPeriod | None = None
+        self._pending: deque[LockstepPeriod] = deque()
+        """Announcements not ticked yet, oldest first."""
         self._pending_since = 0.0
+        """Wall time since the oldest pending announcement waits."""
         self._scheduled = False
+        self._ticked = -1
+        """The last period ticked (or joined at)."""
+        self._head_targets: tuple[LockstepPeriod | None, dict[int, int], dict[str, int]] = (
+            None, {}, {})
+        self._ready_no_sooner = 0
+        """The arrivals the oldest pending period cannot tick before (from the last look)."""
         self._reader_offsets: dict[int, tuple[str, int]] = {}
         self._answer_offsets: dict[str, int] = {}
+        self._answers_at_join: dict[str, int] = {}
         self._sent_at_join: dict[str, int] = {}
         self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
         node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
@@ -150,14 +170,26 @@ class LockstepClient:
         finally:
             self.node.destroy_client(client)
         self._synchronise(answer.joined_at)
+        self._ticked = int(answer.joined_at.period)
         self.client_id = int(answer.client)
+        self.traffic.hold(set(self._reader_offsets), set(answer.joined_at.endpoints))
         self._publish_done(int(answer.joined_at.period))
-        if self._pending is not None and self._pending.period <= answer.joined_at.period:
-            self._pending = None  # announced before the join: done with it above
+        while self._pending and self._pending[0].period <= answer.joined_at.period:
+            self._pending.popleft()  # announced before the join: done with it above
+        self._pending_since = time.monotonic()
         self.traffic.on_arrival = self._check
         self.node.lockstep = self
+        self._stop_following_clock_topic()
         self._check()
         return True
+
+    def _stop_following_clock_topic(self) -> None:
+        """Let only the announcements move the node's clock: rclpy's own /clock reader took
+        every period's /clock (one more wake-up a period) and set the clock to the next
+        period's time whenever that arrived before the tick."""
+        time_source = getattr(self.node, "_time_source", None)  # rclpy's, private (Kilted)
+        if time_source is not None and hasattr(time_source, "detach_node"):
+            time_source.detach_node()
 
     def _synchronise(self, joined_at: LockstepPeriod) -> None:
         """Offsets: what was announced at the join against what has arrived by now."""
@@ -165,10 +197,11 @@ class LockstepClient:
         self._reader_offsets = {
             key: (topic, int(announced.get(topic, 0)) - self.traffic.received[key])
             for key, topic in self._counted_readers()}
-        answers = dict(zip(joined_at.endpoints, joined_at.answers, strict=False))
+        self._answers_at_join = {endpoint: int(count) for endpoint, count in
+                                 zip(joined_at.endpoints, joined_at.answers, strict=False)}
         self._answer_offsets = {
-            endpoint: int(answers.get(endpoint, 0)) - self.traffic.answered.get(endpoint, 0)
-            for endpoint in self.traffic.endpoints}
+            endpoint: self._answers_at_join.get(endpoint, 0)
+            - self.traffic.answered.get(endpoint, 0) for endpoint in self.traffic.endpoints}
         self._sent_at_join = dict(self.traffic.sent)
 
     def _counted_readers(self) -> list[tuple[int, str]]:
@@ -202,35 +235,67 @@ class LockstepClient:
             self._done.publish(LockstepDone(client=self.client_id, leaving=True))
             self.client_id = None
             self.traffic.on_arrival = None
+            self.traffic.stop_holding()
 
     # ---------------------------------------------------------------- period
     def _on_period(self, message: LockstepPeriod) -> None:
-        if self._pending is not None and self._pending.period >= message.period:
+        last = self._pending[-1].period if self._pending else self._ticked
+        if message.period <= last:
             return
-        if self._pending is None:
+        if not self._pending:
             self._pending_since = time.monotonic()
-        self._pending = message
+        self._pending.append(message)
         if self.client_id is not None:
             self._check()
 
     def missing(self) -> list[str]:
-        """What the pending period still waits for, in words; empty when it may tick."""
-        period = self._pending
-        if period is None:
+        """What the oldest pending period still waits for, in words; empty when it may tick."""
+        if not self._pending:
             return ["no period announced"]
-        announced = dict(zip(period.topics, period.messages, strict=False))
-        lacking = [topic for key, (topic, offset) in self._reader_offsets.items()
-                   if key in self.traffic.readers
-                   and self.traffic.received[key] + offset < announced.get(topic, 0)]
-        for endpoint, count in zip(period.endpoints, period.answers, strict=False):
-            offset = self._answer_offsets.get(endpoint)
-            if offset is not None and self.traffic.answered.get(endpoint, 0) + offset < count:
-                lacking.append(endpoint)
+        head = self._pending[0]
+        if self._head_targets[0] is not head:  # worked out once per period, not per arrival
+            self._head_targets = (head, *self._targets(head))
+        _, messages, answers = self._head_targets
+        lacking = [self._reader_offsets[key][0] for key, count in messages.items()
+                   if self.traffic.received[key] < count]
+        lacking.extend(endpoint for endpoint, count in answers.items()
+                       if self.traffic.answered.get(endpoint, 0) < count)
+        shortfall = (sum(max(0, count - self.traffic.received[key])
+                         for key, count in messages.items())
+                     + sum(max(0, count - self.traffic.answered.get(endpoint, 0))
+                           for endpoint, count in answers.items()))
+        self._ready_no_sooner = self.traffic.arrivals + shortfall
         return lacking
 
+    def _targets(self, period: LockstepPeriod) -> tuple[dict[int, int], dict[str, int]]:
+        """What ``period`` counts, in this node's own terms: messages per reader (by topic
+        name), answers per endpoint (by name)."""
+        announced = dict(zip(period.topics, period.messages, strict=False))
+        messages = {key: int(announced.get(topic, 0)) - offset
+                    for key, (topic, offset) in sorted(self._reader_offsets.items(),
+                                                       key=lambda item: (item[1][0], item[0]))
+                    if key in self.traffic.readers}
+        answers = {endpoint: int(count) - self._answer_offset(endpoint)
+                   for endpoint, count in sorted(zip(period.endpoints, period.answers,
+                                                     strict=False))
+                   if endpoint in self.traffic.endpoints}
+        return messages, answers
+
+    def _answer_offset(self, endpoint: str) -> int:
+        """Announced answers on ``endpoint`` that are not this node's: those before the join
+        (a client made after it had none before)."""
+        offset = self._answer_offsets.get(endpoint)
+        return self._answers_at_join.get(endpoint, 0) if offset is None else offset
+
     def _check(self) -> None:
-        if (self._pending is None or self._scheduled or self.holding
-                or self.client_id is None or self.missing()):
+        """Schedule the tick of the oldest pending period if everything it counts is in.
+
+        Called on every arrival: while fewer messages have arrived than the period lacked at
+        the last full look, nothing is looked at (each arrival makes up at most one)."""
+        if (not self._pending or self._scheduled or self.holding or self.client_id is None
+                or (self.traffic.arrivals < self._ready_no_sooner
+                    and self._head_targets[0] is self._pending[0])
+                or self.missing()):
             return
         self._scheduled = True
         # a task, so that callbacks of what just arrived (a future's) run before the tick
@@ -238,29 +303,44 @@ class LockstepClient:
 
     def check_stalled(self) -> None:
         """Tick a period that waited too long for its messages anyway, and say what lacked."""
-        if (self._pending is None or self._scheduled or self.holding or self.client_id is None
+        if (not self._pending or self._scheduled or self.holding or self.client_id is None
                 or time.monotonic() - self._pending_since < STALL_WARNING_S):
             return
         self.stalls += 1
         self.node.get_logger().warning(
-            f"lockstep: period {self._pending.period} ticked without "
+            f"lockstep: period {self._pending[0].period} ticked without "
             f"{', '.join(self.missing())} after {STALL_WARNING_S:.0f} s: this run may not replay")
         self._scheduled = True
         self.node.executor.create_task(self._run_period)
 
     def _run_period(self) -> None:
         self._scheduled = False
-        period, self._pending = self._pending, None
-        if period is None:
+        if not self._pending or self.client_id is None:
             return
+        period = self._pending.popleft()
+        self._pending_since = time.monotonic()
         now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
         self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
+        self._release(period)  # on the period's clock: /clock of the next may be in already
         for ticker in list(self._tickers):
             ticker.tick_if_due(now_ns)
         if self._idle_periods is not None:
             self._idle_periods += 1
         self.periods += 1
-        self._publish_done(int(period.period))
+        self._ticked = int(period.period)
+        self._publish_done(self._ticked)
+        self._check()  # the next period may have arrived whole meanwhile
+
+    def _release(self, period: LockstepPeriod) -> None:
+        """Hand on what ``period`` counts; what a callback raises is kept, not raised."""
+        messages, answers = self._targets(period)
+        try:
+            self.traffic.release(messages, answers)
+        except Exception as error:  # escaping an executor's callback kills the process
+            note = getattr(self.node, "note_error", None)
+            if note is None:
+                raise
+            note(error, where=f"handing on period {period.period}")
 
     def _publish_done(self, period: int) -> None:
         sent = {endpoint: count - self._sent_at_join.get(endpoint, 0)

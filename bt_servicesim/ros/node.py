@@ -16,7 +16,8 @@ simulator runs 50 times faster than real time (the run itself uses the ``EventsE
   (:mod:`bt_servicesim.ros.traffic`: messages per subscription, requests and answers per
   endpoint, messages per published topic) for :mod:`bt_servicesim.ros.lockstep`, and in
   lockstep makes a subscription asked for best effort reliable (``reliable_subscriptions``),
-  since a count needs every message;
+  since a count needs every message, and every subscription keeps at least two periods'
+  messages (:data:`MIN_READER_DEPTH`);
 * duplicate clients: behaviours that call the same service or the same action share one
   client per node (:func:`shared_client`, :func:`shared_action_client`). A client serves any
   number of requests or goals at once, each with its own future, so sharing changes nothing
@@ -38,6 +39,7 @@ message and the 207 µs of rclpy's Python executor, which has neither crash: kee
 
 from __future__ import annotations
 
+import copy
 import traceback
 from collections.abc import Callable
 from typing import Any
@@ -47,7 +49,7 @@ from rclpy.client import Client
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from bt_servicesim.ros.traffic import Traffic
 
@@ -112,6 +114,7 @@ class ExecutiveNode(Node):
                             qos_profile: Any, **kwargs: Any) -> Any:
         kwargs.setdefault("event_callbacks",
                           SubscriptionEventCallbacks(use_default_callbacks=False))
+        qos_profile = deep_enough(qos_profile)
         if self.reliable_subscriptions:
             qos_profile = reliable(qos_profile)
         # counted around the guard: a message whose reader raised has still arrived
@@ -163,6 +166,27 @@ def stop_behind(error: BaseException) -> BaseException | None:
             return error
         error = error.__cause__ or error.__context__
     return None
+
+
+MIN_READER_DEPTH = 10
+"""The fewest messages a subscription of this node keeps: in lockstep the simulator publishes
+its next period while the node is still taking the last one's (docs/simulator.md,
+"Lockstep"), so a reader must keep two periods' worth (the referee's score comes five times
+a period) or lose one, and lockstep counts every message. A latched reader kept one."""
+
+
+def deep_enough(qos: QoSProfile | int) -> QoSProfile | int:
+    """``qos`` keeping at least :data:`MIN_READER_DEPTH` messages if it is reliable (lockstep
+    counts only reliable readers; best effort ones, such as rclpy's own /clock reader, and
+    KEEP_ALL are left as they are)."""
+    if isinstance(qos, int):
+        return max(qos, MIN_READER_DEPTH)
+    if (qos.history == HistoryPolicy.KEEP_ALL or qos.depth >= MIN_READER_DEPTH
+            or qos.reliability != ReliabilityPolicy.RELIABLE):
+        return qos
+    deeper = copy.copy(qos)
+    deeper.depth = MIN_READER_DEPTH
+    return deeper
 
 
 def reliable(qos: QoSProfile | int) -> QoSProfile | int:

@@ -11,6 +11,9 @@ executive from ticking on time. So readers in one node share a subscription per 
   wants messages rather than bytes (the recorder writes the bytes DDS delivered);
 * each wake-up takes every message waiting, oldest first, and hands each to every reader in
   the order they subscribed: one handler per burst rather than one per message and reader.
+  In lockstep the node holds a burst and hands it on message by message when the tick is
+  due (:mod:`bt_servicesim.ros.traffic`): the queue then holds the next period's messages,
+  which are not taken here;
   A reader that only keeps the latest message (``latest_only``) gets the newest of a burst
   alone, and nothing is decoded for the others;
 * the subscription has the first reader's QoS. A later reader whose QoS asks for more
@@ -103,9 +106,10 @@ class SharedSubscription:
 
     def _on_data(self, data: bytes) -> None:
         burst = [data]
-        if self.subscription is not None:
+        traffic = getattr(self.node, "traffic", None)
+        if self.subscription is not None and not (traffic is not None
+                                                  and traffic.holds(self.subscription)):
             burst.extend(queued_raw_messages(self.subscription))
-            traffic = getattr(self.node, "traffic", None)
             if traffic is not None and len(burst) > 1:  # taken here, past the node's count
                 traffic.took_more(self.subscription, len(burst) - 1)
         if self._kept is not None:

@@ -164,6 +164,16 @@ class DrainingExecutor(SingleThreadedExecutor):
         self._shutting_down = GuardCondition(None, None, context=self.context)
         self.context.on_shutdown(self._shutting_down.trigger)
 
+    @property
+    def shutting_down(self) -> GuardCondition:
+        """The guard condition the context's shutdown triggers: for waits of the loop's own."""
+        return self._shutting_down
+
+    @property
+    def resumable(self) -> bool:
+        """Whether a coroutine may resume (or a task was created) since the last pass."""
+        return self._resumable
+
     def drop_tasks_of(self, node: Node) -> int:
         """Cancel ``node``'s unfinished callbacks (coroutines waiting on sim time, navigation
         or the gate) before the node is removed for good; how many there were.

@@ -6,25 +6,32 @@ joins with ``/servicesim/lockstep/join``; after each period the simulator announ
 answers it has sent on each endpoint so far; a joined client says on
 ``/servicesim/lockstep/done`` that it finished its tick for a period and how many requests it
 has sent. The rule (:mod:`servicesim_sim.lockstep_gate`) decides when the simulator may step
-on and in which order the period's requests are served.
+on and in which order the period's requests are served: one period ahead of the clients
+(:data:`~servicesim_sim.lockstep_gate.PIPELINE_LAG`), so that the simulator steps period
+*k*+1 while a client ticks on *k*, and serves the requests of tick *k* after period *k*+1.
 
 :class:`LockstepServer` counts what the node publishes and answers, and wraps the node's
 request handlers so that, while a client is joined, a request taken is served only when the
 gate admits it -- one at a time, in the gate's order, each run to its first wait before the
-next starts. With nobody joined every handler runs as it always did: a backend client that
-never joins (a ``ros2`` command, an executive that runs free) sees no difference.
+next starts; the navigation action's goal, cancel and result requests too
+(:class:`CountingActionServer`), which rclpy would answer as it takes them. With nobody
+joined every handler runs as it always did: a backend client that never joins (a ``ros2``
+command, an executive that runs free) sees no difference.
 """
 
 from __future__ import annotations
 
 import inspect
 import math
+import os
 import time
 from collections.abc import Callable
 from typing import Any
 
 from rclpy.action import ActionServer
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.exceptions import InvalidHandle
+from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -32,7 +39,7 @@ from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
 from servicesim_sim.executor import DrainingExecutor
-from servicesim_sim.lockstep_gate import Admission, LockstepGate
+from servicesim_sim.lockstep_gate import PIPELINE_LAG, Admission, LockstepGate
 
 __all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
            "LockstepServer"]
@@ -45,6 +52,24 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           durability=DurabilityPolicy.VOLATILE)
 GATE_WAIT_S = 0.05
 """Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
+LOOK_EVERY_PERIODS = 10
+"""In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
+request; at least this often it looks for other work (a join, a request from outside)."""
+
+
+LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
+"""For measuring only (``benchmarks/sim_rtf.py --lockstep-lag``): 0 makes the simulator wait
+for each tick before it steps on, as before the pipeline; unset, the pipeline's lag."""
+
+
+def pipeline_lag() -> int:
+    """:data:`PIPELINE_LAG`, or 0 or 1 from :data:`LAG_VARIABLE`; anything else is refused."""
+    value = os.environ.get(LAG_VARIABLE, "").strip()
+    if not value:
+        return PIPELINE_LAG
+    if value not in ("0", "1"):
+        raise SystemExit(f"{LAG_VARIABLE}={value!r}: must be 0 or 1")
+    return int(value)
 
 
 class LockstepServer:
@@ -52,9 +77,12 @@ class LockstepServer:
 
     def __init__(self, node: Node, *, gate: LockstepGate | None = None) -> None:
         self.node = node
-        self.gate = gate or LockstepGate()
+        self.gate = gate or LockstepGate(lag=pipeline_lag())
         self.messages: dict[str, int] = {}
         self.answers: dict[str, int] = {}
+        self.served: set[str] = set()
+        """The endpoints the node answers on, announced from the start (with 0 answers): a
+        client holds answers only on those, and passes on the answers of anyone else's."""
         self._last = LockstepPeriod(period=0)
         self.callback_group = ReentrantCallbackGroup()
         """For every handler of the node: a handler waiting for its turn (or for sim time)
@@ -63,8 +91,9 @@ class LockstepServer:
         self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
         node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
                             callback_group=self.callback_group)
-        node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS,
-                                 callback_group=self.callback_group)
+        self._dones = node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done,
+                                               PROTOCOL_QOS, callback_group=self.callback_group)
+        self._periods_unlooked = 0
 
     @property
     def active(self) -> bool:
@@ -81,30 +110,32 @@ class LockstepServer:
         return self.gate.take(endpoint)
 
     # ------------------------------------------------------------- wrapping
-    def gated(self, endpoint: str, handler: Callable[..., Any], *, count: bool = True,
-              answers: bool = True) -> Callable[..., Any]:
-        """``handler`` (a service callback or an accepted-goal callback), counted and gated.
-
-        ``count``: the request is counted here (False where the action server counts it);
-        ``answers``: the handler's return is the endpoint's answer.
-        """
+    def gated(self, endpoint: str, handler: Callable[..., Any]) -> Callable[..., Any]:
+        """``handler`` (a service callback), counted and gated; its return is the answer."""
         self.gate.endpoints.add(endpoint)
+        self.served.add(endpoint)
 
         async def call(*args: Any) -> Any:
-            number = self.gate.take(endpoint) if count else self.gate.taken.get(endpoint, 0)
-            if self.gate.active:
-                turn = Future()
-                self.gate.admit_later(Admission(endpoint=endpoint, number=number,
-                                                serve=lambda: turn.set_result(True)))
+            turn = self.turn(endpoint, self.gate.take(endpoint))
+            if turn is not None:
                 await turn
             result = handler(*args)
             if inspect.isawaitable(result):
                 result = await result
-            if answers:
-                self.answered(endpoint)
+            self.answered(endpoint)
             return result
 
         return call
+
+    def turn(self, endpoint: str, number: int) -> Future | None:
+        """While a client is joined, a future the gate completes when it admits request
+        ``number`` on ``endpoint``; None when nobody is joined (serve at once)."""
+        if not self.gate.active:
+            return None
+        turn = Future()
+        self.gate.admit_later(Admission(endpoint=endpoint, number=number,
+                                        serve=lambda: turn.set_result(True)))
+        return turn
 
     def gated_message(self, topic: str, callback: Callable[[Any], None]) -> Callable[[Any], None]:
         """A subscription callback, counted and, while a client is joined, gated."""
@@ -127,7 +158,7 @@ class LockstepServer:
         With a client joined the drain is complete (no wall budget): every answer, feedback
         and result due in this period goes out before the announcement that counts it.
         """
-        if self.gate.active:
+        if self.gate.active and executor.resumable:  # requests wait for the gate anyway
             drain_completely(executor)
         self._last = self._announcement(period, sim_time_ns)
         self._announcer.publish(self._last)
@@ -152,17 +183,58 @@ class LockstepServer:
     def hold(self, executor: DrainingExecutor) -> None:
         """Until every joined client is done with the period, then serve its requests in order.
 
+        The done messages are taken here, straight from their subscription, and waited for on
+        a wait set of that subscription alone: handing each over to rclpy's executor (a wait
+        set of every entity, its callback bookkeeping, a look for more) cost the loop about as
+        much as the rest of the gate. The executor runs only when the gate lacks requests
+        (they must be taken to be served) and every :data:`LOOK_EVERY_PERIODS` periods.
         A client the gate waited on for too long is dropped, with one warning naming it.
         """
-        while self.gate.active and not self.gate.is_open():
-            executor.wait_and_run(timeout_sec=GATE_WAIT_S)
-            missing = self.gate.missing()
-            for name in self.gate.drop_silent(time.monotonic()):
-                self.node.get_logger().warning(
-                    f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
-                    f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
-                    f"{'running free' if not self.gate.active else 'going on with the rest'}")
+        self._periods_unlooked += 1
+        while self.gate.active and not self._take_dones():
+            if self.gate.lacks_done():
+                self._wait_for_done(executor, timeout_s=GATE_WAIT_S)
+            else:
+                self._periods_unlooked = 0
+                executor.wait_and_run(timeout_sec=GATE_WAIT_S)
+            self._drop_silent()
+        if self._periods_unlooked >= LOOK_EVERY_PERIODS:
+            self._periods_unlooked = 0
+            executor.run_ready()
         self.admit(executor)
+
+    def _drop_silent(self) -> None:
+        missing = self.gate.missing()
+        for name in self.gate.drop_silent(time.monotonic()):
+            self.node.get_logger().warning(
+                f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
+                f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
+                f"{'running free' if not self.gate.active else 'going on with the rest'}")
+
+    def _take_dones(self) -> bool:
+        """Take the done messages waiting; whether the gate is open now."""
+        while True:
+            try:
+                with self._dones.handle:
+                    taken = self._dones.handle.take_message(LockstepDone, False)
+            except InvalidHandle:
+                return self.gate.is_open()
+            if taken is None:
+                return self.gate.is_open()
+            self._on_done(taken[0])
+
+    def _wait_for_done(self, executor: DrainingExecutor, *, timeout_s: float) -> None:
+        """Block until a done message waits, the context shuts down or ``timeout_s`` passed."""
+        guard = executor.shutting_down
+        context = self.node.context
+        with self._dones.handle, guard.handle, context.handle:
+            wait_set = rclpy_implementation.WaitSet(1, 1, 0, 0, 0, 0, context.handle)
+            try:
+                wait_set.add_subscription(self._dones.handle)
+                wait_set.add_guard_condition(guard.handle)
+                wait_set.wait(int(timeout_s * 1e9))
+            finally:
+                wait_set.destroy_when_not_in_use()
 
     def admit(self, executor: DrainingExecutor) -> None:
         """Serve the admitted requests one at a time, in the gate's order."""
@@ -177,8 +249,8 @@ class LockstepServer:
         message.sim_time.sec, message.sim_time.nanosec = divmod(sim_time_ns, 1_000_000_000)
         message.topics = sorted(self.messages)
         message.messages = [self.messages[topic] for topic in message.topics]
-        message.endpoints = sorted(self.answers)
-        message.answers = [self.answers[endpoint] for endpoint in message.endpoints]
+        message.endpoints = sorted(self.served | set(self.answers))
+        message.answers = [self.answers.get(endpoint, 0) for endpoint in message.endpoints]
         return message
 
     def _on_join(self, request: LockstepJoin.Request,
@@ -210,33 +282,52 @@ def drain_completely(executor: DrainingExecutor) -> None:
 
 
 class CountingActionServer(ActionServer):
-    """rclpy's action server, counting the requests it takes and the results it sends.
+    """rclpy's action server, counting the requests it takes and the answers it sends, and
+    serving its requests through the gate.
 
-    Goal and cancel answers go out as the request is taken, so they count then; a result goes
-    out when the goal ends (or at once for a goal the server does not know). The result is
-    counted in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it:
-    no public callback sees it go.
+    Goal and cancel answers go out as their request is served; a result when the goal ends
+    (or at once for a goal the server does not know). While a client is joined a request is
+    served only when the gate admits it, as a service's: rclpy answers goal and cancel
+    requests as it takes them, and a request of tick *k* taken while the simulator steps
+    *k*+1 would otherwise be answered in period *k*+1 or *k*+2 by luck. The result is counted
+    in ``_send_result_response``, rclpy's own (private, Kilted) hook for sending it: no public
+    callback sees it go.
     """
+
+    KINDS = ("goal", "cancel", "result")
 
     def __init__(self, node: Node, action_type: Any, action_name: str, *,
                  lockstep: LockstepServer, **kwargs: Any) -> None:
         self._lockstep = lockstep
         self._endpoint = action_name
-        lockstep.gate.endpoints.update(f"{action_name}:{kind}"
-                                       for kind in ("goal", "cancel", "result"))
+        lockstep.gate.endpoints.update(f"{action_name}:{kind}" for kind in self.KINDS)
+        lockstep.served.update(f"{action_name}:{kind}" for kind in (*self.KINDS, "feedback"))
         super().__init__(node, action_type, action_name, **kwargs)
 
     async def execute(self, taken_data: Any) -> None:
-        for kind in ("goal", "cancel"):
-            if kind in taken_data:
-                self._lockstep.took(f"{self._endpoint}:{kind}")
-                self._lockstep.answered(f"{self._endpoint}:{kind}")
-        if "result" in taken_data:
-            self._lockstep.took(f"{self._endpoint}:result")
-            _, request = taken_data["result"]
-            if bytes(request.goal_id.uuid) not in self._goal_handles:
-                self._lockstep.answered(f"{self._endpoint}:result")
-        await super().execute(taken_data)
+        turns = {kind: self._lockstep.turn(f"{self._endpoint}:{kind}",
+                                           self._lockstep.took(f"{self._endpoint}:{kind}"))
+                 for kind in self.KINDS if kind in taken_data}
+        for kind, turn in turns.items():
+            if turn is not None:
+                await turn
+            await self._serve(kind, taken_data[kind])
+        if "expired" in taken_data:
+            await self._execute_expire_goals(taken_data["expired"])
+
+    async def _serve(self, kind: str, request: Any) -> None:
+        endpoint = f"{self._endpoint}:{kind}"
+        if kind == "goal":
+            await self._execute_goal_request(request)
+            self._lockstep.answered(endpoint)
+        elif kind == "cancel":
+            await self._execute_cancel_request(request)
+            self._lockstep.answered(endpoint)
+        else:
+            unknown = bytes(request[1].goal_id.uuid) not in self._goal_handles
+            await self._execute_get_result_request(request)
+            if unknown:
+                self._lockstep.answered(endpoint)
 
     def _send_result_response(self, request_header: Any, future: Any) -> None:
         super()._send_result_response(request_header, future)

@@ -5,9 +5,17 @@ Design intent: a seed is a replayable fact only if the world's history does not 
 fast the processes run. So, once a client has joined, the simulator does not step past period
 *k* until
 
-* every joined client has said it finished its tick for *k* (its *done*, with the number of
-  requests it has sent on each endpoint since it joined), and
+* every joined client has said it finished its tick for *k* − ``lag`` (its *done*, with the
+  number of requests it has sent on each endpoint since it joined), and
 * the simulator has taken at least that many requests on each endpoint.
+
+With ``lag`` 1 (the simulator's: :data:`PIPELINE_LAG`) the two processes work at once: the
+simulator steps period *k*+1 while the client ticks on *k*, and the requests of tick *k* are
+served after period *k*+1, one period later than with ``lag`` 0, but always then. A client is
+never waited on for a period before the one it joined at (its first done, sent at the join,
+is for that period), and the requests counted are those of the done for exactly the period
+waited on: a client already done with a later period (it may be, one period ahead of the
+simulator's wait) has its later requests served a period later, never early.
 
 DDS orders nothing across topics and writers, so the gate never relies on arrival order: the
 done message and the requests it counts may arrive in any order, and a request taken while
@@ -29,10 +37,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["DROP_AFTER_S", "Admission", "LockstepGate"]
+__all__ = ["DROP_AFTER_S", "PIPELINE_LAG", "Admission", "LockstepGate"]
 
 DROP_AFTER_S = 10.0
 """Wall seconds the gate waits on a client before it drops the client."""
+PIPELINE_LAG = 1
+"""Periods the simulator may run ahead of its clients' done messages (see the docstring)."""
 
 
 @dataclass
@@ -40,8 +50,16 @@ class _Client:
     name: str
     baseline: dict[str, int]
     """What the simulator had taken on each endpoint when the client joined."""
+    joined_period: int = -1
+    """The period announced when the client joined: it is never waited on for an earlier one."""
     done_period: int = -1
-    requests: dict[str, int] = field(default_factory=dict)
+    requests: dict[int, dict[str, int]] = field(default_factory=dict)
+    """The requests each done counted, by period (those no longer needed are forgotten)."""
+
+    def requests_by(self, period: int) -> dict[str, int]:
+        """The counts of the latest done for ``period`` or before (none: nothing yet)."""
+        counted = [done for done in self.requests if done <= period]
+        return self.requests[max(counted)] if counted else {}
 
 
 @dataclass(order=True)
@@ -57,8 +75,12 @@ class Admission:
 class LockstepGate:
     """Who joined, what they announced, what was taken; see the module docstring."""
 
-    def __init__(self, *, drop_after_s: float = DROP_AFTER_S) -> None:
+    def __init__(self, *, drop_after_s: float = DROP_AFTER_S, lag: int = 0) -> None:
+        if lag < 0:
+            raise ValueError(f"lag {lag}: must be 0 or more")
         self.drop_after_s = drop_after_s
+        self.lag = lag
+        """Periods the simulator may run ahead of the clients' done messages."""
         self.period = -1
         """The last period announced."""
         self.taken: dict[str, int] = {}
@@ -83,19 +105,30 @@ class LockstepGate:
         client_id = self._next_id
         self._next_id += 1
         self._clients[client_id] = _Client(name=name or f"client {client_id}",
-                                           baseline=dict(self.taken))
+                                           baseline=dict(self.taken), joined_period=self.period)
         return client_id
+
+    def waits_for(self, client: _Client) -> int:
+        """The period whose done the gate waits for from ``client`` now."""
+        return max(self.period - self.lag, client.joined_period)
 
     def done(self, client_id: int, period: int, requests: dict[str, int]) -> bool:
         """A client finished its tick for ``period``; False if nobody by that id is joined."""
         client = self._clients.get(client_id)
         if client is None:
             return False
-        if period >= client.done_period:
+        if period > client.done_period:
             client.done_period = period
-            client.requests = {endpoint: count for endpoint, count in requests.items()
-                               if endpoint in self.endpoints}
+            client.requests[period] = {endpoint: count for endpoint, count in requests.items()
+                                       if endpoint in self.endpoints}
+            self._forget_old(client)
         return True
+
+    def _forget_old(self, client: _Client) -> None:
+        """Keep the done the gate waits on (the latest up to that period) and later ones."""
+        needed = [done for done in client.requests if done <= self.waits_for(client)]
+        for old in [done for done in client.requests if needed and done < max(needed)]:
+            del client.requests[old]
 
     def leave(self, client_id: int) -> str | None:
         """A client leaves: the gate no longer waits for it; its name, None if unknown."""
@@ -120,20 +153,27 @@ class LockstepGate:
         """Per endpoint, the requests the joined clients' done messages account for."""
         allowed: dict[str, int] = {}
         for client in self._clients.values():
-            for endpoint in set(client.baseline) | set(client.requests):
+            requests = client.requests_by(self.waits_for(client))
+            for endpoint in set(client.baseline) | set(requests):
                 allowed[endpoint] = (allowed.get(endpoint, 0) + client.baseline.get(endpoint, 0)
-                                     + client.requests.get(endpoint, 0))
+                                     + requests.get(endpoint, 0))
         return allowed
 
     def missing(self) -> list[str]:
         """What the gate still waits for before the next step, in words; empty when open."""
-        lacking = [f"done {self.period} from {client.name}"
-                   for client in self._clients.values() if client.done_period < self.period]
+        lacking = [f"done {self.waits_for(client)} from {client.name}"
+                   for client in self._clients.values()
+                   if client.done_period < self.waits_for(client)]
         if lacking:
             return lacking
         return [f"{count - self.taken.get(endpoint, 0)} request(s) on {endpoint}"
                 for endpoint, count in sorted(self.allowed().items())
                 if self.taken.get(endpoint, 0) < count]
+
+    def lacks_done(self) -> bool:
+        """Whether some client has not said it is done with the period the gate waits on."""
+        return any(client.done_period < self.waits_for(client)
+                   for client in self._clients.values())
 
     def is_open(self) -> bool:
         return not self.missing()
@@ -162,7 +202,7 @@ class LockstepGate:
         if now_s - self._waiting_since < self.drop_after_s:
             return []
         silent = [client_id for client_id, client in self._clients.items()
-                  if client.done_period < self.period] or list(self._clients)
+                  if client.done_period < self.waits_for(client)] or list(self._clients)
         names = [self._clients.pop(client_id).name for client_id in silent]
         self._waiting_since = None
         return names

@@ -12,9 +12,9 @@ service-latency knob and for navigation to finish), so no request ever blocks th
 request the original made fail is answered at once with a documented error answer.
 
 A client may join the simulator's lockstep (:mod:`servicesim_sim.lockstep`): the loop then
-announces each period's end and holds until every joined client has finished its tick for it,
-and serves the period's requests in a fixed order; the node's handlers are counted and gated
-for that, and with nobody joined they run exactly as before.
+announces each period's end, steps the next while the clients tick on it, holds until every
+joined client has finished that tick, and serves its requests in a fixed order; the node's
+handlers are counted and gated for that, and with nobody joined they run exactly as before.
 
 Every request gets an answer, however many come at once: the services and the action's goal,
 cancel and result services hold every request of a burst (:data:`EVERY_REQUEST`; with ROS's
@@ -156,9 +156,7 @@ class SimulatorNode:
         self._navigation = CountingActionServer(
             node, NavigateToPose, NAVIGATION_ACTION, lockstep=self.lockstep,
             execute_callback=self._navigate, goal_callback=lambda _: GoalResponse.ACCEPT,
-            handle_accepted_callback=self.lockstep.gated(
-                f"{NAVIGATION_ACTION}:goal", self._on_goal_accepted, count=False,
-                answers=False),
+            handle_accepted_callback=self._on_goal_accepted,  # served through the gate
             cancel_callback=lambda _: CancelResponse.ACCEPT,
             goal_service_qos_profile=EVERY_REQUEST, result_service_qos_profile=EVERY_REQUEST,
             cancel_service_qos_profile=EVERY_REQUEST, callback_group=callbacks,
@@ -667,8 +665,9 @@ class SimulatorNode:
     def _wait_for_wall_clock(self, pacer: Pacer, executor: DrainingExecutor) -> None:
         """Serve requests until the speed factor lets the next period start."""
         wait_s = pacer.wait_s(sim_time=self.engine.sim_time, speed=self._pace())
-        if wait_s <= 0.0:  # flat out or behind: only look for requests
-            executor.run_ready()
+        if wait_s <= 0.0:  # flat out or behind: only look for requests (in lockstep the
+            if not self.lockstep.active:  # gate looks, when what it waits for is not in)
+                executor.run_ready()
             return
         due = time.monotonic() + wait_s
         while (remaining := due - time.monotonic()) > 0.0:

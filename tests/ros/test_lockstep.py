@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import QoSProfile
 from rclpy.task import Future
 
 from bt_servicesim.ros.lockstep import offered
@@ -65,3 +66,69 @@ def test_best_effort_becomes_reliable_and_reliable_stays_as_it_is() -> None:
     upgraded = reliable(qos_profile_sensor_data)
     assert upgraded.reliability == ReliabilityPolicy.RELIABLE and upgraded.depth >= 10
     assert reliable(10) == 10
+
+
+def test_a_held_reader_sees_only_what_the_period_counts_however_early_the_rest_arrives() -> None:
+    """Messages of period k+1 that arrive while the node waits for tick k stay held."""
+    traffic, seen = Traffic(), []
+    key, receive = traffic.counted_callback("/servicebot/odom", seen.append)
+    traffic.hold({key}, set())
+    for message in ("period 1", "period 2 (early)", "period 2 (also early)"):
+        receive(message)
+    assert seen == [] and traffic.received[key] == 3  # counted on arrival, handed on later
+    traffic.release({key: 1}, {})
+    assert seen == ["period 1"]
+    traffic.release({key: 3}, {})
+    assert seen == ["period 1", "period 2 (early)", "period 2 (also early)"]
+
+
+def test_a_held_answer_completes_the_callers_future_only_when_released() -> None:
+    traffic, client = Traffic(), FakeClient()
+    traffic.watch_client(client)
+    traffic.hold(set(), {"/servicesim/room_info"})
+    handed = client.call_async(None)
+    assert handed is not client.futures[0]  # the caller's own future
+    client.futures[0].set_result("answer")
+    assert traffic.answered == {"/servicesim/room_info": 1} and not handed.done()
+    traffic.release({}, {"/servicesim/room_info": 0})
+    assert not handed.done()
+    traffic.release({}, {"/servicesim/room_info": 1})
+    assert handed.result() == "answer"
+
+
+def test_answers_are_handed_on_in_the_order_they_arrived_and_everything_at_the_end() -> None:
+    traffic, client = Traffic(), FakeClient()
+    traffic.watch_client(client)
+    traffic.hold(set(), {"/servicesim/room_info"})
+    first, second = client.call_async(None), client.call_async(None)
+    client.futures[1].set_result("second's")  # the simulator answered the second first
+    client.futures[0].set_result("first's")
+    traffic.release({}, {"/servicesim/room_info": 1})
+    assert second.result() == "second's" and not first.done()
+    traffic.stop_holding()
+    assert first.result() == "first's" and not traffic.holding
+
+
+def test_answers_on_an_endpoint_the_simulator_does_not_serve_are_not_held() -> None:
+    traffic, client = Traffic(), FakeClient()
+    traffic.watch_client(client)
+    traffic.hold(set(), {"/servicesim/task_info"})  # what the simulator announced it serves
+    handed = client.call_async(None)
+    client.futures[0].set_result("someone else's answer")
+    assert handed.result() == "someone else's answer"
+
+
+def test_reliable_readers_keep_two_periods_of_messages_and_best_effort_ones_stay() -> None:
+    """The simulator publishes a period while the node still takes the last one's: a latched
+    reader keeping one message lost the referee's state of one of them."""
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy, qos_profile_sensor_data
+
+    from bt_servicesim.ros.node import MIN_READER_DEPTH, deep_enough
+
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    deeper = deep_enough(latched)
+    assert deeper.depth == MIN_READER_DEPTH >= 10 and latched.depth == 1
+    assert deeper.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert deep_enough(qos_profile_sensor_data).depth == qos_profile_sensor_data.depth
+    assert deep_enough(1) == MIN_READER_DEPTH

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -87,3 +88,16 @@ def periods_seen_beyond(period: int, *, context: Any, limit_s: float) -> bool:
     finally:
         executor.shutdown()
         node.destroy_node()
+
+
+def test_the_simulator_runs_one_period_ahead_unless_told_to_take_turns(
+        monkeypatch: Any) -> None:
+    from servicesim_sim.lockstep import LAG_VARIABLE, pipeline_lag
+
+    monkeypatch.delenv(LAG_VARIABLE, raising=False)
+    assert pipeline_lag() == 1
+    monkeypatch.setenv(LAG_VARIABLE, "0")
+    assert pipeline_lag() == 0
+    monkeypatch.setenv(LAG_VARIABLE, "2")
+    with pytest.raises(SystemExit, match=f"{LAG_VARIABLE}='2': must be 0 or 1"):
+        pipeline_lag()

@@ -103,3 +103,57 @@ def test_only_the_silent_client_is_dropped_when_another_is_done() -> None:
     gate.drop_silent(0.0)
     assert gate.drop_silent(1.0) == ["dead"]
     assert gate.client_names() == ["alive"] and gate.is_open()
+
+
+def pipelined_gate_with_client() -> tuple[LockstepGate, int]:
+    """A gate one period behind its client (the simulator's), the client joined at period 1."""
+    gate = LockstepGate(drop_after_s=10.0, lag=1)
+    gate.endpoints.update((ROOM, PICKUP, CMD_VEL))
+    gate.announced(1)
+    client = gate.join("executive")
+    return gate, client
+
+
+def test_a_pipelined_gate_waits_for_the_join_periods_done_then_one_period_behind() -> None:
+    gate, client = pipelined_gate_with_client()
+    assert gate.missing() == ["done 1 from executive"]  # the join's own period first
+    gate.done(client, 1, {})
+    assert gate.is_open()
+    gate.announced(2)
+    assert gate.is_open()  # steps period 3 while the client ticks on 2
+    gate.announced(3)
+    assert gate.missing() == ["done 2 from executive"]
+    gate.done(client, 2, {ROOM: 1})
+    assert gate.missing() == [f"1 request(s) on {ROOM}"]
+
+
+def test_a_client_a_period_ahead_has_its_later_requests_served_a_period_later() -> None:
+    """Done 3 arriving while the gate waits on period 2 must not let tick 3's requests in."""
+    gate, client = pipelined_gate_with_client()
+    gate.done(client, 1, {})
+    gate.announced(2)
+    gate.announced(3)
+    served: list[str] = []
+    admit(gate, ROOM, served, "tick 2")
+    admit(gate, ROOM, served, "tick 3")
+    gate.done(client, 2, {ROOM: 1})
+    gate.done(client, 3, {ROOM: 2})  # the client ran on: its tick 3 is done already
+    assert gate.is_open()
+    for admission in gate.due_admissions():
+        admission.serve()
+    assert served == ["tick 2"]
+    gate.announced(4)
+    assert gate.is_open()
+    for admission in gate.due_admissions():
+        admission.serve()
+    assert served == ["tick 2", "tick 3"]
+
+
+def test_a_silent_client_of_a_pipelined_gate_is_dropped_naming_the_period_awaited() -> None:
+    gate, client = pipelined_gate_with_client()
+    gate.done(client, 1, {})
+    gate.announced(2)
+    gate.announced(3)
+    assert gate.missing() == ["done 2 from executive"]
+    gate.drop_silent(0.0)
+    assert gate.drop_silent(10.0) == ["executive"] and gate.is_open()
