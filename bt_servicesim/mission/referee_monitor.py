@@ -9,6 +9,7 @@ sensors and the competition's services only.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.node import Node
@@ -30,12 +31,19 @@ class RefereeMonitor:
     def __init__(self, node: Node) -> None:
         self.latest: RefereeState | None = None
         self.frozen = False
+        self._ended: Callable[[], bool] = lambda: False
         self._reader = shared_subscription(node, RefereeState, REFEREE_TOPIC, self._on_state,
                                            LATCHED)
 
     def _on_state(self, message: RefereeState) -> None:
-        if not self.frozen:
+        if not self.frozen and not self._ended():
             self.latest = message
+
+    def freeze_when(self, ended: Callable[[], bool]) -> None:
+        """Take no state once ``ended()`` holds: the books stay as the tick that ended the
+        mission saw them. In lockstep the client may hand on the next period's messages before
+        the run notices the end (when depends on the load); this keeps them out of the report."""
+        self._ended = ended
 
     def freeze(self) -> None:
         """Keep the referee's books as they are now: the mission has ended, whatever the

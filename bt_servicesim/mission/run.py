@@ -153,6 +153,9 @@ class MissionRun:
         executor.add_node(node)
         monitor = RefereeMonitor(node)
         executive = self.make_executive(node)
+        # a failed mission's books are those its last tick saw; a completed one's come after
+        # it (the referee books checkpoint 4 a moment after the tree), see _run
+        monitor.freeze_when(lambda: executive.finished and not _succeeded(executive))
         tree = getattr(executive, "tree", None)
         if self.monitor is not None and tree is not None:
             self.monitor.watch(tree)
