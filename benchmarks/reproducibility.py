@@ -1,13 +1,17 @@
 """Does a seed replay? Pairs of identical runs, two at once, compared report by report.
 
 ``python benchmarks/reproducibility.py [--pairs N] [--sets default,random,hard] [--speeds 0,20]
-[--executive bt|baseline] [--first-seed S] [--time-limit T] [--free-running]`` runs, for each
+[--executive bt|baseline] [--first-seed S] [--time-limit T] [--free-running] [--json FILE]``
+runs, for each
 scenario set and speed, ``N`` pairs: the two runs of a pair are the same command (the shipped
 task for ``default``, seed ``S + i`` for the seeded sets, ``--difficulty hard`` for ``hard``),
 started together so that they share the 2-core machine and load each other. It prints, per set
 and speed, the share of pairs whose ``report.json`` agree on what an episode is judged by --
 completed, each checkpoint's time, the penalties, the score -- and the commands of the pairs
 that differ, which ``run`` replays. ``--free-running`` measures the same without lockstep.
+``--json FILE`` also writes the figures there, rewritten after each set and speed (so a run cut
+short keeps what it measured), for ``evaluate --reproducibility FILE`` to state in
+``results.md``.
 
 Wall-clock figures vary with the machine's load; nothing here is asserted. Bad arguments give
 one line and exit status 2.
@@ -16,6 +20,8 @@ one line and exit status 2.
 from __future__ import annotations
 
 import json
+import os
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -44,6 +50,8 @@ def build_parser() -> OneLineArgumentParser:
                         help="mission time limit in sim seconds (default 900)")
     parser.add_argument("--free-running", action="store_true",
                         help="run without lockstep, for comparison")
+    parser.add_argument("--json", type=Path, default=None, metavar="FILE",
+                        help="also write the figures to FILE as JSON")
     return parser
 
 
@@ -82,7 +90,8 @@ def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, 
     return reports[0], reports[1]
 
 
-def measure(args: Any, scenario: str, speed: float) -> None:
+def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
+    """Run the pairs of one set and speed; print and return the figures."""
     identical, differing, started = 0, [], time.monotonic()
     stalled = completed = 0
     for index in range(args.pairs):
@@ -94,14 +103,43 @@ def measure(args: Any, scenario: str, speed: float) -> None:
         if judged(first) == judged(second) and first.get("failure") != "no report":
             identical += 1
         else:
-            differing.append((command, first.get("score"), second.get("score")))
-    share = 100.0 * identical / args.pairs
+            differing.append({"command": shlex.join(["python", *command[1:]]),
+                              "scores": [first.get("score"), second.get("score")]})
+    wall_s = time.monotonic() - started
     print(f"{scenario:8s} speed {speed:g}: {identical}/{args.pairs} pairs identical "
-          f"({share:.0f}%), {time.monotonic() - started:.0f} s wall; {completed} of "
+          f"({100.0 * identical / args.pairs:.0f}%), {wall_s:.0f} s wall; {completed} of "
           f"{2 * args.pairs} runs completed, {stalled} ticked a period without every "
           "message (lockstep stalls)", flush=True)
-    for command, score_a, score_b in differing:
-        print(f"  differs ({score_a} vs {score_b}): {' '.join(command[1:])}", flush=True)
+    for pair in differing:
+        print(f"  differs ({pair['scores'][0]} vs {pair['scores'][1]}): {pair['command']}",
+              flush=True)
+    return {"set": scenario, "speed": speed, "pairs": args.pairs, "identical": identical,
+            "completed_runs": completed, "runs": 2 * args.pairs, "stalled_runs": stalled,
+            "wall_s": round(wall_s, 1), "differing": differing}
+
+
+def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[str, Any]]) -> None:
+    """The figures so far, written whole (a temporary file renamed over ``path``)."""
+    document = {
+        "command": shlex.join(["python", "benchmarks/reproducibility.py", *argv]),
+        "executive": args.executive,
+        "timing": "free running" if args.free_running else "lockstep",
+        "commit": _commit(),
+        "load_average": [round(value, 2) for value in os.getloadavg()],
+        "results": results,
+    }
+    partial = path.with_name(path.name + ".partial")
+    partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    partial.replace(path)
+
+
+def _commit() -> str | None:
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, check=True, cwd=Path(__file__).resolve().parent)
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return out.stdout.strip() or None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -119,9 +157,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     timing = "free running" if args.free_running else "lockstep"
     print(f"{args.executive} executive, {timing}, {args.pairs} pairs per set and speed, "
           "the two runs of a pair at once", flush=True)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    results: list[dict[str, Any]] = []
     for speed in speeds:
         for scenario in sets:
-            measure(args, scenario, speed)
+            results.append(measure(args, scenario, speed))
+            if args.json is not None:
+                write_json(args.json, args, argv, results)
     return 0
 
 
