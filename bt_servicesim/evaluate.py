@@ -60,6 +60,7 @@ from bt_servicesim.evaluation.episodes import (
 )
 from bt_servicesim.evaluation.progress import Progress, as_minutes
 from bt_servicesim.evaluation.report import write_results
+from bt_servicesim.evaluation.reproducibility import load_reproducibility
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
     DEFAULT_SPEED,
@@ -92,8 +93,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="seed of the first episode; episode n plays seed+n")
     parser.add_argument("--out", type=Path, required=True, help="evaluation directory")
     parser.add_argument("--speed", type=float, default=DEFAULT_SPEED,
-                        help=f"sim speed of every episode (default {DEFAULT_SPEED:g}; 0: as fast "
-                             "as possible, which lets a busy executive fall behind)")
+                        help=f"sim speed of every episode (default {DEFAULT_SPEED:g}: as fast as "
+                             "possible; in lockstep a busy machine only makes episodes slower)")
     parser.add_argument("--episode-timeout", type=float, default=600.0,
                         help="wall seconds before an episode is stopped and failed (default 600)")
     parser.add_argument("--time-limit", type=float, default=900.0,
@@ -108,6 +109,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="keep the episodes an earlier evaluation in --out finished with "
                              "the same executive, scenario, seed, speed and time limit; run "
                              "only the rest")
+    parser.add_argument("--reproducibility", type=Path, metavar="FILE",
+                        help="state in results.md the share of seeds that replay, from the "
+                             "figures of benchmarks/reproducibility.py --json FILE")
     parser.add_argument("--cluster", metavar="ADDRESS",
                         help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
                              "worker as many at once as it has threads (needs the 'cluster' "
@@ -135,12 +139,18 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
     for flag, path in (("--out", args.out), ("--docs", args.docs)):
         _check(path is None or not path.exists() or path.is_dir(),
                f"{flag} {path}: exists and is not a directory")
+    reproducibility = None
+    if args.reproducibility is not None:
+        try:
+            reproducibility = load_reproducibility(args.reproducibility)
+        except ValueError as error:
+            raise UsageError(f"--reproducibility {error}") from error
     return EvaluationSettings(
         episodes=args.episodes, scenarios=scenarios, executives=executives, jobs=args.jobs,
         seed=args.seed, out=args.out, speed=args.speed, episode_timeout_s=args.episode_timeout,
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
-        resume=args.resume, cold=args.cold,
+        resume=args.resume, cold=args.cold, reproducibility=reproducibility,
     )
 
 

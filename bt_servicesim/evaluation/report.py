@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_servicesim.evaluation.kinematic_bound import add_kinematic_bounds
+from bt_servicesim.evaluation.reproducibility import reproducibility_section
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.evaluation.summary import (
@@ -54,6 +55,8 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
               "kinematic lower bound (the shortest route the rules allow at the robot's top "
               "speed), over the completed episodes.", "",
               *bound_table(settings, rows, problem=bound_problem), ""]
+    lines += ["## Reproducibility", "",
+              *reproducibility_section(rows, settings.reproducibility), ""]
     lines += ["## Why episodes failed", "", *failure_table(rows), "", "## Plots", ""]
     lines += [f"![{title}]({image_dir}/results_{name}.png)" for name, title in PLOTS]
     return "\n".join(lines) + "\n"

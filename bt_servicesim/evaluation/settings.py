@@ -11,14 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from bt_servicesim.evaluation.reproducibility import Reproducibility
 from bt_servicesim.ros.domain import DOMAINS
 
-#: Episodes run at 20x real time by default, not flat out: at speed 0 the simulator runs as
-#: fast as its core allows and never waits for the executive, which needs about as much CPU
-#: per sim second; with a few episodes at once on a small machine the executive then falls
-#: sim seconds behind (a guest "out of range for 20 s" at the first look), and the evaluation
-#: measures the machine's load instead of the mission logic.
-DEFAULT_SPEED = 20.0
+#: Episodes run flat out by default: every episode runs in lockstep with our simulator, which
+#: waits for each tick, so a busy machine makes an episode slower, never different. (Before
+#: lockstep the default was 20x real time: flat out, a loaded executive fell sim seconds
+#: behind and the evaluation measured the machine.)
+DEFAULT_SPEED = 0.0
 
 
 MAX_JOBS = len(DOMAINS) - 1
@@ -69,6 +69,8 @@ class EvaluationSettings:
     resume: bool = False
     cold: bool = False
     """Every episode a ``run`` process of its own, as before warm pairs (for comparisons)."""
+    reproducibility: Reproducibility | None = None
+    """The figures of ``benchmarks/reproducibility.py --json`` that results.md states."""
 
 
 def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
