@@ -123,7 +123,7 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
     document = {
         "command": shlex.join(["python", "benchmarks/reproducibility.py", *argv]),
         "executive": args.executive,
-        "timing": "free running" if args.free_running else "lockstep",
+        "timing": timing_of(args),
         "commit": _commit(),
         "load_average": [round(value, 2) for value in os.getloadavg()],
         "results": results,
@@ -131,6 +131,10 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
     partial = path.with_name(path.name + ".partial")
     partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     partial.replace(path)
+
+
+def timing_of(args: Any) -> str:
+    return "free running" if args.free_running else "lockstep"
 
 
 def _commit() -> str | None:
@@ -154,8 +158,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         build_parser().error(f"--speeds {args.speeds}: must be numbers")
     if args.pairs < 1 or any(not speed >= 0.0 for speed in speeds):
         build_parser().error("--pairs must be 1 or more and every speed 0 or more")
-    timing = "free running" if args.free_running else "lockstep"
-    print(f"{args.executive} executive, {timing}, {args.pairs} pairs per set and speed, "
+    print(f"{args.executive} executive, {timing_of(args)}, {args.pairs} pairs per set and speed, "
           "the two runs of a pair at once", flush=True)
     argv = sys.argv[1:] if argv is None else list(argv)
     results: list[dict[str, Any]] = []

@@ -37,9 +37,10 @@ MAX_EPISODE_TIMEOUT_S = 1e6
 STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
 
 
-EPISODE_CPU_S_PER_SIM_S = 0.027
-"""CPU seconds an episode spends per sim second, simulator and executive together (measured
-with ``benchmarks/sim_rtf.py`` at speed 50: about 13 ms each)."""
+EPISODE_CPU_S_PER_SIM_S = 0.048
+"""CPU seconds an episode spends per sim second, simulator and executive together, in lockstep
+(``benchmarks/sim_rtf.py --speed 0 --timing both`` on a quiet machine, 2026-11-24: executive
+22.1-23.9 ms, simulator 24.9-26.7 ms)."""
 
 
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume

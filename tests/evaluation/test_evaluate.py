@@ -439,9 +439,9 @@ def test_episodes_an_interrupted_evaluation_did_not_play_are_left_out_of_the_sta
 def test_settings_that_overload_the_machine_are_warned_about() -> None:
     from bt_servicesim.evaluation.settings import load_warning
 
-    assert load_warning(jobs=3, speed=20.0, cores=2) is None
-    warning = load_warning(jobs=4, speed=20.0, cores=2)
-    assert warning is not None and "2.2 cores" in warning and "this machine has 2" in warning
+    assert load_warning(jobs=2, speed=20.0, cores=2) is None
+    warning = load_warning(jobs=3, speed=20.0, cores=2)
+    assert warning is not None and "2.9 cores" in warning and "this machine has 2" in warning
     assert load_warning(jobs=1, speed=0.0, cores=2) is None
     assert load_warning(jobs=2, speed=0.0, cores=2) is not None
 
