@@ -23,6 +23,7 @@ context down, so the run puts Python's handlers back: Ctrl-C must reach the run 
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -208,13 +209,23 @@ class MissionRun:
         self._wait_for_servers(node, executor)
         self._spin_for(executor, self.discovery_settle_s)
         self._join_lockstep(client, executor)
+        # what lives now lives for the mission: the cyclic collector stops walking it (a warm
+        # worker's last mission is collected first)
+        gc.unfreeze()
+        gc.collect()
+        gc.freeze()
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
         limit_ns = int((self.settings.time_limit_s + SIM_TIME_BACKSTOP_S) * 1e9)
         next_exit_check = time.monotonic()
+        looked_at = -1
         while not executive.finished:
             executor.spin_once(timeout_sec=0.05)
+            if node.lockstep is not None:  # the clock moves once a period: look once a period
+                if node.lockstep.periods == looked_at and time.monotonic() < next_exit_check:
+                    continue
+                looked_at = node.lockstep.periods
             now_ns = node.get_clock().now().nanoseconds
             records.note_phase(executive.phase())
             view.update(executive=executive, monitor=monitor, sim_time_s=now_ns / 1e9)

@@ -18,6 +18,11 @@ published by :class:`TaskTopic` once the referee reports a running task) and
 ``/bt_servicesim/tree`` (:class:`TreeTopic`; a self-contained tree snapshot on every change the
 snapshot log records: tick, sim time, root status, tip, and the status and feedback of every node
 that is not INVALID).
+
+The competition's ``/servicesim/score`` (``Score``, 50 Hz) is not recorded: the referee's state
+(``/servicesim/referee``, recorded) carries the same score twice a sim second and on every
+change, and taking the 50 Hz stream was half of the messages the executive's process received.
+Nothing subscribing, the simulator does not publish it (it still does for any other reader).
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from rclpy.task import Future
-from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
+from servicesim_competition.msg import ActorNames, ActorStates, RefereeState
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
@@ -95,7 +100,6 @@ RECORDED_TOPICS = (
     RecordedTopic("/tf", TFMessage),
     RecordedTopic("/tf_static", TFMessage, latched=True),
     RecordedTopic("/servicebot/rfid", ActorNames),
-    RecordedTopic("/servicesim/score", Score),
     RecordedTopic("/servicesim/referee", RefereeState, latched=True),
     RecordedTopic("/servicesim/actors", ActorStates),
     RecordedTopic("/servicebot/map", OccupancyGrid, latched=True),

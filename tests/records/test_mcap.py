@@ -23,7 +23,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
-from servicesim_competition.msg import ActorNames, ActorStates, RefereeState, Score
+from servicesim_competition.msg import ActorNames, ActorStates, RefereeState
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
@@ -44,6 +44,12 @@ from bt_servicesim.ros.shared_subscription import shared_subscription
 from tests.fakes import SimTimeGraph
 
 SIM_NS = 42_500_000_000
+
+
+def odometry_at(x: float) -> Odometry:
+    odom = Odometry()
+    odom.header.frame_id, odom.pose.pose.position.x = "odom", x
+    return odom
 
 
 def sample_messages() -> dict[str, Any]:
@@ -84,7 +90,6 @@ def sample_messages() -> dict[str, Any]:
         "/tf": TFMessage(transforms=[transform]),
         "/servicebot/amcl_pose": estimate,
         "/servicebot/rfid": ActorNames(actor_names=["human_20843"]),
-        "/servicesim/score": Score(score=12.5),
         "/servicesim/referee": referee,
         "/servicesim/actors": actors,
         "/servicebot/map": grid,
@@ -164,32 +169,32 @@ def test_a_burst_of_messages_is_recorded_whole_and_in_order_in_one_callback(
         graph: Graph) -> None:
     recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
     graph.start_sim_clock()
-    score = graph.publishers["/servicesim/score"]
-    graph.spin_until(lambda: score.get_subscription_count() > 0, "the recorder to match")
+    odom = graph.publishers["/servicebot/odom"]
+    graph.spin_until(lambda: odom.get_subscription_count() > 0, "the recorder to match")
     for value in range(8):  # within the subscription's queue depth (50)
-        score.publish(Score(score=float(value)))
+        odom.publish(odometry_at(float(value)))
     time.sleep(0.5)  # let DDS deliver the whole burst before anything is taken
-    graph.spin_until(lambda: recorder.counts["/servicesim/score"] > 0, "the first score")
-    assert recorder.counts["/servicesim/score"] == 8, "the first callback takes the queue"
+    graph.spin_until(lambda: recorder.counts["/servicebot/odom"] > 0, "the first odometry")
+    assert recorder.counts["/servicebot/odom"] == 8, "the first callback takes the queue"
     recorder.close()
-    scores = [decoded.score for topic, _, _, decoded in read_back(graph.path)
-              if topic == "/servicesim/score"]
-    assert scores == [float(value) for value in range(8)]
+    xs = [decoded.pose.pose.position.x for topic, _, _, decoded in read_back(graph.path)
+          if topic == "/servicebot/odom"]
+    assert xs == [float(value) for value in range(8)]
 
 
 def test_a_reader_of_a_recorded_topic_shares_the_recorders_subscription(graph: Graph) -> None:
     recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
     heard: list[float] = []
     subscriptions = len(list(graph.recorder_node.subscriptions))
-    shared_subscription(graph.recorder_node, Score, "/servicesim/score",
-                        lambda message: heard.append(message.score), 10)
+    shared_subscription(graph.recorder_node, Odometry, "/servicebot/odom",
+                        lambda message: heard.append(message.pose.pose.position.x), 10)
     assert len(list(graph.recorder_node.subscriptions)) == subscriptions
     graph.start_sim_clock()
-    score = graph.publishers["/servicesim/score"]
-    graph.spin_until(lambda: score.get_subscription_count() > 0, "the recorder to match")
+    odom = graph.publishers["/servicebot/odom"]
+    graph.spin_until(lambda: odom.get_subscription_count() > 0, "the recorder to match")
     for value in range(3):
-        score.publish(Score(score=float(value)))
-    graph.spin_until(lambda: recorder.counts["/servicesim/score"] == 3, "three scores")
+        odom.publish(odometry_at(float(value)))
+    graph.spin_until(lambda: recorder.counts["/servicebot/odom"] == 3, "three odometries")
     recorder.close()
     assert heard == [0.0, 1.0, 2.0]
 
