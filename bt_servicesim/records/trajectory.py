@@ -367,8 +367,10 @@ def trace_from_recording(mcap_path: Path,
         "/servicebot/map": builder.on_map, GROUND_TRUTH_TOPIC: builder.on_robot,
         "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
     }
-    with mcap_path.open("rb") as stream:
-        for _schema, channel, message in make_reader(stream).iter_messages():
+    topics = [*handlers, *([TREE_TOPIC] if phases is None else [])]
+    with mcap_path.open("rb") as stream:  # in the order written, which is the order of arrival
+        for _schema, channel, message in make_reader(stream).iter_messages(
+                topics=topics, log_time_order=False):
             while noted and noted[0][0] * 1e9 < message.log_time:  # ties: message first
                 when, phase = noted.popleft()
                 now_ns[0] = round(when * 1e9)
