@@ -29,6 +29,7 @@ from bt_servicesim.mission.settings import (
     DEFAULT_TIME_LIMIT_S,
     EXECUTIVES,
     REPORT_NAME,
+    TRAJECTORY_POLICIES,
     RunSettings,
 )
 from bt_servicesim.monitor.groot2_server import DEFAULT_HOST, DEFAULT_PORT, Groot2Server
@@ -96,6 +97,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--free-running", action="store_true",
                         help="do not join the simulator's lockstep even where it offers it: "
                         "the tree ticks on /clock as it would on Gazebo (runs may not replay)")
+    parser.add_argument("--trajectory", choices=TRAJECTORY_POLICIES, default="always",
+                        help="draw trajectory.png after every run (always, the default) or only "
+                        "when the mission did not complete (failed); python -m "
+                        "bt_servicesim.trajectory DIR draws any run's later from its run.mcap")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -128,6 +133,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove), free_running=args.free_running,
+        trajectory=args.trajectory,
     )
 
 

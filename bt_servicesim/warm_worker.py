@@ -97,7 +97,7 @@ class WarmEpisode:
     def run_settings(self) -> RunSettings:
         return RunSettings(world=None, seed=self.seed, speed=self.speed, tree=DEFAULT_TREE,
                            out=self.out, time_limit_s=self.time_limit_s, headless=True,
-                           executive=self.executive, run_id=self.run_id)
+                           executive=self.executive, run_id=self.run_id, trajectory="failed")
 
 
 def build_parser() -> argparse.ArgumentParser:

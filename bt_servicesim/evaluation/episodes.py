@@ -127,7 +127,8 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
     command = [sys.executable, "-m", "bt_servicesim.run", "--headless",
                "--out", str(episode.out), "--overwrite", "--run-id", episode.run_id,
                "--executive", episode.executive,
-               "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s)]
+               "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s),
+               "--trajectory", "failed"]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
     for argument in SCENARIO_SETS[episode.scenario].sim_args:

@@ -187,7 +187,8 @@ class MissionRun:
             self._leave_lockstep()
             if self.simulator is not None:
                 self.simulator.stop()
-        records.finish(title=self._title(monitor))
+        records.finish(title=self._title(monitor),
+                       trajectory=self.settings.trajectory == "always" or code != EXIT_COMPLETED)
         self._finish(monitor, code, executive)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()

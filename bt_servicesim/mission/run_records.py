@@ -70,12 +70,16 @@ class RunRecords:
         if not self.phases or self.phases[-1][1] != phase:
             self.phases.append((sim_now_s(self._node.get_clock()), phase))
 
-    def finish(self, *, title: str) -> None:
-        """Write what is written at the end and close the rest; a failure is a warning."""
+    def finish(self, *, title: str, trajectory: bool = True) -> None:
+        """Write what is written at the end and close the rest; a failure is a warning.
+
+        ``trajectory``: draw the trajectory picture (else it can be drawn later from the
+        recording, ``python -m bt_servicesim.trajectory DIR``)."""
         steps: list[tuple[str, Callable[[], None]]] = [
             (MCAP_NAME, self._close_recording),  # the picture is drawn from the finished recording
-            (TRAJECTORY_NAME, lambda: self._render_trajectory(title)),
         ]
+        if trajectory:
+            steps.append((TRAJECTORY_NAME, lambda: self._render_trajectory(title)))
         if self.tree_log is not None:
             steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
         for name, step in steps:

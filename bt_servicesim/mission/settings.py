@@ -14,7 +14,7 @@ from bt_servicesim.monitor.live_server import LiveAddress
 
 __all__ = [
     "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S",
-    "RunSettings",
+    "TRAJECTORY_POLICIES", "RunSettings",
 ]
 
 EXECUTIVES = ("bt", "baseline")
@@ -25,6 +25,10 @@ DEFAULT_TIME_LIMIT_S = 900.0
 """The mission time limit in sim seconds, unless the run names another."""
 STARTUP_LIMIT_S = 60.0
 """Wall seconds the simulator gets to come up."""
+TRAJECTORY_POLICIES = ("always", "failed")
+"""When the run draws ``trajectory.png``: after every run, or only after a mission that did
+not complete (an evaluation: the picture is the CPU of a tenth of a warm episode, and any run's
+can be drawn later from its ``run.mcap`` with ``python -m bt_servicesim.trajectory DIR``)."""
 REPORT_NAME = "report.json"
 """The report in the run directory: score, checkpoints and penalties as the referee counted."""
 
@@ -51,3 +55,5 @@ class RunSettings:
     """Serve the live topics to Foxglove on this address (``run --foxglove``); None: no server."""
     free_running: bool = False
     """Do not join the backend's lockstep even if it offers one (for comparisons)."""
+    trajectory: str = "always"
+    """One of :data:`TRAJECTORY_POLICIES`."""

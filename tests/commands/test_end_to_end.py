@@ -63,6 +63,18 @@ def test_the_default_shipped_task_completes(tmp_path: Path) -> None:
     assert report["penalties"]["failed_pickup"] == 0
     assert report["penalties"]["failed_dropoff"] == 0
     assert 0.0 < report["sim_time_s"] < 900.0
+    assert (tmp_path / "trajectory.png").is_file(), "every run draws its picture by default"
+
+
+def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(
+        tmp_path: Path) -> None:
+    # what an evaluation asks: the picture only of a mission that did not complete
+    code, report = mission(tmp_path, "--trajectory", "failed", "--speed", "0")
+    assert_completed(code, report)
+    assert not (tmp_path / "trajectory.png").exists()
+    drawn = run_module("bt_servicesim.trajectory", str(tmp_path), timeout=WALL_LIMIT_S)
+    assert drawn.returncode == 0, drawn.stderr[-2000:]
+    assert (tmp_path / "trajectory.png").stat().st_size > 0
 
 
 def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
@@ -87,8 +99,9 @@ def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
 
 
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
-    code, report = mission(tmp_path, "--time-limit", "20")
+    code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed")
     assert code == 1
+    assert (tmp_path / "trajectory.png").is_file(), "a mission that failed is drawn"
     assert report["completed"] is False
     assert report["failure"]
     # the report is the referee's books when the mission ended, not after the run's shut-down

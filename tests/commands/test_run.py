@@ -24,6 +24,7 @@ def run(*arguments: str, cwd: Path) -> subprocess.CompletedProcess[str]:
         (["--time-limit", "0"], "--time-limit"),
         (["--tree", "no_such_tree.xml"], "no_such_tree.xml"),
         (["--executive", "magic"], "--executive"),
+        (["--trajectory", "sometimes"], "--trajectory"),
         (["--frobnicate"], "--frobnicate"),
     ],
 )

@@ -60,6 +60,9 @@ def test_two_seeds_on_one_warm_pair_report_as_each_seed_played_cold(tmp_path: Pa
         assert replayed(warm_row) == replayed(cold_row)
         assert (Path(warm_row["out"]) / "tree_log.jsonl").is_file()
         assert (Path(warm_row["out"]) / "run.mcap").is_file()
+        # an evaluation draws the picture of a mission that did not complete (60 sim s)
+        assert not warm_row["completed"]
+        assert (Path(warm_row["out"]) / "trajectory.png").is_file()
     assert replayed(warm[0]) != replayed(warm[1]), "two seeds, two missions"
 
 
