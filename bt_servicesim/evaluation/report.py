@@ -284,7 +284,7 @@ def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> N
     otherwise make every report say "with uncommitted changes".
     """
     revision = source_revision()
-    rows, problem = add_kinematic_bounds(rows)
+    rows, problem = add_kinematic_bounds(rows, jobs=settings.jobs)
     settings.out.mkdir(parents=True, exist_ok=True)
     summary = summary_of(settings, rows)
     (settings.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")

@@ -60,7 +60,7 @@ from servicesim_sim.guest import LOST_DISTANCE
 from servicesim_sim.referee import CHECKPOINT_NAMES
 from servicesim_sim.robot import BODY_RADIUS, MAX_SPEED, WallClearance
 from servicesim_sim.scenario import Scenario
-from servicesim_sim.world import AreaBox, World
+from servicesim_sim.world import AreaBox, World, load_world
 
 PROG = "python -m servicesim_sim.task_bound"
 EXIT_BAD_INPUT = 2
@@ -252,13 +252,20 @@ class Bounder:
 
     def __init__(self) -> None:
         self._lattices: dict[Path, LatticeGraph] = {}
+        self._worlds: dict[Path, World] = {}  # one command's files do not change under it
+
+    def _load(self, path: str | Path) -> World:
+        resolved = Path(path).resolve()
+        if resolved not in self._worlds:
+            self._worlds[resolved] = load_world(path)
+        return self._worlds[resolved]
 
     def bound(self, args: argparse.Namespace) -> dict[str, Any]:
         from servicesim_sim.scenario import ScenarioError, make_scenario
         from servicesim_sim.settings import SettingsError, settings_from_arguments
 
         try:
-            settings = settings_from_arguments(args)
+            settings = settings_from_arguments(args, load=self._load)
             scenario = make_scenario(settings.world, seed=settings.seed,
                                      difficulty=settings.difficulty)
         except (SettingsError, ScenarioError) as error:

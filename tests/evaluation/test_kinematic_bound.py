@@ -80,6 +80,18 @@ def test_each_task_is_asked_once_for_every_executive_and_the_ratio_is_time_over_
     assert "kinematic_bound_s" not in rows[0], "the rows given are left as they were"
 
 
+def test_bounds_asked_of_several_processes_come_back_for_the_tasks_each_was_given(
+        tmp_path: Path) -> None:
+    log = tmp_path / "calls.log"
+    rows = [row("bt", "random", seed, sim_time_s=90.0) for seed in range(5)]
+    bounded, problem = add_kinematic_bounds(rows, command=fake_bound_command(log), jobs=2)
+    assert problem is None
+    shares = [json.loads(line) for line in log.read_text().splitlines()]
+    assert len(shares) == 2, "one process per job"
+    assert sorted(entry["seed"] for share in shares for entry in share) == list(range(5))
+    assert [r["kinematic_bound_s"] for r in bounded] == [fake_bound(seed) for seed in range(5)]
+
+
 def test_a_failing_bound_command_costs_the_bounds_not_the_evaluation(tmp_path: Path) -> None:
     failing = (sys.executable, "-c",
                "import sys; sys.stderr.write('traceback...\\nbroken world: no map\\n'); "
