@@ -442,8 +442,10 @@ def test_settings_that_overload_the_machine_are_warned_about() -> None:
     assert load_warning(jobs=2, speed=20.0, cores=2) is None
     warning = load_warning(jobs=3, speed=20.0, cores=2)
     assert warning is not None and "2.9 cores" in warning and "this machine has 2" in warning
+    assert "slower than --speed asks" in warning
+    # flat out asks for nothing but the cores there are: more episodes only share them
     assert load_warning(jobs=1, speed=0.0, cores=2) is None
-    assert load_warning(jobs=2, speed=0.0, cores=2) is not None
+    assert load_warning(jobs=3, speed=0.0, cores=2) is None
 
 
 def start_evaluation(tmp_path: Path, mode: str, *arguments: str) -> subprocess.Popen[str]:
