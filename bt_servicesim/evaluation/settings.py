@@ -81,9 +81,9 @@ def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
     second (simulator and executive together); asked for more than the machine has, the
     episodes run slower than ``--speed`` says. Every episode runs in lockstep with our
     simulator, so that changes no result. At speed 0 (flat out, the default) nothing is asked
-    for but the cores there are: more episodes than cores share them, which kept the machine
-    busier (``--jobs 3`` on two cores: 756 warm episodes an hour against 688 at ``--jobs 2``,
-    docs/evaluation.md), so there is nothing to warn about.
+    for but the cores there are: more episodes than cores share them (on two cores ``--jobs 3``
+    played as many episodes an hour as ``--jobs 2``, docs/evaluation.md), so there is nothing
+    to warn about.
     """
     if speed <= 0.0:
         return None

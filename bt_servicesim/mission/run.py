@@ -210,11 +210,7 @@ class MissionRun:
         self._wait_for_servers(node, executor)
         self._spin_for(executor, self.discovery_settle_s)
         self._join_lockstep(client, executor)
-        # what lives now lives for the mission: the cyclic collector stops walking it (a warm
-        # worker's last mission is collected first)
-        gc.unfreeze()
-        gc.collect()
-        gc.freeze()
+        _keep_out_of_the_collector()
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
@@ -418,6 +414,14 @@ def events_executor() -> Executor:
         signal.signal(number, handler)
     return executor
 
+
+def _keep_out_of_the_collector() -> None:
+    """What lives when the mission starts lives for it: the cyclic garbage collector stops
+    walking it (the simulator, profiled, spent about 5 % of its CPU collecting). A warm worker's last
+    mission is unfrozen and collected first, so that nothing of it is kept."""
+    gc.unfreeze()
+    gc.collect()
+    gc.freeze()
 
 def _succeeded(executive: Executive) -> bool:
     return executive.outcome is not None and executive.outcome.name == "SUCCESS"
