@@ -417,8 +417,8 @@ def events_executor() -> Executor:
 
 def _keep_out_of_the_collector() -> None:
     """What lives when the mission starts lives for it: the cyclic garbage collector stops
-    walking it (the simulator, profiled, spent about 5 % of its CPU collecting). A warm worker's last
-    mission is unfrozen and collected first, so that nothing of it is kept."""
+    walking it (the simulator, profiled, spent about 5 % of its CPU collecting). A warm
+    worker's last mission is unfrozen and collected first, so that nothing of it is kept."""
     gc.unfreeze()
     gc.collect()
     gc.freeze()
