@@ -50,6 +50,22 @@ def test_clearance_is_the_distance_to_the_nearest_blocked_cell() -> None:
     assert not grid.is_free(2.75, 2.0, clearance=0.35)
 
 
+def test_the_same_map_again_reuses_its_clearances_and_another_map_gets_its_own() -> None:
+    values = cells(6.0, 4.0)
+    fill(values, 3.0, 0.0, 3.5, 4.0)
+    first = OccupancyGrid2D.from_message(grid_message(values))
+    again = OccupancyGrid2D.from_message(grid_message(values))  # an executive's next episode
+    assert again.clearances is first.clearances
+    assert not again.clearances.flags.writeable
+    fill(values, 1.0, 1.0, 1.5, 1.5)  # a pillar: the clearances must see it
+    other = OccupancyGrid2D.from_message(grid_message(values))
+    assert other.clearances is not first.clearances
+    assert other.clearance(1.25, 1.25) == 0.0 < first.clearance(1.25, 1.25)
+    coarser = OccupancyGrid2D.from_message(grid_message(values, resolution=2 * RESOLUTION))
+    assert coarser.clearances is not other.clearances, "the resolution counts"
+    assert np.allclose(coarser.clearances, 2.0 * other.clearances)  # same cells, twice the size
+
+
 def test_unknown_and_intermediate_values() -> None:
     values = cells(4.0, 4.0)
     fill(values, 2.0, 0.0, 4.0, 4.0, value=-1)
