@@ -8,7 +8,8 @@ the bound is exactly
 
 so this module measures the first from the robot's true trajectory in the episode's
 ``run.mcap`` (the simulator's ground truth, a topic the executive never reads; records may),
-and the second follows. It also says what share of the mission the robot stood (slower than
+over the task as the referee timed it (its recorded state's stamp less its task time), and the
+second follows. It also says what share of the mission the robot stood (slower than
 :data:`STANDING_M_S`).
 
 ``python -m bt_servicesim.evaluation.path_excess DIR [--executive bt] [--set random]`` reads an
@@ -57,11 +58,11 @@ class PathFigures:
     standing_share: float
 
 
-def path_figures(samples: Sequence[Sample], *, sim_time_s: float,
+def path_figures(samples: Sequence[Sample], *, task_start_s: float | None, sim_time_s: float,
                  bound_length_m: float, time_over_bound: float) -> PathFigures | None:
-    """The figures of a mission of ``sim_time_s`` whose task starts at the first sample that
-    moves; None if the samples never move or the bound is empty."""
-    start = next((s.t for s in samples if abs(s.v) > STANDING_M_S / 5.0), None)
+    """The figures of a mission of ``sim_time_s`` from ``task_start_s`` (sim time, the
+    referee's); None if the start is unknown or the bound is empty."""
+    start = task_start_s
     if start is None or bound_length_m <= 0.0 or sim_time_s <= 0.0:
         return None
     mission = [s for s in samples if start <= s.t <= start + sim_time_s]
@@ -72,23 +73,33 @@ def path_figures(samples: Sequence[Sample], *, sim_time_s: float,
                        mean_speed_m_s=driven / sim_time_s, standing_share=standing)
 
 
-def recorded_samples(mcap_path: Path) -> list[Sample]:
-    """The ground truth's samples in a run's recording, in the order written."""
+def recorded_samples(mcap_path: Path) -> tuple[list[Sample], float | None]:
+    """The ground truth's samples in a run's recording, in the order written, and the sim time
+    the task started at by the referee's books (its stamp less its task time, from the first
+    state of a running task); None if the recording has no such state."""
     from mcap.reader import make_reader
     from nav_msgs.msg import Odometry
     from rclpy.serialization import deserialize_message
+    from servicesim_competition.msg import RefereeState
 
+    from bt_servicesim.mission.referee_monitor import REFEREE_TOPIC
     from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC
 
-    samples = []
+    samples, task_start = [], None
     with mcap_path.open("rb") as stream:
-        for _, _, message in make_reader(stream).iter_messages(topics=[GROUND_TRUTH_TOPIC],
-                                                               log_time_order=False):
+        for _, channel, message in make_reader(stream).iter_messages(
+                topics=[GROUND_TRUTH_TOPIC, REFEREE_TOPIC], log_time_order=False):
+            if channel.topic == REFEREE_TOPIC:
+                state = deserialize_message(message.data, RefereeState)
+                if task_start is None and state.task_running:
+                    stamp = state.stamp.sec + state.stamp.nanosec / 1e9
+                    task_start = stamp - state.task_sim_time
+                continue
             odometry = deserialize_message(message.data, Odometry)
             position = odometry.pose.pose.position
             samples.append(Sample(t=message.log_time / 1e9, x=position.x, y=position.y,
                                   v=odometry.twist.twist.linear.x))
-    return samples
+    return samples, task_start
 
 
 def figures_of(rows: Iterable[dict[str, Any]]) -> list[PathFigures]:
@@ -100,7 +111,9 @@ def figures_of(rows: Iterable[dict[str, Any]]) -> list[PathFigures]:
         if not (row.get("completed") and legs and row.get("time_over_bound")
                 and recording.is_file()):
             continue
-        figures = path_figures(recorded_samples(recording), sim_time_s=float(row["sim_time_s"]),
+        samples, task_start = recorded_samples(recording)
+        figures = path_figures(samples, task_start_s=task_start,
+                               sim_time_s=float(row["sim_time_s"]),
                                bound_length_m=sum(float(leg["length_m"]) for leg in legs),
                                time_over_bound=float(row["time_over_bound"]))
         if figures is not None:

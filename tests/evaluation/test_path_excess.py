@@ -25,30 +25,34 @@ def straight_drive(*, wait_s: float, drive_s: float, speed: float) -> list[Sampl
     return samples
 
 
-def test_the_path_and_the_speed_are_measured_from_the_first_move() -> None:
-    samples = straight_drive(wait_s=3.0, drive_s=20.0, speed=0.5)  # 10 m
-    figures = path_figures(samples, sim_time_s=25.0, bound_length_m=8.0, time_over_bound=1.56)
+def test_the_path_and_the_speed_are_measured_over_the_referees_task_time() -> None:
+    samples = straight_drive(wait_s=3.0, drive_s=20.0, speed=0.5)  # 10 m from t = 3 s
+    # the task started at 2 s (the robot set off a second later) and ended at 22 s
+    figures = path_figures(samples, task_start_s=2.0, sim_time_s=20.0, bound_length_m=8.0,
+                           time_over_bound=2.5)
     assert figures is not None
-    assert figures.path_over_bound == pytest.approx(10.0 / 8.0)
-    assert figures.mean_speed_m_s == pytest.approx(10.0 / 25.0)
-    assert figures.standing_share == 0.0, "the wait before the task is not the mission's"
-    assert figures.time_over_bound == 1.56
+    assert figures.path_over_bound == pytest.approx(9.5 / 8.0), "the last second is after it"
+    assert figures.mean_speed_m_s == pytest.approx(9.5 / 20.0)
+    assert figures.standing_share == pytest.approx(10 / 201), "the second before setting off"
+    assert figures.time_over_bound == 2.5
 
 
 def test_standing_counts_the_samples_slower_than_the_threshold() -> None:
     samples = straight_drive(wait_s=0.0, drive_s=10.0, speed=0.5)
     stop = samples[-1]
     samples += [Sample(t=stop.t + step / 10.0, x=stop.x, y=0.0, v=0.0) for step in range(1, 12)]
-    figures = path_figures(samples, sim_time_s=11.1, bound_length_m=5.0, time_over_bound=2.2)
+    figures = path_figures(samples, task_start_s=0.0, sim_time_s=11.1, bound_length_m=5.0,
+                           time_over_bound=2.2)
     assert figures is not None
     assert figures.standing_share == pytest.approx(11 / 112)
 
 
-def test_a_robot_that_never_moves_or_an_empty_bound_gives_no_figures() -> None:
-    still = [Sample(t=step / 10.0, x=0.0, y=0.0, v=0.0) for step in range(50)]
-    assert path_figures(still, sim_time_s=5.0, bound_length_m=3.0, time_over_bound=1.0) is None
+def test_an_unknown_task_start_or_an_empty_bound_gives_no_figures() -> None:
     moving = straight_drive(wait_s=0.0, drive_s=2.0, speed=0.5)
-    assert path_figures(moving, sim_time_s=2.0, bound_length_m=0.0, time_over_bound=1.0) is None
+    assert path_figures(moving, task_start_s=None, sim_time_s=2.0, bound_length_m=3.0,
+                        time_over_bound=1.0) is None
+    assert path_figures(moving, task_start_s=0.0, sim_time_s=2.0, bound_length_m=0.0,
+                        time_over_bound=1.0) is None
 
 
 def test_only_completed_rows_with_a_bound_and_a_recording_are_measured(tmp_path: Path) -> None:
@@ -63,7 +67,7 @@ def test_only_completed_rows_with_a_bound_and_a_recording_are_measured(tmp_path:
 
 def test_the_summary_gives_median_and_percentiles_of_each_figure() -> None:
     samples = straight_drive(wait_s=0.0, drive_s=20.0, speed=0.5)
-    figures = [path_figures(samples, sim_time_s=20.0, bound_length_m=length,
+    figures = [path_figures(samples, task_start_s=0.0, sim_time_s=20.0, bound_length_m=length,
                             time_over_bound=10.0 / length) for length in (5.0, 8.0, 10.0)]
     lines = summary_lines([f for f in figures if f is not None])
     assert lines[0] == "3 completed missions with a bound and a recording"
