@@ -47,10 +47,6 @@ PROG = "python -m bt_servicesim.warm_worker"
 RESET_SERVICE = "/servicesim/reset"
 RESET_WAIT_S = 30.0
 """Wall seconds a reset may take to be answered (it loads the world and draws the task)."""
-WARM_SETTLE_S = 0.5
-"""Wall seconds the simulator gets to discover a new episode's endpoints, in place of the cold
-run's :data:`~bt_servicesim.mission.run.DISCOVERY_SETTLE_S`: the two processes found each
-other long ago, so only the new node's endpoints are new to the simulator."""
 IDLE_HOLD_S = 3600.0
 """The simulator's first hold, until the first reset: no episode is played before one."""
 
@@ -202,8 +198,7 @@ class WarmWorker:
                           file=sys.stderr)
                     return EXIT_BAD_INPUT
                 run = MissionRun(settings=settings, make_executive=make_executive,
-                                 extra_sim_args=episode.sim_args, backend=self.simulator,
-                                 discovery_settle_s=WARM_SETTLE_S)
+                                 extra_sim_args=episode.sim_args, backend=self.simulator)
                 return run.play()
             except SimulatorLostError as lost:
                 self.lost = str(lost)

@@ -55,12 +55,13 @@ from bt_servicesim.mission.stopping import (
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.ros import lockstep
+from bt_servicesim.ros.discovery import await_backend_discovery
 from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
 
 TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
-DISCOVERY_SETTLE_S = 2.0  # wall seconds for the simulator to discover the clients set up
+DISCOVERY_LIMIT_S = 10.0  # wall seconds the backend may take to discover the readers set up
 SERVER_WAIT_LIMIT_S = 30.0  # wall seconds the run waits for every server its executive calls
 FINAL_STATE_WAIT_S = 3.0  # wall seconds to wait for the referee's last state
 SIM_TIME_BACKSTOP_S = 60.0  # sim seconds past the time limit before the run gives up itself
@@ -79,7 +80,6 @@ class MissionRun:
         monitor: Groot2Server | None = None,
         live_server: LiveServer | None = None,
         backend: SimulatorProcess | None = None,
-        discovery_settle_s: float = DISCOVERY_SETTLE_S,
     ) -> None:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
         closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to.
@@ -87,15 +87,13 @@ class MissionRun:
         ``backend``: a simulator someone else started, keeps and has reset for this run (a
         warm episode, :mod:`bt_servicesim.evaluation.warm_worker`): the run watches it but
         never starts or stops it, and is started with :meth:`play` in a process that keeps
-        rclpy initialised. ``discovery_settle_s``: the wall time the simulator gets to
-        discover the executive's endpoints (see :meth:`_wait_for_servers`).
+        rclpy initialised.
         """
         self.settings = settings
         self.extra_sim_args = extra_sim_args
         self.make_executive = make_executive
         self.monitor = monitor
         self.live_server = live_server
-        self.discovery_settle_s = discovery_settle_s
         self.owns_simulator = backend is None
         self.simulator = backend if backend is not None else None if settings.attach else (
             SimulatorProcess(world=settings.world, seed=settings.seed, speed=settings.speed,
@@ -208,7 +206,7 @@ class MissionRun:
         client = self._lockstep_offer(node, executor)
         executive.setup()
         self._wait_for_servers(node, executor)
-        self._spin_for(executor, self.discovery_settle_s)
+        self._await_discovery(node, executor)
         self._join_lockstep(client, executor)
         _keep_out_of_the_collector()
         executive.start()
@@ -313,8 +311,8 @@ class MissionRun:
         the client only once the server has discovered the client's reader in turn, which on a
         busy machine can take seconds. An answer sent before that is lost (a drop-off the
         referee granted looked like a timeout), so the tree starts only when every client is
-        ready, and DISCOVERY_SETTLE_S later. Bounded: a server that never comes is the
-        tree's to wait for and report.
+        ready, and the backend has discovered its readers (:meth:`_await_discovery`).
+        Bounded: a server that never comes is the tree's to wait for and report.
         """
         def every_server_ready() -> bool:
             actions = [w for w in node.waitables if isinstance(w, ActionClient)]
@@ -322,6 +320,14 @@ class MissionRun:
                     and all(action.server_is_ready() for action in actions))
 
         MissionRun._spin_until(executor, every_server_ready, SERVER_WAIT_LIMIT_S)
+
+    @staticmethod
+    def _await_discovery(node: Node, executor: Executor) -> None:
+        """Until the backend has discovered every reader the executive set up (a probe on
+        /clock, :mod:`bt_servicesim.ros.discovery`); bounded, then said and gone on with."""
+        if not await_backend_discovery(node, executor, limit_s=DISCOVERY_LIMIT_S):
+            print(f"the backend's /clock did not reach a new reader within "
+                  f"{DISCOVERY_LIMIT_S:.0f} s: its first answers may be lost", flush=True)
 
     def _title(self, monitor: RefereeMonitor) -> str:
         fields = monitor.report_fields()

@@ -58,7 +58,9 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
 OFFER_WAIT_S = 3.0
 """Wall seconds a run waits for the join service once the simulator's own services are up."""
 JOIN_SETTLE_S = 0.5
-"""Wall seconds after the join for what the simulator sent before it to arrive."""
+"""Wall seconds at most after the join for what the simulator sent before it to arrive."""
+JOIN_QUIET_S = 0.02
+"""Wall seconds without an arrival that end that wait."""
 FINAL_PERIODS = 3
 """Periods the client stays in step after its last ticker stopped: what the last tick sent is
 served (after the next period: the pipeline's one period later) and answered; then it holds
@@ -164,9 +166,7 @@ class LockstepClient:
             if not future.done() or future.result() is None:
                 return False
             answer = future.result()
-            settle = time.monotonic() + JOIN_SETTLE_S
-            while time.monotonic() < settle:
-                executor.spin_once(timeout_sec=0.05)
+            self._take_what_came_before(executor)
         finally:
             self.node.destroy_client(client)
         self._synchronise(answer.joined_at)
@@ -190,6 +190,23 @@ class LockstepClient:
         time_source = getattr(self.node, "_time_source", None)  # rclpy's, private (Kilted)
         if time_source is not None and hasattr(time_source, "detach_node"):
             time_source.detach_node()
+
+    def _take_what_came_before(self, executor: Executor) -> None:
+        """Take what the simulator sent before it answered the join, so that the offsets
+        count it as before the join.
+
+        From its answer until this client's first done the simulator sends nothing (the gate
+        holds it at the join's period), and what it sent before the answer was delivered to
+        this process ahead of the answer (one writer process, one port, in order); what is
+        still to be taken waits in this process. So a short quiet (:data:`JOIN_QUIET_S`) ends
+        the wait: a few hundredths of a second where a fixed settle took half a second.
+        """
+        deadline = time.monotonic() + JOIN_SETTLE_S
+        seen, quiet_since = self.traffic.arrivals, time.monotonic()
+        while (now := time.monotonic()) < deadline and now - quiet_since < JOIN_QUIET_S:
+            executor.spin_once(timeout_sec=JOIN_QUIET_S)
+            if self.traffic.arrivals != seen:
+                seen, quiet_since = self.traffic.arrivals, time.monotonic()
 
     def _synchronise(self, joined_at: LockstepPeriod) -> None:
         """Offsets: what was announced at the join against what has arrived by now."""

@@ -1,0 +1,50 @@
+"""Whether the backend has discovered this node's readers: a probe on ``/clock``.
+
+A writer sends only to the readers its participant has discovered. Until the simulator has
+discovered a reader of the executive (a topic's, or the reader of a service's answers), what
+it sends there is lost: an answer the referee gave looked like a timeout. The run used to
+wait a fixed two wall seconds for this after its servers were ready, which most of the time
+was two seconds of nothing, and on a starved machine could still be too short.
+
+Discovery gives an order to wait on instead. A participant announces its readers one after
+another on one reliable built-in channel (SEDP's subscriptions writer), and the remote
+participant matches its writers with each reader as it takes that reader's announcement, in
+the order they were sent. So once a reader made after all the others has had a message from
+the backend, the backend has taken the announcements of all the earlier readers, and matched
+its writers with them. :func:`await_backend_discovery` makes such a reader on ``/clock``
+(every backend publishes it: the simulator repeats it while it holds for a client, Gazebo
+as it runs) and spins until it has a message, within a wall-time limit; then it destroys it.
+"""
+
+from __future__ import annotations
+
+import time
+
+from rclpy.executors import Executor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+
+__all__ = ["CLOCK_TOPIC", "await_backend_discovery"]
+
+CLOCK_TOPIC = "/clock"
+PROBE_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""Best effort matches every writer's reliability; a repeated clock makes up for a loss."""
+SPIN_S = 0.05
+"""Wall seconds of one wait for the probe's message."""
+
+
+def await_backend_discovery(node: Node, executor: Executor, *, limit_s: float) -> bool:
+    """Until the backend has matched every reader ``node`` has now (True), or ``limit_s``
+    wall seconds passed (False): see the module docstring. Call it once every reader
+    whose first messages matter exists; what is made later is not covered."""
+    heard: list[bool] = []
+    probe = node.create_subscription(Clock, CLOCK_TOPIC, lambda _message: heard.append(True),
+                                     PROBE_QOS)
+    try:
+        deadline = time.monotonic() + limit_s
+        while not heard and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=SPIN_S)
+    finally:
+        node.destroy_subscription(probe)
+    return bool(heard)
