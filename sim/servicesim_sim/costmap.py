@@ -23,6 +23,7 @@ Design intent:
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,7 +145,7 @@ class Costmap:
         self.lidar = lidar or Lidar()
         self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
         self._ray_walls, self._ray_cell = _ray_grid(self._walls, occupancy_map.resolution)
-        self.frame, wall_distance = _coarse_wall_distance(
+        self.frame, wall_distance = _kept_wall_distance(
             occupancy_map, self._walls, resolution=resolution, margin=crop_margin)
         self.static = self.inflation.costs(wall_distance)
         self.marks: tuple[PersonMark, ...] = ()
@@ -315,6 +316,25 @@ def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarr
     gaps = np.hypot(points[:, None, 0] - others[None, :, 0],
                     points[:, None, 1] - others[None, :, 1])
     return np.any(gaps <= radius, axis=1)
+
+
+_WALL_DISTANCES: weakref.WeakKeyDictionary[
+    OccupancyMap, dict[tuple[float, float], tuple[GridFrame, np.ndarray]]] = (
+    weakref.WeakKeyDictionary())
+
+
+def _kept_wall_distance(occupancy_map: OccupancyMap, walls: np.ndarray, *,
+                        resolution: float, margin: float) -> tuple[GridFrame, np.ndarray]:
+    """:func:`_coarse_wall_distance` of the map's walls, once per loaded map, resolution and
+    margin: the episodes a reset plays on one world share it, read-only."""
+    kept = _WALL_DISTANCES.setdefault(occupancy_map, {})
+    found = kept.get((resolution, margin))
+    if found is None:
+        frame, distance = _coarse_wall_distance(occupancy_map, walls, resolution=resolution,
+                                                margin=margin)
+        distance.setflags(write=False)
+        found = kept[(resolution, margin)] = (frame, distance)
+    return found
 
 
 def _coarse_wall_distance(occupancy_map: OccupancyMap, walls: np.ndarray, *,

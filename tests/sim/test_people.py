@@ -414,3 +414,32 @@ def test_office_idlers_stand_in_its_idling_areas_and_some_near_the_shipped_pick_
         near_pick_up += any(math.hypot(p.x - centre[0], p.y - centre[1]) <= 2.0
                             for p in standing)
     assert near_pick_up >= 2
+
+
+def test_many_lines_at_once_answer_as_each_line_alone() -> None:
+    """The routes' corner cutting checks lines in batches; each answer must be the one the
+    line alone gets, or the same seed would draw other routes."""
+    from servicesim_sim.people import Clearance
+
+    clearance = Clearance.of(office_map())
+    walkable = clearance.metres >= 0.3
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        start = rng.uniform((0.2, 0.2), (19.8, 11.8))  # inside the window
+        ends = rng.uniform((0.2, 0.2), (19.8, 11.8), size=(int(rng.integers(1, 20)), 2))
+        ends[0] = start  # a zero-length line among them
+        batch = clearance.lines_are_clear(start, ends, walkable)
+        alone = [clearance.line_is_clear(start, end, walkable) for end in ends]
+        assert batch.tolist() == alone
+    assert not all(alone) and any(alone), "the draws must meet both answers"
+
+
+def test_a_map_measures_its_clearance_once_and_no_episode_can_change_it() -> None:
+    from servicesim_sim.people import Clearance
+
+    occupancy = office_map()
+    first, again = Clearance.of(occupancy), Clearance.of(occupancy)
+    assert first is again
+    assert Clearance.of(office_map()) is not first  # another map object: its own
+    with pytest.raises(ValueError):
+        first.metres[0, 0] = 1.0
