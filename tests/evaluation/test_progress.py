@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import select
 import time
 from typing import Any
 
@@ -100,6 +101,15 @@ def test_a_stream_that_fails_ends_the_progress_never_the_evaluation() -> None:
         Progress(1, HungUp(fails_after=0, errno=errno)).advance(row(completed=True))
 
 
+def read_all(terminal: int, *, quiet_s: float = 0.5) -> str:
+    """What was written to a pseudo-terminal's other end: the kernel hands it on in pieces,
+    later on a busy machine, so read until nothing more comes for ``quiet_s``."""
+    pieces = []
+    while select.select([terminal], [], [], quiet_s)[0]:
+        pieces.append(os.read(terminal, 65536))
+    return b"".join(pieces).decode(errors="replace")
+
+
 def test_a_pseudo_terminal_that_reports_no_size_still_gets_the_bar() -> None:
     main, child = os.openpty()  # a new pseudo-terminal: 0 columns, 0 rows
     try:
@@ -108,7 +118,7 @@ def test_a_pseudo_terminal_that_reports_no_size_still_gets_the_bar() -> None:
             progress = Progress(2, stream)
             progress.advance(row(completed=True))
             progress.close()
-        drawn = os.read(main, 65536).decode(errors="replace")
+        drawn = read_all(main)
     finally:
         os.close(main)
         os.close(child)
