@@ -57,7 +57,7 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           durability=DurabilityPolicy.VOLATILE)
 OFFER_WAIT_S = 3.0
 """Wall seconds a run waits for the join service once the simulator's own services are up."""
-JOIN_SETTLE_S = 0.5
+JOIN_SETTLE_S = 3.0
 """Wall seconds at most after the join for what the simulator sent before it to arrive."""
 JOIN_QUIET_S = 0.02
 """Wall seconds without an arrival that end that wait."""
@@ -166,7 +166,7 @@ class LockstepClient:
             if not future.done() or future.result() is None:
                 return False
             answer = future.result()
-            self._take_what_came_before(executor)
+            self._take_what_came_before(executor, answer.joined_at)
         finally:
             self.node.destroy_client(client)
         self._synchronise(answer.joined_at)
@@ -191,22 +191,42 @@ class LockstepClient:
         if time_source is not None and hasattr(time_source, "detach_node"):
             time_source.detach_node()
 
-    def _take_what_came_before(self, executor: Executor) -> None:
+    def _take_what_came_before(self, executor: Executor, joined_at: LockstepPeriod) -> None:
         """Take what the simulator sent before it answered the join, so that the offsets
         count it as before the join.
 
         From its answer until this client's first done the simulator sends nothing (the gate
         holds it at the join's period), and what it sent before the answer was delivered to
-        this process ahead of the answer (one writer process, one port, in order); what is
-        still to be taken waits in this process. So a short quiet (:data:`JOIN_QUIET_S`) ends
-        the wait: a few hundredths of a second where a fixed settle took half a second.
+        this process ahead of the answer (one writer process, one port, in order), except a
+        latched topic's history: a reliable writer sends a newly matched reader that on its
+        own time. So the wait ends once every latched reader has what it is owed
+        (:meth:`_owed_history`) and nothing has arrived for :data:`JOIN_QUIET_S`; it is
+        bounded by :data:`JOIN_SETTLE_S`. A few hundredths of a second, mostly.
         """
         deadline = time.monotonic() + JOIN_SETTLE_S
         seen, quiet_since = self.traffic.arrivals, time.monotonic()
-        while (now := time.monotonic()) < deadline and now - quiet_since < JOIN_QUIET_S:
+        while (now := time.monotonic()) < deadline and (
+                now - quiet_since < JOIN_QUIET_S or not self._owed_history(joined_at)):
             executor.spin_once(timeout_sec=JOIN_QUIET_S)
             if self.traffic.arrivals != seen:
                 seen, quiet_since = self.traffic.arrivals, time.monotonic()
+
+    def _owed_history(self, joined_at: LockstepPeriod) -> bool:
+        """Whether every matched latched (transient-local) reader holds what DDS owes it: of
+        the messages announced on its topic, as many as its history keeps, whether they came
+        as they were sent or as history when the reader matched."""
+        announced = dict(zip(joined_at.topics, joined_at.messages, strict=False))
+        for key, subscription in self.traffic.readers.items():
+            qos = subscription.qos_profile
+            if (qos.durability != DurabilityPolicy.TRANSIENT_LOCAL
+                    or subscription.get_publisher_count() == 0):
+                continue
+            owed = int(announced.get(subscription.topic_name, 0))
+            if qos.history != HistoryPolicy.KEEP_ALL:
+                owed = min(owed, qos.depth)
+            if self.traffic.received[key] < owed:
+                return False
+        return True
 
     def _synchronise(self, joined_at: LockstepPeriod) -> None:
         """Offsets: what was announced at the join against what has arrived by now."""

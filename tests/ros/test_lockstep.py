@@ -132,3 +132,43 @@ def test_reliable_readers_keep_two_periods_of_messages_and_best_effort_ones_stay
     assert deeper.durability == DurabilityPolicy.TRANSIENT_LOCAL
     assert deep_enough(qos_profile_sensor_data).depth == qos_profile_sensor_data.depth
     assert deep_enough(1) == MIN_READER_DEPTH
+
+
+class FakeReader:
+    """A subscription as the join's wait looks at it."""
+
+    def __init__(self, topic: str, qos: QoSProfile, *, publishers: int = 1) -> None:
+        self.topic_name, self.qos_profile, self.publishers = topic, qos, publishers
+
+    def get_publisher_count(self) -> int:
+        return self.publishers
+
+
+def test_the_join_waits_for_each_latched_readers_owed_history_only() -> None:
+    """A latched reader is owed as many of the announced messages as its history keeps;
+    volatile readers, and latched ones nobody publishes to, are owed nothing."""
+    from types import SimpleNamespace
+
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy
+    from servicesim_competition.msg import LockstepPeriod
+
+    from bt_servicesim.ros.lockstep import LockstepClient
+
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    keep_all = QoSProfile(depth=1, history=HistoryPolicy.KEEP_ALL,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    readers = {0: FakeReader("/areas", latched), 1: FakeReader("/odom", QoSProfile(depth=10)),
+               2: FakeReader("/pose", latched, publishers=0), 3: FakeReader("/log", keep_all)}
+    client = SimpleNamespace(traffic=SimpleNamespace(readers=readers,
+                                                     received={0: 0, 1: 0, 2: 0, 3: 0}))
+    joined_at = LockstepPeriod(topics=["/areas", "/log", "/odom", "/pose"],
+                               messages=[3, 2, 5, 1])
+
+    def owed() -> bool:
+        return LockstepClient._owed_history(client, joined_at)  # type: ignore[arg-type]
+
+    assert not owed()  # /areas: 1 of 3 (its depth), /log: 2 (keeps all)
+    client.traffic.received.update({0: 1, 3: 1})
+    assert not owed()
+    client.traffic.received[3] = 2
+    assert owed()  # /odom is volatile, /pose has no publisher: nothing owed
