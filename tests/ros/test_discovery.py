@@ -41,7 +41,10 @@ class Backend:
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
 
-    def close(self) -> None:
+    def __enter__(self) -> Backend:
+        return self
+
+    def __exit__(self, *_: object) -> None:
         self.executor.shutdown()
         self.node.destroy_node()
         self.context.try_shutdown()
@@ -61,26 +64,20 @@ def client(ros_context: Context) -> Iterator[tuple[Node, SingleThreadedExecutor]
 def test_after_the_probe_the_backend_has_matched_every_earlier_reader(
         client: tuple[Node, SingleThreadedExecutor]) -> None:
     node, executor = client
-    backend = Backend(clock=True)
-    try:
+    with Backend(clock=True) as backend:
         for n in range(TOPICS):  # one reader at a time, each proved by a probe of its own
             node.create_subscription(Int32, f"/probe_test/t{n}", lambda _m: None, RELIABLE)
             assert await_backend_discovery(node, executor, limit_s=10.0)
             matched = [writer.get_subscription_count() for writer in backend.writers[:n + 1]]
             assert matched == [1] * (n + 1), f"after reader {n}: {matched}"
-    finally:
-        backend.close()
 
 
 def test_without_a_clock_it_gives_up_within_its_limit_and_leaves_no_reader(
         client: tuple[Node, SingleThreadedExecutor]) -> None:
     node, executor = client
-    backend = Backend(clock=False)
-    try:
+    with Backend(clock=False):
         started = time.monotonic()
         assert not await_backend_discovery(node, executor, limit_s=0.4)
         assert 0.4 <= time.monotonic() - started < 3.0
         assert node.count_subscribers(CLOCK_TOPIC) == 0
         assert [s.topic_name for s in node.subscriptions] == []
-    finally:
-        backend.close()
