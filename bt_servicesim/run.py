@@ -16,6 +16,7 @@ import argparse
 import ipaddress
 import math
 import os
+import signal
 import sys
 import uuid
 from collections.abc import Callable, Sequence
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
+from bt_servicesim.mission.head_start import HeadStart
 from bt_servicesim.mission.settings import (
     DEFAULT_SPEED,
     DEFAULT_TIME_LIMIT_S,
@@ -32,7 +34,9 @@ from bt_servicesim.mission.settings import (
     TRAJECTORY_POLICIES,
     RunSettings,
 )
-from bt_servicesim.monitor.groot2_server import DEFAULT_HOST, DEFAULT_PORT, Groot2Server
+from bt_servicesim.mission.simulator_process import SimulatorProcess
+from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for, signal_of
+from bt_servicesim.monitor.groot2_protocol import DEFAULT_HOST, DEFAULT_PORT
 from bt_servicesim.monitor.live_server import DEFAULT_PORT as FOXGLOVE_PORT
 from bt_servicesim.monitor.live_server import (
     LiveAddress,
@@ -41,18 +45,13 @@ from bt_servicesim.monitor.live_server import (
     describe,
     open_live_server,
 )
-from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
-from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.loading import (
-    DEFAULT_TREE,
-    MissionTreeError,
-    load_mission_tree,
-    phases_of,
-)
+from bt_servicesim.ros.domain import NoFreeDomainError
+from bt_servicesim.tree.files import DEFAULT_TREE
 
 if TYPE_CHECKING:
     from rclpy.node import Node
 
+    from bt_servicesim.monitor.groot2_server import Groot2Server
     from bt_servicesim.tree.executive import Executive
 
 PROG = "python -m bt_servicesim.run"
@@ -198,61 +197,88 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Check the input, start the simulator, then load the tree while it comes up.
+
+    What needs only the arguments is checked first. The simulator then gets a head start
+    (:mod:`bt_servicesim.mission.head_start`): the tree needs every behaviour and its libraries
+    imported, about a second here, and the simulator as long to come up. A tree, a monitor
+    port or a Foxglove address refused after that takes the head start back, so bad input
+    still leaves nothing but its one-line error.
+    """
     args = build_parser().parse_args(argv)
-    monitor: Groot2Server | None = None
-    live: LiveServer | None = None
     try:
         settings = settings_from(args)
-        make_executive = executive_factory(settings)
-        monitor = _open_monitor(settings)  # before the run directory: a port in use leaves none
-        live = open_live_server(settings.foxglove) if settings.foxglove else None
-    except (UsageError, MissionTreeError, LiveServerError, OSError) as error:
-        if monitor is not None:
-            monitor.close()
+    except UsageError as error:
         return error_line(PROG, error)
-    try:
-        return _run(settings, make_executive, args, monitor, live)
-    finally:
-        if monitor is not None:
-            monitor.close()
-        if live is not None:
-            live.stop()
+    with HeadStart(settings, sim_args=tuple(args.sim_arg)) as head_start:
+        started = _start(settings, head_start)
+        if isinstance(started, int):
+            return started
+        make_executive, monitor, live = started
+        try:
+            return _run(settings, make_executive, args, monitor, live, head_start.hand_over())
+        finally:
+            _close_servers(monitor, live)
+
+
+def _start(settings: RunSettings, head_start: HeadStart
+           ) -> tuple[ExecutiveFactory, Groot2Server | None, LiveServer | None] | int:
+    """The head start, then the tree and the servers; an exit status if any was refused or a
+    stop signal came meanwhile (everything taken back)."""
+    monitor: Groot2Server | None = None
+    live: LiveServer | None = None
+    with StopSignals():
+        try:
+            head_start.begin(users_domain=_users_domain())
+            from bt_servicesim.tree.loading import MissionTreeError  # behaviours: after the start
+
+            try:
+                make_executive = executive_factory(settings)
+                monitor = _open_monitor(settings)
+                live = open_live_server(settings.foxglove) if settings.foxglove else None
+            except (MissionTreeError, LiveServerError) as error:
+                raise UsageError(str(error)) from error
+            return make_executive, monitor, live
+        except (UsageError, OSError, NoFreeDomainError) as error:
+            _close_servers(monitor, live)
+            head_start.abandon()
+            return error_line(PROG, error)
+        except (KeyboardInterrupt, Terminated) as stop:
+            _close_servers(monitor, live)
+            head_start.abandon()
+            print(f"{PROG}: stopped by {signal.Signals(signal_of(stop)).name} while starting",
+                  file=sys.stderr)
+            return exit_code_for(stop)
+
+
+def _close_servers(monitor: Groot2Server | None, live: LiveServer | None) -> None:
+    if monitor is not None:
+        monitor.close()
+    if live is not None:
+        live.stop()
 
 
 def _open_monitor(settings: RunSettings) -> Groot2Server | None:
-    """The Groot2 server, listening before anything starts, if the run was asked for one."""
+    """The Groot2 server, listening before the run goes on, if the run was asked for one."""
     if settings.groot is None:
         return None
+    from bt_servicesim.monitor.groot2_server import Groot2Server
+
     host, port = settings.groot
     return Groot2Server(host=host, port=port)
 
 
 def _run(settings: RunSettings, make_executive: ExecutiveFactory, args: argparse.Namespace,
-         monitor: Groot2Server | None, live: LiveServer | None) -> int:
-    try:
-        settings.out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        return error_line(PROG, error)
+         monitor: Groot2Server | None, live: LiveServer | None,
+         simulator: SimulatorProcess | None) -> int:
     if live is not None:
         print(describe(live), flush=True)
-    apply_localhost_defaults()
-    claim = None
-    if not settings.attach:  # a domain of its own: it only ever talks to its own simulator
-        try:
-            claim = claim_domain(avoid=_users_domain())
-        except NoFreeDomainError as error:
-            return error_line(PROG, error)
-        os.environ["ROS_DOMAIN_ID"] = str(claim.domain_id)
     from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
 
-    try:
-        return MissionRun(
-            settings=settings, make_executive=make_executive,
-            extra_sim_args=tuple(args.sim_arg), monitor=monitor, live_server=live,
-        ).execute()
-    finally:
-        if claim is not None:
-            claim.release()
+    return MissionRun(
+        settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
+        monitor=monitor, live_server=live, simulator=simulator,
+    ).execute()
 
 
 def _users_domain() -> int | None:
@@ -274,6 +300,8 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
                                     time_limit_s=settings.time_limit_s)
 
         return make_baseline
+    from bt_servicesim.tree.loading import load_mission_tree, phases_of
+
     root = load_mission_tree(settings.tree, time_limit_s=settings.time_limit_s)
     phases = phases_of(settings.tree)
 

@@ -84,7 +84,7 @@ class WarmEpisode:
 
     def reset_arguments(self) -> list[str]:
         """The simulator's arguments for this episode, as a cold run starts it with."""
-        from bt_servicesim.mission.run import simulator_arguments
+        from bt_servicesim.mission.simulator_process import simulator_arguments
 
         seed = [] if self.seed is None else ["--seed", str(self.seed)]
         return ["--speed", repr(self.speed), *seed,

@@ -80,6 +80,7 @@ class MissionRun:
         monitor: Groot2Server | None = None,
         live_server: LiveServer | None = None,
         backend: SimulatorProcess | None = None,
+        simulator: SimulatorProcess | None = None,
     ) -> None:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
         closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to.
@@ -88,6 +89,9 @@ class MissionRun:
         warm episode, :mod:`bt_servicesim.evaluation.warm_worker`): the run watches it but
         never starts or stops it, and is started with :meth:`play` in a process that keeps
         rclpy initialised.
+
+        ``simulator``: the run's own simulator, already started by the command
+        (:mod:`bt_servicesim.mission.head_start`); the run stops it as one it started itself.
         """
         self.settings = settings
         self.extra_sim_args = extra_sim_args
@@ -95,10 +99,8 @@ class MissionRun:
         self.monitor = monitor
         self.live_server = live_server
         self.owns_simulator = backend is None
-        self.simulator = backend if backend is not None else None if settings.attach else (
-            SimulatorProcess(world=settings.world, seed=settings.seed, speed=settings.speed,
-                             log_path=settings.out / "sim.log",
-                             extra_args=simulator_arguments(settings, extra_sim_args)))
+        self.simulator = backend or simulator or (
+            None if settings.attach else SimulatorProcess.for_run(settings, extra_sim_args))
         self.started_wall = time.monotonic()
         self.failure: str | None = None
         self.traceback: str | None = None
@@ -387,14 +389,6 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
-
-
-def simulator_arguments(settings: RunSettings, sim_args: tuple[str, ...]) -> tuple[str, ...]:
-    """The simulator's arguments for this run but the world, seed and speed: the hold for the
-    lockstep client (unless the run runs free) and the run's ``--sim-arg`` ones."""
-    await_lockstep = () if settings.free_running else (
-        "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
-    return (*await_lockstep, *sim_args)
 
 
 def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:

@@ -18,9 +18,20 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bt_servicesim.mission.settings import STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.stopping import parent_death_signal
 
 SIMULATOR_MODULE = "servicesim_sim"
+SIMULATOR_LOG_NAME = "sim.log"
+"""The simulator's output, in the run directory."""
+
+
+def simulator_arguments(settings: RunSettings, sim_args: tuple[str, ...]) -> tuple[str, ...]:
+    """The simulator's arguments for this run but the world, seed and speed: the hold for the
+    lockstep client (unless the run runs free) and the run's ``--sim-arg`` ones."""
+    await_lockstep = () if settings.free_running else (
+        "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
+    return (*await_lockstep, *sim_args)
 
 
 class SimulatorProcess:
@@ -44,7 +55,28 @@ class SimulatorProcess:
         self.log_path = log_path
         self._process: subprocess.Popen[bytes] | None = None
 
+    @classmethod
+    def for_run(cls, settings: RunSettings, sim_args: tuple[str, ...], *,
+                log_path: Path | None = None) -> SimulatorProcess:
+        """The simulator a run with ``settings`` starts (log: the run directory's
+        ``sim.log`` unless ``log_path`` says otherwise)."""
+        return cls(world=settings.world, seed=settings.seed, speed=settings.speed,
+                   log_path=log_path or settings.out / SIMULATOR_LOG_NAME,
+                   extra_args=simulator_arguments(settings, sim_args))
+
+    @property
+    def started(self) -> bool:
+        return self._process is not None
+
+    def rename_log(self, path: Path) -> None:
+        """Give the log another name; the process goes on writing to it."""
+        os.replace(self.log_path, path)
+        self.log_path = path
+
     def start(self) -> None:
+        """Start the process (once: a started simulator is not started again)."""
+        if self._process is not None:
+            return
         parent = os.getpid()
         with self.log_path.open("wb") as log:
             self._process = subprocess.Popen(

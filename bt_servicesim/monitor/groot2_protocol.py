@@ -36,11 +36,16 @@ from typing import Any
 import msgpack
 
 __all__ = [
-    "PROTOCOL_ID", "REPLY_HEADER_SIZE", "REQUEST_HEADER_SIZE", "NodeStatusCode", "RequestHeader",
+    "DEFAULT_HOST", "DEFAULT_PORT", "PROTOCOL_ID", "REPLY_HEADER_SIZE", "REQUEST_HEADER_SIZE",
+    "NodeStatusCode", "RequestHeader",
     "RequestType", "Served", "answer", "blackboard_payload", "error_reply", "jsonable",
     "new_tree_id", "reply_header", "status_buffer",
 ]
 
+DEFAULT_HOST = "127.0.0.1"
+"""Where a monitor listens unless told otherwise: loopback only."""
+DEFAULT_PORT = 1667
+"""Groot2's, Nav2's and btview's default port for a tree's monitor."""
 PROTOCOL_ID = 2
 REQUEST_HEADER_SIZE = 6
 REPLY_HEADER_SIZE = REQUEST_HEADER_SIZE + 16

@@ -30,14 +30,18 @@ import zmq
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from bt_servicesim.monitor.groot2_protocol import Served, answer, error_reply, new_tree_id
+from bt_servicesim.monitor.groot2_protocol import (
+    DEFAULT_HOST,
+    DEFAULT_PORT,
+    Served,
+    answer,
+    error_reply,
+    new_tree_id,
+)
 from bt_servicesim.monitor.groot2_tree import MonitoredTree, status_codes
 
 __all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "Groot2Server", "MonitorBindError", "Snapshot"]
 
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_PORT = 1667
-"""Groot2's, Nav2's and btview's default."""
 POLL_PERIOD_MS = 100
 """How long the server waits for a request before it looks whether it should stop."""
 SEND_TIMEOUT_MS = 1000

@@ -22,10 +22,10 @@ import py_trees
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.behaviours import node_registry
+from bt_servicesim.tree.files import DEFAULT_TREE
 from bt_servicesim.tree.shape import short_label
 from bt_servicesim.tree.validation import tree_file_problems
 
-DEFAULT_TREE = Path(__file__).resolve().parents[2] / "trees" / "servicesim_mission.xml"
 PHASES_ATTRIBUTE = "phases"
 """The main tree's attribute naming the composite whose children are the mission's phases."""
 DEFAULT_PHASES = "Mission"

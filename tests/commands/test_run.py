@@ -59,3 +59,19 @@ def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content:
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
     assert "broken.xml" in lines[0] and problem in lines[0]
+    assert not (tmp_path / "runs").exists(), "the simulator's head start is taken back"
+
+
+def test_a_refused_tree_keeps_the_earlier_run_it_was_to_overwrite(tmp_path: Path) -> None:
+    """The simulator starts while the tree is checked; its log has a name of its own until
+    the tree passes, and goes with the simulator when it does not."""
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    (earlier / "report.json").write_text('{"status": "completed"}')
+    (earlier / "sim.log").write_text("the earlier run's simulator\n")
+    tree = tmp_path / "broken.xml"
+    tree.write_text("<tree/>")
+    result = run("--tree", str(tree), "--out", str(earlier), "--overwrite", cwd=tmp_path)
+    assert result.returncode == 2 and "broken.xml" in result.stderr
+    assert sorted(path.name for path in earlier.iterdir()) == ["report.json", "sim.log"]
+    assert (earlier / "sim.log").read_text() == "the earlier run's simulator\n"
