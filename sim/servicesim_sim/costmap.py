@@ -11,11 +11,15 @@ Design intent:
   bounding box of the map's occupied cells plus a margin. A coarse cell takes the smallest wall
   distance of the map cells it covers, so coarsening never lets a plan closer to a wall.
 * The static layer is computed once, with one Euclidean distance transform.
-* The obstacle layer holds people as marks (x, y). :meth:`Costmap.observe` is a lidar sweep:
-  everyone inside the ±120° field of view and 0.1–30 m range whose centre is in line of sight
-  (no wall and no nearer person in the way) is marked, and every old mark in view with nobody
-  there any more is cleared. Marks out of view stay, stale, until seen again or
-  :meth:`Costmap.clear`. A person is a disc, inflated like a wall.
+* The obstacle layer holds people as marks (x, y). :meth:`Costmap.observe` is a lidar sweep.
+  A person is *visible* inside the ±120° field of view and 0.1–30 m range when their centre is
+  in line of sight (no wall and no nearer person in the way). A visible person whose surface is
+  within the marking range, 3 m, is marked: the competition's costmap marks scan hits only
+  within its ``obstacle_range`` of 3 m, while it clears along every ray out to the scan's end
+  (``raytrace_range`` 100 m, the lidar's 30 m). So every old mark in view with nobody there
+  any more is cleared at any range, and a mark where a visible person still stands stays (the
+  ray ends on them). Marks out of view stay, stale, until seen again or :meth:`Costmap.clear`.
+  A person is a disc.
 * The lidar is approximated by one ray per person to the person's centre, walls sampled on the
   map's own grid; people's legs, the scan's angular resolution and noise are not modelled.
 """
@@ -102,11 +106,15 @@ RAY_CELL = 0.1  # metres: the lidar's rays are traced on walls pooled to about t
 
 @dataclass(frozen=True)
 class Lidar:
-    """The planar scanner: field of view (half angle) and range, both as in the competition."""
+    """The planar scanner: field of view (half angle) and range, both as in the competition,
+    and the range within which the costmap marks what it hits (the competition's
+    ``obstacle_range``, ``competitor_example_solution/servicebot_2dnav/config/
+    costmap_common_params.yaml``)."""
 
     half_angle: float = math.radians(120.0)
     min_range: float = 0.1
     max_range: float = 30.0
+    mark_range: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -196,14 +204,20 @@ class Costmap:
     # ------------------------------------------------------------------ people
     def observe(self, robot_x: float, robot_y: float, robot_yaw: float,
                 people_xy: list[tuple[float, float]] | np.ndarray, now: float) -> None:
-        """One lidar sweep: mark the people in view, clear old marks in view."""
+        """One lidar sweep: mark the people in view within the marking range, clear old marks
+        in view where nobody stands any more (see the module docstring)."""
         robot = np.array([robot_x, robot_y], dtype=np.float64)
         people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
-        seen = people[self._in_view(robot, robot_yaw, people, occluders=people)]
+        visible = people[self._in_view(robot, robot_yaw, people, occluders=people)]
+        surface = np.hypot(*(visible - robot).T) - self.person_radius
+        near = surface <= self.lidar.mark_range
+        seen = visible[near]
         old = np.array([(mark.x, mark.y) for mark in self.marks]).reshape(-1, 2)
         keep = ~_near_any(old, seen, self.person_radius)  # a person seen there marks it anew
-        if keep.any():  # only the other old marks need a ray: cleared if in view
-            keep[keep] = ~self._in_view(robot, robot_yaw, old[keep], occluders=seen)
+        standing = _near_any(old, visible[~near], self.person_radius)  # the ray ends on them
+        rayed = keep & ~standing  # only the other old marks need a ray: cleared if in view
+        if rayed.any():
+            keep[rayed] = ~self._in_view(robot, robot_yaw, old[rayed], occluders=visible)
         marks = tuple(mark for mark, kept in zip(self.marks, keep, strict=True) if kept)
         marks += tuple(PersonMark(float(x), float(y), now) for x, y in seen)
         self.visible_people = tuple((float(x), float(y)) for x, y in seen)

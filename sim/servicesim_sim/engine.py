@@ -29,7 +29,13 @@ import numpy as np
 
 from servicesim_sim import referee as rules
 from servicesim_sim.camera import render_front_camera
-from servicesim_sim.guest import LOST_DISTANCE, STOP_DISTANCE, Guest, GuestState
+from servicesim_sim.guest import (
+    DRIFT_TIME_TOLERANCE,
+    LOST_DISTANCE,
+    STOP_DISTANCE,
+    Guest,
+    GuestState,
+)
 from servicesim_sim.localisation import (
     IDENTITY,
     AmclModel,
@@ -384,7 +390,7 @@ class SimEngine:
         from the robot. A scheduled drift nobody follows for is skipped."""
         guest = self.guest
         due = False
-        while self._drifts and self.sim_time >= self._drifts[0]:
+        while self._drifts and self.sim_time >= self._drifts[0] - DRIFT_TIME_TOLERANCE:
             self._drifts.pop(0)
             due = True
         if not guest.following:

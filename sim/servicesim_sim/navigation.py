@@ -38,7 +38,7 @@ from typing import Literal
 
 import numpy as np
 
-from servicesim_sim.costmap import INSCRIBED, Costmap
+from servicesim_sim.costmap import INSCRIBED, Costmap, Lidar
 from servicesim_sim.planner import ComputePathToPoseError, Planner, PlanResult, path_length
 from servicesim_sim.world import OccupancyMap
 
@@ -203,13 +203,14 @@ class Navigator:
     def __init__(self, occupancy_map: OccupancyMap, *, max_speed: float = 0.5,
                  max_turn_rate: float = 1.0, xy_tolerance: float = 0.3,
                  yaw_tolerance: float = 0.262, rng: np.random.Generator,
-                 tuning: Tuning | None = None) -> None:
+                 tuning: Tuning | None = None, lidar: Lidar | None = None) -> None:
         self.tuning = tuning or Tuning()
         self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
         self.rng = rng
-        self.costmap = Costmap(occupancy_map, person_radius=self.tuning.person_radius)
+        self.costmap = Costmap(occupancy_map, person_radius=self.tuning.person_radius,
+                               lidar=lidar)
         self.planner = Planner(self.costmap, goal_tolerance=xy_tolerance)
         self.status: NavigationStatus = "idle"
         self.error_code = 0

@@ -309,7 +309,13 @@ SHIPPED_PICK_UP, SHIPPED_DROP_OFF = "FrontElevator", "PrivateCubicle_32_1"
 SHIPPED_GUEST = {"name": "human_20843", "x": -0.043, "y": 1.512, "yaw": 1.5708}
 SHIPPED_START = {"area": "PublicBathroomB", "x": 10.975, "y": 3.75, "yaw": 3.14}
 PEOPLE = {"walkers": 10, "idlers": 30}
-DRIFT = {"start_s": 200.0, "min_interval_s": 100.0, "max_interval_s": 300.0, "count": 30}
+SHIPPED_DRIFT_TIMES = (487, 654, 889, 1038, 1313, 1606, 1767, 1881, 2164, 2463, 2643, 2745, 2966,
+                       3171, 3418, 3581, 3862, 3989, 4145, 4358, 4616, 4892, 5039, 5306, 5515,
+                       5653, 5925, 6043, 6335, 6619)
+"""The shipped task's drift times in world sim seconds (``worlds/service.world`` 43207-43265, the
+FollowActorPlugin's ``drift_time`` elements); a seeded task draws its own by the rule below."""
+DRIFT = {"start_s": 200.0, "min_interval_s": 100.0, "max_interval_s": 300.0, "count": 30,
+         "times": list(SHIPPED_DRIFT_TIMES)}
 
 
 def closed_in_shipped() -> frozenset[str]:

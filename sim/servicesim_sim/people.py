@@ -50,6 +50,9 @@ PERSON_RADIUS = 0.25  # metres; a person's footprint seen as a disc
 WALKER_SPEED_RANGE = (0.9, 1.2)  # m/s
 WALKER_STOP_DISTANCE = 1.5  # anyone nearer than this ahead of a walker ... (obstacle_margin)
 WALKER_LANE_HALF_WIDTH = 0.4 * WALKER_STOP_DISTANCE  # ... and this near its line stops it
+ROBOT_BELOW_WALKER = 1.0  # metres: the stop distance is measured in 3-D (TrajectoryActorPlugin.cc
+# 186-199, ``modelPos.Length()``) from a walker's origin 1.0 m up (its waypoints' z, as the
+# guest's) to the robot's on the floor (``base_footprint``): the robot stops it from about 1.12 m
 WALKER_WALL_CLEARANCE = 0.5  # route nodes and straightened legs keep this far from walls
 WALKER_IDLER_CLEARANCE = 0.75  # ... and this far from idlers (beyond the lane's half-width)
 WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns back (ours: the
@@ -488,12 +491,13 @@ class Walker:
         self.waited = 0.0
         self.advance(0.0)
 
-    def blocked(self, points: Sequence[tuple[float, float]]) -> bool:
-        """Whether any point lies in the lane ahead: nearer than :data:`WALKER_STOP_DISTANCE`,
-        ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
-        walker's own position is never ahead of it)."""
+    def blocked(self, points: Sequence[tuple[float, float]], *, below: float = 0.0) -> bool:
+        """Whether any point lies in the lane ahead: nearer than :data:`WALKER_STOP_DISTANCE`
+        in 3-D (the points' origins ``below`` metres under the walker's), ahead of the walker
+        and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the walker's own position is
+        never ahead of it)."""
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
-        reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE
+        reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
         for px, py in points:
             dx, dy = px - x, py - y
             if (dx * dx + dy * dy < reach and dx * cos + dy * sin > 0.0
@@ -578,9 +582,10 @@ class Crowd:
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
         # idlers are left out: routes are drawn so that none ever stands in a walker's lane
-        fixed = [(robot[0], robot[1]), *others]
+        floor = [(robot[0], robot[1])]
         moving = [(w.person.x, w.person.y) for w in self._walkers]
-        stops = [(w.blocked(fixed), w.blocked(moving)) for w in self._walkers]
+        stops = [(w.blocked(floor, below=ROBOT_BELOW_WALKER) or w.blocked(others),
+                  w.blocked(moving)) for w in self._walkers]
         for walker, (by_people, by_walkers) in zip(self._walkers, stops, strict=True):
             if not (by_people or by_walkers):
                 walker.waited = 0.0

@@ -35,7 +35,8 @@ OUT_OF_RANGE_M = (2.6, 5.0)  # how far from the area centre an out-of-range gues
 START_GUEST_CLEARANCE_M = 1.5  # the robot's start pose keeps this far from the guest
 START_EDGE_MARGIN_M = 0.4  # and this far inside its area: a return within the 0.3 m goal
 # tolerance of the start pose must still put the robot's origin in the area (checkpoint 4)
-SHIPPED_DRIFT_SEED = 100  # the original's shipped world was generated with seed 100
+SHIPPED_DRIFT_SEED = 100  # the shipped task's people and knobs: the seed the original's shipped
+# world was generated with (its drift times are in the world file, `drift.times`)
 
 
 @dataclass(frozen=True)
@@ -114,12 +115,27 @@ def drift_schedule(spec: DriftSpec, *, rng: np.random.Generator,
     """Drift times in absolute world sim seconds, as the original's world template drew them:
     none before ``start_s``; the first ``min..max`` seconds after it, each next one ``min..max``
     seconds after the one before. ``scale`` shrinks (< 1) or stretches the whole schedule,
-    ``start_s`` and the intervals alike."""
+    ``start_s`` and the intervals alike.
+
+    Like Ruby's ``rand(min..max)`` in the template (``worlds/service.world.erb`` 360-363), an
+    interval between whole numbers of seconds is a whole number of seconds, each as likely
+    (the floor of a uniform draw over min..max + 1: one draw an interval, as before)."""
+    whole = spec.min_interval_s.is_integer() and spec.max_interval_s.is_integer()
     times, now = [], spec.start_s
     for _ in range(spec.count):
-        now += float(rng.uniform(spec.min_interval_s, spec.max_interval_s))
+        if whole:
+            now += math.floor(rng.uniform(spec.min_interval_s, spec.max_interval_s + 1.0))
+        else:
+            now += float(rng.uniform(spec.min_interval_s, spec.max_interval_s))
         times.append(round(now * scale, 3))
     return tuple(times)
+
+
+def fixed_drift_times(spec: DriftSpec, *, scale: float = 1.0) -> tuple[float, ...] | None:
+    """The world's own schedule for its fixed task, scaled as a drawn one would be."""
+    if spec.times is None:
+        return None
+    return tuple(round(time * scale, 3) for time in spec.times)
 
 
 def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
@@ -130,8 +146,10 @@ def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
         guest_x, guest_y = _out_of_range_spot(world, world.areas[task.pick_up],
                                               _spot_mask(world), rng)
         task = dataclasses.replace(task, guest_x=guest_x, guest_y=guest_y)
+    fixed = fixed_drift_times(world.drift, scale=difficulty.drift_scale)
     return Scenario(
-        task=task, drift_times=drift_schedule(world.drift, rng=rng, scale=difficulty.drift_scale),
+        task=task, drift_times=fixed if fixed is not None else drift_schedule(
+            world.drift, rng=rng, scale=difficulty.drift_scale),
         people_seed=int(rng.integers(2**31)), knob_seed=int(rng.integers(2**31)),
         difficulty=difficulty, seed=None,
     )

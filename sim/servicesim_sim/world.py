@@ -19,6 +19,7 @@ Design intent:
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -172,12 +173,15 @@ class PeopleSpec:
 
 @dataclass(frozen=True)
 class DriftSpec:
-    """When the guest drifts: first at ``start_s`` or later, then every min..max seconds."""
+    """When the guest drifts: first at ``start_s`` or later, then every min..max seconds;
+    ``times``, when given, is the world's own fixed schedule for its fixed task (the shipped
+    world file's), played when no seed draws one."""
 
     start_s: float = 200.0
     min_interval_s: float = 100.0
     max_interval_s: float = 300.0
     count: int = 30
+    times: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -605,16 +609,32 @@ def _drift(fields: _Fields) -> DriftSpec:
     if not fields.has("drift"):
         return DriftSpec()
     drift = fields.child("drift")
-    drift.reject_unknown(("start_s", "min_interval_s", "max_interval_s", "count"))
+    drift.reject_unknown(("start_s", "min_interval_s", "max_interval_s", "count", "times"))
     defaults = DriftSpec()
     spec = DriftSpec(
         start_s=drift.number("start_s", default=defaults.start_s),
         min_interval_s=drift.number("min_interval_s", default=defaults.min_interval_s),
         max_interval_s=drift.number("max_interval_s", default=defaults.max_interval_s),
         count=drift.integer("count", default=defaults.count),
+        times=_drift_times(drift),
     )
     _check_drift(drift, spec)
     return spec
+
+
+def _drift_times(drift: _Fields) -> tuple[float, ...] | None:
+    if not drift.has("times"):
+        return None
+    value = drift.raw("times")
+    if not (isinstance(value, list) and all(
+            isinstance(t, int | float) and not isinstance(t, bool) and math.isfinite(t)
+            for t in value)):
+        drift.fail(f"drift.times must be a list of sim times in seconds, not {_kind(value)}")
+    times = tuple(float(t) for t in value)
+    if any(later <= earlier for earlier, later in itertools.pairwise(times)) or (
+            times and times[0] < 0.0):
+        drift.fail("drift.times must rise, from 0 or more")
+    return times
 
 
 def _check_drift(fields: _Fields, spec: DriftSpec) -> None:

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from servicesim_sim.engine import TF_ERROR, SimEngine
+from servicesim_sim.office import SHIPPED_DRIFT_TIMES
 from servicesim_sim.scenario import Difficulty, make_scenario
 from servicesim_sim.world import DEFAULT_WORLD, World, load_world
 
@@ -147,14 +148,26 @@ def test_scheduled_and_forced_drifts_stop_the_guest_where_they_are() -> None:
 
 
 def test_drift_times_are_world_times_after_the_start_time_not_200_s_after_new_task() -> None:
+    for seed in range(8):
+        times = engine(seed=seed).scenario.drift_times
+        assert len(times) == 30
+        assert 300.0 <= times[0] <= 500.0  # start_time 200 + U(100, 300), as the original drew
+        gaps = [later - earlier for earlier, later in itertools.pairwise(times)]
+        assert all(100.0 <= gap <= 300.0 for gap in gaps)
+        assert all(time.is_integer() for time in times)  # Ruby's rand(100..300): whole seconds
+        hard = engine(seed=seed, difficulty=Difficulty.hard()).scenario.drift_times
+        assert 75.0 <= hard[0] <= 125.0  # hard scales the whole schedule by 0.25
+        assert all(25.0 <= b - a <= 75.0 for a, b in itertools.pairwise(hard))
+        assert all((4 * time).is_integer() for time in hard)
+
+
+def test_the_shipped_task_plays_the_shipped_worlds_drift_times() -> None:
+    # worlds/service.world 43207-43265
     times = engine().scenario.drift_times
-    assert len(times) == 30
-    assert 300.0 <= times[0] <= 500.0  # start_time 200 + U(100, 300), as the original drew
-    gaps = [later - earlier for earlier, later in itertools.pairwise(times)]
-    assert all(100.0 <= gap <= 300.0 for gap in gaps)
+    assert times[:4] == (487.0, 654.0, 889.0, 1038.0) and times[-1] == 6619.0
+    assert times == tuple(float(time) for time in SHIPPED_DRIFT_TIMES)
     hard = engine(difficulty=Difficulty.hard()).scenario.drift_times
-    assert 75.0 <= hard[0] <= 125.0  # hard scales the whole schedule by 0.25
-    assert all(25.0 <= b - a <= 75.0 for a, b in itertools.pairwise(hard))
+    assert hard == tuple(time * 0.25 for time in times)
 
 
 def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None:
@@ -166,11 +179,11 @@ def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None
     sim.new_task()
     at_pick_up_beside_guest(sim)
     assert sim.pickup("human_20843", "servicebot")[0]
-    while sim.sim_time < 5.9:
+    while sim.sim_time < 5.45:
         sim.step()
     assert sim.guest_state() == "following"
-    while sim.sim_time < 6.1:  # 3 s after new_task, not 6
-        sim.step()
+    while sim.sim_time < 5.55:  # 3 s after new_task, not 6, and 0.5 s early as the original's
+        sim.step()  # (FollowActorPlugin.cc 294-307: the first update within 0.5 s of the time)
     assert sim.guest_state() == "drifted"
     assert sim.referee.current == 1
 
@@ -361,6 +374,22 @@ def test_touching_a_person_costs_the_contact_penalty() -> None:
     sim.step()
     assert sim.referee.penalties.contact > 0.0
     assert sim.referee.penalties.approximation > 0.0
+
+
+def test_a_person_does_not_stop_the_robot_driving_into_them() -> None:
+    # ours: people are no physics bodies; the original's collision boxes would block the robot
+    # (worlds/actor_trajectory.erb 55-74, src/AttachModelPlugin.cc); docs/fidelity.md says so
+    sim = engine()
+    sim.new_task()
+    guest = (sim.guest.x, sim.guest.y)
+    sim.robot.x, sim.robot.y, sim.robot.yaw = guest[0] - 1.0, guest[1], 0.0
+    assert sim.world.map.is_free(guest[0] - 1.0, guest[1]) and sim.world.map.is_free(
+        guest[0] + 0.6, guest[1])  # floor all the way
+    sim.command_velocity(0.5, 0.0)
+    for _ in range(int(3.0 / sim.dt)):
+        sim.step()
+    assert sim.robot.x > guest[0]  # through the guest's disc
+    assert sim.referee.penalties.contact > 0.0
 
 
 def test_the_same_seed_gives_the_same_task_and_people() -> None:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.costmap import INSCRIBED, LETHAL, MAX_INFLATED, Costmap, Inflation
+from servicesim_sim.costmap import INSCRIBED, LETHAL, MAX_INFLATED, Costmap, Inflation, Lidar
 from servicesim_sim.navigation import (
     FollowPathError,
     NavigateToPoseError,
@@ -32,6 +32,10 @@ People = Callable[[float], list[tuple[float, float]]]
 
 
 # --------------------------------------------------------------------------- maps
+MARK_AT_ANY_RANGE = Lidar(mark_range=30.0)
+"""For tests of what the lidar sees: a costmap marking everyone it sees, not only within 3 m."""
+
+
 def room(width: float, height: float) -> np.ndarray:
     """A free rectangle inside a 0.1 m thick wall, as a grid."""
     grid = np.zeros((round(height / RESOLUTION), round(width / RESOLUTION)), dtype=np.int8)
@@ -94,8 +98,8 @@ class Unicycle:
         return not self.map.blocked_mask()[rows, cols].any()
 
 
-def navigator(occupancy_map: OccupancyMap) -> Navigator:
-    return Navigator(occupancy_map, rng=np.random.default_rng(7))
+def navigator(occupancy_map: OccupancyMap, *, lidar: Lidar | None = None) -> Navigator:
+    return Navigator(occupancy_map, rng=np.random.default_rng(7), lidar=lidar)
 
 
 def drive(nav: Navigator, robot: Unicycle, *, people: People = lambda now: [],
@@ -158,7 +162,7 @@ def test_the_grid_is_cropped_to_the_walls_and_coarser_than_the_map(occupied: int
 
 
 def test_a_person_in_view_is_marked_and_inflated() -> None:
-    costmap = Costmap(corridor_map(3.0))
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=2.0)
     assert [(mark.x, mark.y, mark.seen_at) for mark in costmap.marks] == [(6.0, 1.6, 2.0)]
     assert costmap.cost_at(6.0, 1.6) == LETHAL
@@ -171,7 +175,7 @@ def test_a_person_in_view_is_marked_and_inflated() -> None:
 def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_seen() -> None:
     grid = room(12.0, 3.2)
     wall(grid, 7.0, 0.0, 7.2, 2.0)  # a wall stub between the robot and (8, 1)
-    costmap = Costmap(occupancy(grid))
+    costmap = Costmap(occupancy(grid), lidar=MARK_AT_ANY_RANGE)
     behind, walled, hidden, shield = (0.5, 2.5), (8.0, 1.0), (10.0, 2.5), (5.0, 2.5)
     costmap.observe(3.0, 2.5, 0.0, [behind, walled, hidden, shield], now=0.0)
     assert [(mark.x, mark.y) for mark in costmap.marks] == [shield]
@@ -180,7 +184,7 @@ def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_
 def test_a_partition_one_cell_thick_hides_people_from_slanted_rays() -> None:
     grid = room(12.0, 3.2)
     wall(grid, 6.0, 0.0, 6.05, 2.5)  # 5 cm thick, open above y = 2.5
-    costmap = Costmap(occupancy(grid))
+    costmap = Costmap(occupancy(grid), lidar=MARK_AT_ANY_RANGE)
     slanted = [(9.0, 0.5 + 0.013 * k) for k in range(20)]  # many slopes through the partition
     costmap.observe(3.0, 2.8, 0.0, [*slanted, (9.0, 2.9)], now=0.0)
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(9.0, 2.9)]
@@ -189,13 +193,13 @@ def test_a_partition_one_cell_thick_hides_people_from_slanted_rays() -> None:
 def test_people_beyond_the_lidar_range_are_not_seen() -> None:
     grid = np.zeros((40, 700), dtype=np.int8)  # 35 x 2 m at 0.05 m
     grid[:2, :] = grid[-2:, :] = 100
-    costmap = Costmap(occupancy(grid))
+    costmap = Costmap(occupancy(grid), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(1.0, 1.0, 0.0, [(20.0, 1.0), (34.0, 1.0)], now=0.0)
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(20.0, 1.0)]
 
 
 def test_a_mark_out_of_view_stays_until_cleared() -> None:
-    costmap = Costmap(corridor_map(3.0))
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(3.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
     costmap.observe(3.0, 1.6, math.pi, [], now=1.0)  # turned away; the person left
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(6.0, 1.6)]
@@ -206,7 +210,7 @@ def test_a_mark_out_of_view_stays_until_cleared() -> None:
 
 
 def test_a_mark_seen_free_again_is_removed_and_a_mover_leaves_one_mark() -> None:
-    costmap = Costmap(corridor_map(3.0))
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
     costmap.observe(1.0, 1.6, 0.0, [(8.0, 1.0)], now=0.1)  # walked on, still in view
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(8.0, 1.0)]
@@ -216,7 +220,7 @@ def test_a_mark_seen_free_again_is_removed_and_a_mover_leaves_one_mark() -> None
 
 
 def test_costs_at_points_match_the_combined_grid_whether_or_not_it_was_built() -> None:
-    costmap = Costmap(occupancy(room(12.0, 6.0)))
+    costmap = Costmap(occupancy(room(12.0, 6.0)), lidar=MARK_AT_ANY_RANGE)
     rng = np.random.default_rng(3)
     people = [(3.0, 1.5), (4.0, 4.4), (6.0, 2.6), (6.4, 3.1), (9.0, 4.0), (10.5, 1.2)]
     costmap.observe(0.5, 3.0, 0.0, people, now=0.0)
@@ -233,7 +237,7 @@ def test_costs_at_points_match_the_combined_grid_whether_or_not_it_was_built() -
 
 
 def test_the_costmap_version_changes_only_when_the_marks_do() -> None:
-    costmap = Costmap(corridor_map(3.0))
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
     version = costmap.version
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.1)
@@ -241,6 +245,23 @@ def test_the_costmap_version_changes_only_when_the_marks_do() -> None:
     costmap.observe(1.0, 1.6, 0.0, [(6.5, 1.6)], now=0.2)
     assert costmap.version > version
 
+
+
+def test_people_are_marked_only_within_the_competitions_obstacle_range_of_3_m() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(1.0, 1.6, 0.0, [(4.2, 1.6), (6.0, 2.6)], now=0.0)  # surfaces 2.9, 4.8 m
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(4.2, 1.6)]
+    assert costmap.cost_at(6.0, 2.6) == 0
+    assert costmap.visible_people == ((4.2, 1.6),)
+
+
+def test_a_mark_is_cleared_from_beyond_the_marking_range_once_nobody_stands_there() -> None:
+    costmap = Costmap(corridor_map(3.0))
+    costmap.observe(3.5, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
+    costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=1.0)  # backed off: seen, out of range
+    assert [(mark.x, mark.y, mark.seen_at) for mark in costmap.marks] == [(6.0, 1.6, 0.0)]
+    costmap.observe(1.0, 1.6, 0.0, [], now=2.0)  # gone: the ray to the wall clears it
+    assert costmap.marks == ()
 
 # --------------------------------------------------------------------------- planner
 def test_plan_goes_around_a_wall() -> None:
@@ -315,7 +336,7 @@ def test_start_and_goal_off_the_map_or_deep_in_a_wall_are_reported() -> None:
 
 
 def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
-    costmap = Costmap(corridor_map(3.0))
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=0.0)
     planner = Planner(costmap)
     around = planner.plan((1.0, 1.6), (11.0, 1.6))
@@ -476,7 +497,7 @@ def test_a_long_detour_is_not_taken_for_a_person_briefly_in_the_way() -> None:
 
 def test_a_person_standing_in_the_lower_corridor_sends_the_robot_round_the_top() -> None:
     occupancy_map = two_corridor_map()
-    nav = navigator(occupancy_map)
+    nav = navigator(occupancy_map, lidar=MARK_AT_ANY_RANGE)
     robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
     nav.start(11.0, 0.8, 0.0, now=0.0)
     heights = []
@@ -493,7 +514,7 @@ def test_a_person_standing_in_the_lower_corridor_sends_the_robot_round_the_top()
 
 def test_a_person_blocking_a_corridor_makes_the_robot_wait_then_abort() -> None:
     occupancy_map = corridor_map(1.4)  # a person in the middle leaves 0.4 m each side
-    nav = navigator(occupancy_map)
+    nav = navigator(occupancy_map, lidar=MARK_AT_ANY_RANGE)
     robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
     nav.start(11.0, 0.8, 0.0, now=0.0)
     ended = drive(nav, robot, people=lambda now: [(6.0, 0.8)], until=60.0)
@@ -508,7 +529,7 @@ def test_a_person_blocking_a_corridor_makes_the_robot_wait_then_abort() -> None:
 
 def test_the_robot_goes_on_once_the_blocking_person_leaves() -> None:
     occupancy_map = corridor_map(1.4)
-    nav = navigator(occupancy_map)
+    nav = navigator(occupancy_map, lidar=MARK_AT_ANY_RANGE)
     robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
     nav.start(11.0, 0.8, 0.0, now=0.0)
     drive(nav, robot, people=lambda now: [(6.0, 0.8)] if now < 5.0 else [], until=90.0)
@@ -590,7 +611,7 @@ def test_an_unknown_pose_or_goal_aborts() -> None:
 
 
 def test_clear_costmaps_forgets_people_and_idle_commands_are_zero() -> None:
-    nav = navigator(corridor_map(3.0))
+    nav = navigator(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
     assert nav.status == "idle"
     assert nav.command(pose=(1.0, 1.6, 0.0), people=[(6.0, 1.6)], now=0.0) == (0.0, 0.0)
     assert len(nav.costmap.marks) == 1
@@ -646,7 +667,7 @@ def test_a_clearly_shorter_way_opened_by_a_person_leaving_is_taken() -> None:
 
 def test_on_the_shortest_way_no_periodic_replan_is_spent() -> None:
     occupancy_map = occupancy(room(14.0, 3.0))
-    nav = navigator(occupancy_map)
+    nav = navigator(occupancy_map, lidar=MARK_AT_ANY_RANGE)
     plans = CountedPlans(nav)
     robot = Unicycle(occupancy_map, 1.0, 1.5, 0.0)
     nav.start(13.0, 1.5, 0.0, now=0.0)

@@ -150,7 +150,7 @@ def steps_moved(people: Crowd, walker: Person, robot: Callable[[Person], Robot])
 def test_a_walker_stops_for_a_robot_in_front_and_walks_on_when_it_is_gone() -> None:
     people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
-    assert steps_moved(people, walker, robot_at(distance=1.2, bearing=math.radians(25.0))) == 0
+    assert steps_moved(people, walker, robot_at(distance=1.0, bearing=math.radians(25.0))) == 0
     assert steps_moved(people, walker, far_away) > 0.85
 
 
@@ -160,12 +160,13 @@ def at_lane_offset(*, ahead: float, side: float) -> Callable[[Person], Robot]:
 
 
 @pytest.mark.parametrize(("ahead", "side"), [
-    (1.45, 0.0),  # straight ahead, just inside 1.5 m
-    (1.2, 0.55),  # to one side, just inside the 0.6 m half-width
+    (1.1, 0.0),  # straight ahead, just inside the 1.12 m the 3-D 1.5 m leaves on the floor
+    (0.9, 0.55),  # to one side, just inside the 0.6 m half-width (1.06 m away)
     (0.3, -0.55),  # close, to the other side
 ])
 def test_a_walker_stops_for_a_robot_in_its_lane(ahead: float, side: float) -> None:
-    # TrajectoryActorPlugin.cc 197-199: nearer than 1.5 m, ahead, within 0.4 x 1.5 m sideways
+    # TrajectoryActorPlugin.cc 186-199: nearer than 1.5 m in 3-D from the walker's origin 1 m
+    # up to the robot's on the floor, ahead, within 0.4 x 1.5 m sideways
     people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
     assert steps_moved(people, walker, at_lane_offset(ahead=ahead, side=side)) == 0
@@ -177,6 +178,7 @@ def test_a_walker_stops_for_a_robot_in_its_lane(ahead: float, side: float) -> No
     (0.2, 0.78),  # close at its shoulder (the old give-way disc stopped for this)
     (1.55, 0.0),  # ahead but further than 1.5 m
     (1.3, 0.8),  # ahead and within 1.5 m, but beside the lane
+    (1.2, 0.0),  # straight ahead within 1.5 m on the floor, but 1.56 m from the walker's origin
 ])
 def test_a_walker_does_not_stop_for_a_robot_outside_its_lane(ahead: float, side: float) -> None:
     people = crowd(5, walkers=1)
@@ -184,11 +186,25 @@ def test_a_walker_does_not_stop_for_a_robot_outside_its_lane(ahead: float, side:
     assert steps_moved(people, walker, at_lane_offset(ahead=ahead, side=side)) > 0.85
 
 
+def test_the_guest_stops_a_walker_from_the_full_1_5_m_the_robot_does_not() -> None:
+    # the guest's origin is 1 m up like the walker's (service.world.erb 1152-1159)
+    spot = robot_at(distance=1.45, bearing=0.0)
+    people = crowd(5, walkers=1)
+    walker = walkers_of(people)[0]
+    assert steps_moved(people, walker, spot) > 0.85  # the robot there: it walks on
+    people = crowd(5, walkers=1)
+    walker = walkers_of(people)[0]
+    guest_x, guest_y, _ = spot(walker)
+    before = (walker.x, walker.y)
+    people.step(0.1, robot=FAR_AWAY, others=[(guest_x, guest_y)])
+    assert (walker.x, walker.y) == before
+
+
 def test_a_walker_waits_for_the_robot_as_long_as_it_stays_in_the_lane() -> None:
     # TrajectoryActorPlugin.cc 250: no time-out, it waits while the way is blocked
     people = crowd(5, walkers=1)
     walker = walkers_of(people)[0]
-    robot = robot_at(distance=1.2, bearing=0.0)(walker)  # stays where it was put
+    robot = robot_at(distance=1.0, bearing=0.0)(walker)  # stays where it was put
     before = (walker.x, walker.y)
     for _ in range(600):  # a sim minute
         people.step(0.1, robot=robot)
@@ -200,7 +216,7 @@ def test_a_walker_with_patience_turns_back_after_it() -> None:
     people = Crowd(office_map(), rng=np.random.default_rng(5), walkers=1, idlers=12,
                    taken_names=set(), keep_clear=KEEP_CLEAR, walker_patience_s=5.0)
     walker = walkers_of(people)[0]
-    robot = robot_at(distance=1.2, bearing=0.0)(walker)
+    robot = robot_at(distance=1.0, bearing=0.0)(walker)
     blocked = 0.0
     while steps_moved(people, walker, lambda _: robot) == 0.0:
         blocked += 1.0
