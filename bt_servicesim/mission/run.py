@@ -211,10 +211,10 @@ class MissionRun:
         self._await_discovery(node, executor)
         self._join_lockstep(client, executor)
         _keep_out_of_the_collector()
+        started_ns = node.get_clock().now().nanoseconds
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
-        limit_ns = int((self.settings.time_limit_s + SIM_TIME_BACKSTOP_S) * 1e9)
         next_exit_check = time.monotonic()
         looked_at = -1
         while not executive.finished:
@@ -232,7 +232,8 @@ class MissionRun:
                 next_exit_check = time.monotonic() + SIMULATOR_CHECK_PERIOD_S
                 if self.simulator is not None and self.simulator.exit_code() is not None:
                     return self._fail(self.simulator.describe_exit(), executive, node)
-            if now_ns > limit_ns:
+            if outlived_time_limit(started_ns=started_ns, now_ns=now_ns,
+                                   time_limit_s=self.settings.time_limit_s):
                 return self._fail("the mission tree outlived its time limit", executive, node)
             if node.lockstep is not None:
                 node.lockstep.check_stalled()
@@ -389,6 +390,14 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
+
+
+def outlived_time_limit(*, started_ns: int, now_ns: int, time_limit_s: float) -> bool:
+    """Whether a mission that started at sim time ``started_ns`` has run
+    :data:`SIM_TIME_BACKSTOP_S` past its time limit by ``now_ns``: the run's backstop, should
+    the tree not end itself. Counted from the start, as the tree's own limits are: a backend's
+    clock need not start at zero (Gazebo's runs from its launch, a robot's is system time)."""
+    return now_ns - started_ns > int((time_limit_s + SIM_TIME_BACKSTOP_S) * 1e9)
 
 
 def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:

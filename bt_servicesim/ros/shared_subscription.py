@@ -16,9 +16,16 @@ executive from ticking on time. So readers in one node share a subscription per 
   which are not taken here;
   A reader that only keeps the latest message (``latest_only``) gets the newest of a burst
   alone, and nothing is decoded for the others;
-* the subscription has the first reader's QoS. A later reader whose QoS asks for more
-  (reliable over best effort, transient local over volatile, a deeper history) gets a
-  subscription of its own: sharing never weakens what a reader asked for;
+* the subscription has the first reader's QoS. A later reader shares it only if it has the
+  same reliability and at least the durability (transient local over volatile) and history
+  depth the reader asked for; otherwise the reader gets a subscription of its own.
+  Reliability must match, not merely be "at least": a reliable reader does not match a
+  best-effort publisher, so a best-effort reader (the tree's sensor readers ask for
+  ``qos_profile_sensor_data``) on a reliable subscription would hear nothing from a backend
+  that publishes best effort, and a reliable reader on a best-effort one could lose messages.
+  In lockstep the node makes every subscription reliable
+  (:class:`~bt_servicesim.ros.node.ExecutiveNode`), so there a best-effort request is matched
+  as the reliable one it becomes;
 * a transient-local (latched) subscription keeps the last messages its history holds and
   hands them to a latched reader that joins later, at once, as DDS would have given a
   subscription of its own: the map, published once, reaches the tree's reader however late
@@ -35,9 +42,11 @@ from typing import Any
 
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
+
+from bt_servicesim.ros.node import ExecutiveNode, reliable
 
 __all__ = ["Reader", "SharedSubscription", "queued_raw_messages", "shared_subscription"]
 
@@ -74,15 +83,15 @@ class SharedSubscription:
             message_type, topic, self._on_data, qos, raw=True)
 
     def covers(self, qos: QoSProfile) -> bool:
-        """Whether this subscription gives a reader at least what ``qos`` asks for."""
+        """Whether this subscription hears the publishers ``qos`` would (the same reliability)
+        and keeps at least what it asks for (durability and history)."""
         have, want = self.qos, qos
-        reliable = (have.reliability == ReliabilityPolicy.RELIABLE
-                    or want.reliability != ReliabilityPolicy.RELIABLE)
+        same_reliability = have.reliability == want.reliability
         durable = (have.durability == DurabilityPolicy.TRANSIENT_LOCAL
                    or want.durability != DurabilityPolicy.TRANSIENT_LOCAL)
         deep = have.history == HistoryPolicy.KEEP_ALL or (
             want.history != HistoryPolicy.KEEP_ALL and have.depth >= want.depth)
-        return reliable and durable and deep
+        return same_reliability and durable and deep
 
     def add(self, callback: Callable[[Any], None], *, raw: bool, latest_only: bool,
             latched: bool) -> Reader:
@@ -136,7 +145,7 @@ def shared_subscription(node: Node, message_type: type, topic: str,
     ``callback`` gets each message (serialised bytes with ``raw=True``), or with
     ``latest_only=True`` the newest of each burst that arrived together.
     """
-    profile = qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos)
+    profile = _requested_on(node, qos)
     latched = profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
     shared_list = _registry(node).setdefault((topic, message_type), [])
     for shared in shared_list:
@@ -158,6 +167,14 @@ def queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:
         if taken is None:
             return
         yield taken[0]
+
+
+def _requested_on(node: Node, qos: QoSProfile | int) -> QoSProfile:
+    """``qos`` as a subscription of ``node`` gets it: in lockstep, reliable
+    (:attr:`~bt_servicesim.ros.node.ExecutiveNode.reliable_subscriptions`)."""
+    if isinstance(node, ExecutiveNode) and node.reliable_subscriptions:
+        qos = reliable(qos)
+    return qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos)
 
 
 def _registry(node: Node) -> dict[tuple[str, type], list[SharedSubscription]]:

@@ -11,6 +11,16 @@ node and the attribute:
   to the type the constructor declares (int, float or bool);
 - ``memory`` of a Sequence or Fallback is ``true`` or ``false``; ``policy`` of a Parallel is one
   py_trees knows.
+
+It also refuses what would make a mission read the wall clock or differ from one load to the
+next, since a seed has to replay the same mission:
+
+- py_trees' wall-clock nodes (:data:`WALL_CLOCK_NODES`: the ``Timeout`` decorator, and the
+  ``Timer`` leaf should it ever be registered), each with the sim-time node to use instead;
+- a ``<SubTree>`` without a ``name``, and a node that seeds itself from its name (one taking a
+  ``seed``, such as JitterGoal) given neither a name nor a seed: py_trees names those with a
+  random uuid, so their qualified names and those of the nodes under them, and the seeds
+  derived from them, would change on every load.
 """
 
 from __future__ import annotations
@@ -26,6 +36,11 @@ from py_trees.ports import PortsMixin
 __all__ = ["tree_file_problems"]
 
 PARALLEL_POLICIES = ("success_on_all", "success_on_one", "success_on_selected")
+WALL_CLOCK_NODES = {"Timeout": "SimTimeout", "Timer": "SimWait"}
+"""py_trees' nodes that read the wall clock, each with this project's node on sim time to use
+instead. Of what py_trees' XML parser builds, only the ``Timeout`` decorator reads it; its
+``Timer`` leaf is refused by name too, in case it is ever registered."""
+SUBTREE_TAGS = ("subtree", "subtreeplus")
 _NOT_ARGUMENTS = {"name", "child", "children", "behaviour_class_name"}
 
 
@@ -35,22 +50,52 @@ def tree_file_problems(root: ElementTree.Element,
     decorators = _py_trees_decorators()
     for tree in root.findall("BehaviorTree"):
         for element in tree.iter():
-            where = f"<{element.tag} name=\"{element.get('name', '')}\">"
-            cls = registry.get(element.tag) or decorators.get(element.tag.lower())
-            if cls is not None:
-                yield from (f"{where}: {problem}" for problem in _node_problems(element, cls))
-            elif element.tag.lower() in ("sequence", "fallback", "selector"):
-                memory = element.get("memory", "true").lower()
-                if memory not in ("true", "false"):
-                    yield f'{where}: memory="{element.get("memory")}" is not true or false'
-            elif element.tag.lower() == "parallel":
-                policy = element.get("policy", "success_on_one")
-                if policy not in PARALLEL_POLICIES:
-                    yield (f'{where}: policy="{policy}" is not one of '
-                           f"{', '.join(PARALLEL_POLICIES)}")
+            yield from (f"{_where(element)}: {problem}" for problem
+                        in _element_problems(element, registry=registry, decorators=decorators))
+
+
+def _element_problems(element: ElementTree.Element, *, registry: Mapping[str, type],
+                      decorators: Mapping[str, type]) -> Iterator[str]:
+    tag = element.tag.lower()
+    cls = registry.get(element.tag) or decorators.get(tag)
+    wall_clock = _wall_clock_node(element.tag, registry=registry)
+    if wall_clock is not None:
+        yield (f"py_trees' {wall_clock} runs on the wall clock, which a replay does not "
+               f"repeat: use {WALL_CLOCK_NODES[wall_clock]}, on sim time")
+    elif cls is not None:
+        yield from _node_problems(element, cls)
+    elif tag in SUBTREE_TAGS and not element.get("name"):
+        yield ("a SubTree needs a name: py_trees names it with a random uuid, and the names "
+               "under it (and the seeds JitterGoal derives from them) would change every load")
+    elif tag in ("sequence", "fallback", "selector"):
+        memory = element.get("memory", "true").lower()
+        if memory not in ("true", "false"):
+            yield f'memory="{element.get("memory")}" is not true or false'
+    elif tag == "parallel":
+        policy = element.get("policy", "success_on_one")
+        if policy not in PARALLEL_POLICIES:
+            yield f'policy="{policy}" is not one of {", ".join(PARALLEL_POLICIES)}'
+
+
+def _where(element: ElementTree.Element) -> str:
+    """The element by its name, or when it has none by all its attributes."""
+    shown = {"name": element.attrib["name"]} if "name" in element.attrib else element.attrib
+    attributes = "".join(f' {key}="{value}"' for key, value in shown.items())
+    return f"<{element.tag}{attributes}>"
+
+
+def _wall_clock_node(tag: str, *, registry: Mapping[str, type]) -> str | None:
+    """py_trees' wall-clock node that ``tag`` builds (its parser matches decorators in any
+    case), or None; a node of this project's registry under that tag is this project's."""
+    if tag in registry:
+        return None
+    return next((name for name in WALL_CLOCK_NODES if name.lower() == tag.lower()), None)
 
 
 def _node_problems(element: ElementTree.Element, cls: type) -> Iterator[str]:
+    if _seeds_from_name(cls) and not element.get("name") and "seed" not in element.attrib:
+        yield ("needs a name or a seed: py_trees names it with a random uuid, and it seeds "
+               "itself from its name, so each load would draw different numbers")
     ports: dict[str, typing.Any] = {}
     if issubclass(cls, PortsMixin):
         ports = {**cls.input_ports(), **cls.output_ports()}
@@ -76,6 +121,14 @@ def _constructor_hints(cls: type) -> dict[str, type]:
     parameters = inspect.signature(cls.__init__).parameters
     return {name: hint for name, hint in hints.items()
             if name in parameters and hint in (int, float, bool)}
+
+
+def _seeds_from_name(cls: type) -> bool:
+    """Whether ``cls`` takes a ``seed`` and so, given none, seeds itself from its name."""
+    try:
+        return "seed" in inspect.signature(cls.__init__).parameters
+    except (TypeError, ValueError):  # no signature to read
+        return False
 
 
 def _converts(value: str, expected: type) -> bool:

@@ -48,6 +48,11 @@ def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[s
          "</BehaviorTree></root>", "Teleport"),
         ("<root main_tree_to_execute='Other'><BehaviorTree ID='M'><Sequence name='S'/>"
          "</BehaviorTree></root>", "Other"),
+        ("<root main_tree_to_execute='M'><BehaviorTree ID='M'><Timeout name='T' duration='5'>"
+         "<SimWait name='W' seconds='1'/></Timeout></BehaviorTree></root>", "use SimTimeout"),
+        ("<root main_tree_to_execute='M'><BehaviorTree ID='M'><SubTree ID='W'/></BehaviorTree>"
+         "<BehaviorTree ID='W'><SimWait name='W' seconds='1'/></BehaviorTree></root>",
+         "a SubTree needs a name"),
     ],
 )
 def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content: str,

@@ -1,4 +1,5 @@
-"""The run's start-up gate: the tree starts once every server its executive calls is there."""
+"""The run's start-up gate: the tree starts once every server its executive calls is there; its
+sim-time backstop counts from the mission's start."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from rclpy.node import Node
 from std_srvs.srv import Empty
 
 from bt_servicesim.mission import run as mission_run
-from bt_servicesim.mission.run import MissionRun
+from bt_servicesim.mission.run import SIM_TIME_BACKSTOP_S, MissionRun, outlived_time_limit
 
 
 def test_the_run_waits_until_every_client_has_its_server(ros_context: Any) -> None:
@@ -46,3 +47,21 @@ def test_a_server_that_never_comes_holds_the_run_only_until_the_limit(
         assert not missing.service_is_ready()
     finally:
         executive.destroy_node()
+
+
+SECOND_NS = 10**9
+
+
+@pytest.mark.parametrize(("since_start_s", "outlived"), [
+    (0.0, False),
+    (30.0 + SIM_TIME_BACKSTOP_S, False),  # the limit and the backstop's grace, to the second
+    (30.0 + SIM_TIME_BACKSTOP_S + 0.001, True),
+])
+def test_the_backstop_counts_from_the_missions_start_not_the_clocks_zero(
+        since_start_s: float, outlived: bool) -> None:
+    """A backend whose clock already reads 5000 s (Gazebo running since its launch) gives a
+    30 s mission 30 s and the backstop's grace, not nothing."""
+    started_ns = 5000 * SECOND_NS
+    now_ns = started_ns + round(since_start_s * SECOND_NS)
+    assert outlived_time_limit(started_ns=started_ns, now_ns=now_ns,
+                               time_limit_s=30.0) is outlived

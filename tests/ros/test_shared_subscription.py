@@ -1,5 +1,6 @@
-"""Shared subscriptions: one per topic and node while the QoS allows, every waiting message to
-every reader in one wake-up, bytes or decoded, and gone with the last reader."""
+"""Shared subscriptions: one per topic and node while the QoS allows (the same reliability, at
+least the durability and depth), every waiting message to every reader in one wake-up, bytes or
+decoded, and gone with the last reader."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
     DurabilityPolicy,
+    HistoryPolicy,
     QoSProfile,
     ReliabilityPolicy,
     qos_profile_sensor_data,
@@ -19,7 +21,8 @@ from rclpy.qos import (
 from rclpy.serialization import deserialize_message
 from std_msgs.msg import Int32
 
-from bt_servicesim.ros.shared_subscription import shared_subscription
+from bt_servicesim.ros.node import ExecutiveNode
+from bt_servicesim.ros.shared_subscription import SharedSubscription, shared_subscription
 from tests.fakes import spin_until, wait_for_subscription
 
 RELIABLE_50 = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
@@ -58,13 +61,81 @@ def test_readers_asking_no_more_than_the_first_share_its_subscription(
         nodes: tuple[Node, Node, SingleThreadedExecutor]) -> None:
     node, _, _ = nodes
     shared_subscription(node, Int32, "/shared/a", print, RELIABLE_50, raw=True)
-    shared_subscription(node, Int32, "/shared/a", print, qos_profile_sensor_data)
     shared_subscription(node, Int32, "/shared/a", print, 10)
     assert subscription_count(node) == 1
+    shared_subscription(node, Int32, "/shared/a", print, qos_profile_sensor_data)  # best effort
     shared_subscription(node, Int32, "/shared/a", print, LATCHED)  # asks for transient local
     shared_subscription(node, Int32, "/shared/a", print, 100)  # asks for a deeper history
     shared_subscription(node, Int32, "/shared/b", print, 10)  # another topic
-    assert subscription_count(node) == 4
+    assert subscription_count(node) == 5
+
+
+BEST_EFFORT_5 = QoSProfile(depth=5, reliability=ReliabilityPolicy.BEST_EFFORT)
+BEST_EFFORT_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
+KEEP_ALL = QoSProfile(depth=1, history=HistoryPolicy.KEEP_ALL,
+                      reliability=ReliabilityPolicy.RELIABLE)
+
+
+@pytest.mark.parametrize(("have", "want", "covered"), [
+    (RELIABLE_50, BEST_EFFORT_5, False),  # a reliable reader hears no best-effort publisher
+    (BEST_EFFORT_5, RELIABLE_50, False),  # a best-effort one would drop what was asked for
+    (BEST_EFFORT_5, qos_profile_sensor_data, True),
+    (RELIABLE_50, QoSProfile(depth=10), True),  # reliable by default, and not as deep
+    (RELIABLE_50, QoSProfile(depth=100), False),  # deeper
+    (KEEP_ALL, RELIABLE_50, True),
+    (RELIABLE_50, KEEP_ALL, False),
+    (LATCHED, QoSProfile(depth=1), True),  # transient local covers volatile
+    (QoSProfile(depth=1), LATCHED, False),
+    (BEST_EFFORT_LATCHED, BEST_EFFORT_5, False),  # transient local, but not as deep
+    (BEST_EFFORT_LATCHED, QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
+     True),
+])
+def test_a_subscription_covers_a_request_of_the_same_reliability_asking_no_more(
+        nodes: tuple[Node, Node, SingleThreadedExecutor], have: QoSProfile, want: QoSProfile,
+        covered: bool) -> None:
+    node, _, _ = nodes
+    assert SharedSubscription(node, Int32, "/shared/a", have).covers(want) is covered
+
+
+@pytest.fixture
+def executive(ros_context: Context) -> Iterator[tuple[ExecutiveNode, Node,
+                                                      SingleThreadedExecutor]]:
+    reader = ExecutiveNode("shared_executive", context=ros_context)
+    writer = Node("shared_writer", context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(reader)
+    yield reader, writer, executor
+    executor.shutdown()
+    reader.destroy_node()
+    writer.destroy_node()
+
+
+def test_a_best_effort_reader_after_a_reliable_one_hears_a_best_effort_publisher(
+        executive: tuple[ExecutiveNode, Node, SingleThreadedExecutor]) -> None:
+    """The run's recorder reads odometry and RFID reliably before the tree's sensor readers
+    ask for best effort: on a backend publishing best effort, the tree must still hear."""
+    node, writer, executor = executive
+    recorded: list[Int32] = []
+    sensed: list[Int32] = []
+    shared_subscription(node, Int32, "/shared/sensor", recorded.append, RELIABLE_50)
+    shared_subscription(node, Int32, "/shared/sensor", sensed.append, qos_profile_sensor_data)
+    publisher = writer.create_publisher(Int32, "/shared/sensor", qos_profile_sensor_data)
+    spin_until(executor, lambda: bool(sensed), "the best-effort reader to hear",
+               before=lambda: publisher.publish(Int32(data=7)), limit_s=10.0, step_s=0.05)
+    assert sensed[0].data == 7 and recorded == []  # the reliable reader matches no such writer
+
+
+def test_in_lockstep_a_best_effort_reader_shares_a_reliable_subscription(
+        executive: tuple[ExecutiveNode, Node, SingleThreadedExecutor]) -> None:
+    """In lockstep every subscription of the node is made reliable, so the tree's sensor
+    readers still ride on the recorder's subscription: one per topic, as before."""
+    node, _, _ = executive
+    node.reliable_subscriptions = True
+    before = subscription_count(node)  # rclpy's own /clock reader
+    shared_subscription(node, Int32, "/shared/sensor", print, RELIABLE_50, raw=True)
+    shared_subscription(node, Int32, "/shared/sensor", print, qos_profile_sensor_data)
+    assert subscription_count(node) == before + 1
 
 
 def test_a_best_effort_subscription_is_not_shared_with_a_reader_wanting_reliable(
