@@ -85,7 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
         "Run seeded missions for each executive on the same seeds and compare them."))
     parser.add_argument("--episodes", type=int, default=10, help="episodes per scenario set")
     parser.add_argument("--scenarios", default="default,random,hard",
-                        help="comma list of scenario sets: default, random, hard")
+                        help="comma list of scenario sets: default, random, hard, "
+                        "original-guest (default: the first three)")
     parser.add_argument("--executive", default="bt,baseline",
                         help="comma list of executives: bt, baseline")
     parser.add_argument("--jobs", type=int, default=2, help="episodes run at once")

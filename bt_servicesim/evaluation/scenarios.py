@@ -26,5 +26,8 @@ SCENARIO_SETS = {
         ScenarioSet("random", seeded=True, description="seeded random tasks"),
         ScenarioSet("hard", seeded=True, sim_args=("--difficulty", "hard"),
                     description="seeded random tasks, every difficulty knob turned up"),
+        ScenarioSet("original-guest", seeded=True, sim_args=("--guest-path", "straight"),
+                    description="the random set's tasks with the original's guest, who walks "
+                    "straight at the robot (through walls) instead of along its trail"),
     )
 }

@@ -314,6 +314,19 @@ def test_resume_reruns_an_episode_played_with_other_settings(tmp_path: Path) -> 
     assert not rows[0].get("resumed") and rows[0]["exit_code"] == 3
 
 
+def test_the_original_guest_set_plays_the_random_sets_tasks_with_the_straight_guest(
+        tmp_path: Path) -> None:
+    chosen = settings(tmp_path, scenarios=("random", "original-guest"))
+    plan = list(plan_episodes(chosen))
+    for index in range(2):
+        random, original = (run_command(next(e for e in plan if e.scenario == name
+                                             and e.index == index), chosen)
+                            for name in ("random", "original-guest"))
+        assert random[random.index("--seed") + 1] == original[original.index("--seed") + 1]
+        assert original[-2:] == ["--sim-arg=--guest-path", "--sim-arg=straight"]
+        assert "--sim-arg=--guest-path" not in random
+
+
 def test_run_command_for_each_scenario_set(tmp_path: Path) -> None:
     chosen = settings(tmp_path, scenarios=("default", "hard"), speed=2.0)
     plan = list(plan_episodes(chosen))
