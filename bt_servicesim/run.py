@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
 from bt_servicesim.mission.head_start import HeadStart
 from bt_servicesim.mission.settings import (
+    CLOCKS,
     DEFAULT_SPEED,
     DEFAULT_TIME_LIMIT_S,
     EXECUTIVES,
@@ -93,6 +94,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--foxglove", nargs="?", const=str(FOXGLOVE_PORT), metavar="[ADDR:]PORT",
                         help="serve the live topics to Foxglove over WebSocket on "
                         f"127.0.0.1:PORT (default {FOXGLOVE_PORT}), or on ADDR:PORT")
+    parser.add_argument("--clock", choices=CLOCKS, default="sim",
+                        help="keep time by the backend's /clock (sim, the default: a simulator, "
+                        "Gazebo) or by the system clock (system: a real robot, which publishes "
+                        "no /clock; only with --attach)")
     parser.add_argument("--free-running", action="store_true",
                         help="do not join the simulator's lockstep even where it offers it: "
                         "the tree ticks on /clock as it would on Gazebo (runs may not replay)")
@@ -124,6 +129,9 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         raise UsageError(f"--time-limit {args.time_limit}: must be more than 0 and at most "
                          f"{MAX_TIME_LIMIT_S:.0f} sim seconds")
     groot = None if args.groot is None else groot_address(args.groot)
+    if args.clock == "system" and not args.attach:
+        raise UsageError("--clock system: only with --attach; the run's own simulator keeps "
+                         "sim time")
     if groot is not None and args.executive != "bt":
         raise UsageError(f"--groot shows a behaviour tree; the {args.executive} executive has none")
     return RunSettings(
@@ -132,7 +140,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove), free_running=args.free_running,
-        trajectory=args.trajectory,
+        trajectory=args.trajectory, clock=args.clock,
     )
 
 

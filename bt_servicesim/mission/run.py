@@ -55,7 +55,11 @@ from bt_servicesim.mission.stopping import (
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.ros import lockstep
-from bt_servicesim.ros.discovery import await_backend_discovery
+from bt_servicesim.ros.discovery import (
+    SIM_CLOCK_PROBE,
+    SYSTEM_CLOCK_PROBE,
+    await_backend_discovery,
+)
 from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
@@ -117,7 +121,7 @@ class MissionRun:
                 if self.simulator is not None:
                     self.simulator.start()
                 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-                return self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
+                return self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
                 return self._stopped_while_starting(stop, stops)
             finally:
@@ -135,12 +139,17 @@ class MissionRun:
         with StopSignals() as stops:
             write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
-                code = self._execute_on(ExecutiveNode("bt_servicesim_executive"), stops)
+                code = self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
                 return self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
             return code if stops.first is None or code >= 128 else 128 + stops.first
+
+    def _node(self) -> ExecutiveNode:
+        """The executive's node, on sim time unless the run keeps the system clock."""
+        return ExecutiveNode("bt_servicesim_executive",
+                             use_sim_time=self.settings.clock == "sim")
 
     def _stopped_while_starting(self, stop: BaseException, stops: StopSignals) -> int:
         stops.hold(stop)
@@ -212,6 +221,7 @@ class MissionRun:
         self._join_lockstep(client, executor)
         _keep_out_of_the_collector()
         started_ns = node.get_clock().now().nanoseconds
+        shown_from_ns = started_ns if self.settings.clock == "system" else 0  # not the epoch
         executive.start()
         view = ProgressView(headless=self.settings.headless,
                             tree_root=records.tree.root if records.tree else None)
@@ -225,7 +235,8 @@ class MissionRun:
                 looked_at = node.lockstep.periods
             now_ns = node.get_clock().now().nanoseconds
             records.note_phase(executive.phase())
-            view.update(executive=executive, monitor=monitor, sim_time_s=now_ns / 1e9)
+            view.update(executive=executive, monitor=monitor,
+                        sim_time_s=(now_ns - shown_from_ns) / 1e9)
             if node.callback_error is not None and not executive.finished:
                 return self._fail(f"a callback raised {node.callback_error}", executive, node)
             if time.monotonic() >= next_exit_check:  # a system call: ten times a wall second
@@ -240,7 +251,8 @@ class MissionRun:
         if _succeeded(executive):  # the referee books checkpoint 4 a moment after the tree
             self._spin_until(executor, lambda: monitor.completed, FINAL_STATE_WAIT_S)
         monitor.freeze()  # the report is the referee's books when the mission ended
-        view.close(executive=executive, monitor=monitor, sim_time_s=sim_now_s(node.get_clock()))
+        view.close(executive=executive, monitor=monitor,
+                   sim_time_s=sim_now_s(node.get_clock()) - shown_from_ns / 1e9)
         if not monitor.completed:
             self.failure = self._ending(executive, node)
         return EXIT_COMPLETED if monitor.completed else EXIT_FAILED
@@ -290,6 +302,9 @@ class MissionRun:
         if self.settings.free_running:
             print("free running: --free-running asked for it", flush=True)
             return None
+        if self.settings.clock == "system":
+            print("free running: the run keeps the system clock (--clock system)", flush=True)
+            return None
         if not lockstep.offered(node, executor):
             print("free running: the backend offers no lockstep", flush=True)
             return None
@@ -324,12 +339,13 @@ class MissionRun:
 
         MissionRun._spin_until(executor, every_server_ready, SERVER_WAIT_LIMIT_S)
 
-    @staticmethod
-    def _await_discovery(node: Node, executor: Executor) -> None:
+    def _await_discovery(self, node: Node, executor: Executor) -> None:
         """Until the backend has discovered every reader the executive set up (a probe on
-        /clock, :mod:`bt_servicesim.ros.discovery`); bounded, then said and gone on with."""
-        if not await_backend_discovery(node, executor, limit_s=DISCOVERY_LIMIT_S):
-            print(f"the backend's /clock did not reach a new reader within "
+        /clock, or /tf on the system clock, :mod:`bt_servicesim.ros.discovery`); bounded,
+        then said and gone on with."""
+        probe = SYSTEM_CLOCK_PROBE if self.settings.clock == "system" else SIM_CLOCK_PROBE
+        if not await_backend_discovery(node, executor, limit_s=DISCOVERY_LIMIT_S, probe=probe):
+            print(f"the backend's {probe[1]} did not reach a new reader within "
                   f"{DISCOVERY_LIMIT_S:.0f} s: its first answers may be lost", flush=True)
 
     def _title(self, monitor: RefereeMonitor) -> str:
@@ -352,6 +368,7 @@ class MissionRun:
             "executive": self.settings.executive,
             "ros_domain_id": int(os.environ.get("ROS_DOMAIN_ID", "0") or 0),
             "attached": self.settings.attach,
+            "clock": self.settings.clock,
             "timing": self.timing,
             "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
@@ -412,6 +429,8 @@ def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:
     words += [f"--sim-arg={argument}" for argument in sim_args]
     if settings.free_running:
         words.append("--free-running")
+    if settings.clock != "sim":
+        words.append(f"--attach --clock {settings.clock}")
     return " ".join(words)
 
 

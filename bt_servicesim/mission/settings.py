@@ -13,8 +13,8 @@ from pathlib import Path
 from bt_servicesim.monitor.live_server import LiveAddress
 
 __all__ = [
-    "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME", "STARTUP_LIMIT_S",
-    "TRAJECTORY_POLICIES", "RunSettings",
+    "CLOCKS", "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME",
+    "STARTUP_LIMIT_S", "TRAJECTORY_POLICIES", "RunSettings",
 ]
 
 EXECUTIVES = ("bt", "baseline")
@@ -25,6 +25,9 @@ DEFAULT_TIME_LIMIT_S = 900.0
 """The mission time limit in sim seconds, unless the run names another."""
 STARTUP_LIMIT_S = 60.0
 """Wall seconds the simulator gets to come up."""
+CLOCKS = ("sim", "system")
+"""What the executive keeps time by: the backend's ``/clock`` (a simulator, Gazebo), or the
+system clock (a real robot, which publishes no ``/clock``: ``use_sim_time`` false)."""
 TRAJECTORY_POLICIES = ("always", "failed")
 """When the run draws ``trajectory.png``: after every run, or only after a mission that did
 not complete (an evaluation: the picture is the CPU of a tenth of a warm episode, and any run's
@@ -57,3 +60,5 @@ class RunSettings:
     """Do not join the backend's lockstep even if it offers one (for comparisons)."""
     trajectory: str = "always"
     """One of :data:`TRAJECTORY_POLICIES`."""
+    clock: str = "sim"
+    """One of :data:`CLOCKS`; ``system`` only with ``attach``."""

@@ -71,7 +71,8 @@ class SimTicker:
             # would be collected while registered, and the clock would call freed memory
             _LIVE.setdefault(id(node), set()).add(self)
         else:
-            self._timer = node.create_timer(period_s, self._tick)
+            # the EventsExecutor hands a timer's callback a TimerInfo; the ticker needs none
+            self._timer = node.create_timer(period_s, lambda *_info: self._tick())
 
     def cancel(self) -> None:
         """No more calls; idempotent."""

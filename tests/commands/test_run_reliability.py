@@ -185,6 +185,21 @@ def test_attach_runs_against_the_backend_already_on_the_shells_domain(
     assert not (tmp_path / "run" / "sim.log").exists()
 
 
+def test_attach_on_the_system_clock_runs_without_sim_time(
+        tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
+    """As on a real robot, which publishes no /clock: the tree ticks on the system clock, and
+    its own time limit (8 s of it here) ends the mission."""
+    result = run_module("bt_servicesim.run", "--headless", "--attach", "--clock", "system",
+                        "--time-limit", "8", "--out", str(tmp_path / "run"), timeout=WALL_LIMIT_S)
+    report = report_of(tmp_path / "run")
+    assert result.returncode == 1, result.stderr[-2000:]
+    assert "free running: the run keeps the system clock" in result.stdout
+    assert (report["clock"], report["timing"]) == ("system", "free running")
+    assert report["ticks"] >= 40  # 10 a second for 8 s, allowing for a busy machine
+    assert "MissionTimeLimit: timed out" in report["last_activity"]
+    assert "--clock system" in report["reproduce"]
+
+
 def bad_trees(directory: Path) -> dict[str, Path]:
     trees = {
         "retry": '<Retry name="R" num_failures="abc"><Fallback name="f"/></Retry>',
@@ -207,6 +222,7 @@ BAD_INPUT = [
     ("bt_servicesim.run", ["--out", ""], "--out: an empty path"),
     ("bt_servicesim.run", ["--sim-arg=--speed=0.001"], "--sim-arg --speed=0.001: the run sets"),
     ("bt_servicesim.run", ["--attach", "--seed", "3"], "--attach starts no simulator: --seed"),
+    ("bt_servicesim.run", ["--clock", "system"], "--clock system: only with --attach"),
     ("bt_servicesim.run", ["--tree", "{retry}"], 'num_failures="abc" is not an int'),
     ("bt_servicesim.run", ["--tree", "{port}"], "the required input port actors_in_range"),
     ("bt_servicesim.dump", ["--tree", "{retry}"], 'num_failures="abc" is not an int'),
