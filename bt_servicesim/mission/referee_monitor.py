@@ -66,12 +66,21 @@ class RefereeMonitor:
     def task_sim_time(self) -> float:
         return 0.0 if self.latest is None else float(self.latest.task_sim_time)
 
+    def unheard(self) -> str:
+        """What a report adds when no referee state ever came, else nothing: a backend without
+        this simulator's extension (Gazebo's ServiceSim, a robot) keeps its books unread."""
+        if self.latest is not None:
+            return ""
+        return (f"no referee state came on {REFEREE_TOPIC} (this simulator's extension): "
+                "what the referee counted is unknown")
+
     def report_fields(self) -> dict[str, Any]:
-        """``completed``, ``score``, ``sim_time_s``, ``checkpoints``, ``penalties``."""
+        """``completed``, ``score``, ``sim_time_s``, ``checkpoints``, ``penalties`` and
+        ``referee_heard`` (whether any referee state came)."""
         state = self.latest
         if state is None:
             return {
-                "completed": False, "score": 0.0, "sim_time_s": 0.0,
+                "completed": False, "referee_heard": False, "score": 0.0, "sim_time_s": 0.0,
                 "checkpoints": [
                     {"name": name, "done": False, "sim_time_s": 0.0} for name in CHECKPOINT_NAMES
                 ],
@@ -79,6 +88,7 @@ class RefereeMonitor:
             }
         return {
             "completed": bool(state.completed),
+            "referee_heard": True,
             "score": float(state.score),
             "sim_time_s": float(state.task_sim_time),
             "checkpoints": [

@@ -42,7 +42,7 @@ from servicesim_competition.srv import NewTask
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_COMPLETED, EXIT_FAILED
 from bt_servicesim.mission.progress import ProgressView
-from bt_servicesim.mission.referee_monitor import RefereeMonitor
+from bt_servicesim.mission.referee_monitor import REFEREE_TOPIC, RefereeMonitor
 from bt_servicesim.mission.report import write_report
 from bt_servicesim.mission.run_records import RunRecords
 from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
@@ -254,7 +254,8 @@ class MissionRun:
         view.close(executive=executive, monitor=monitor,
                    sim_time_s=sim_now_s(node.get_clock()) - shown_from_ns / 1e9)
         if not monitor.completed:
-            self.failure = self._ending(executive, node)
+            self.failure = "; ".join(
+                part for part in (self._ending(executive, node), monitor.unheard()) if part)
         return EXIT_COMPLETED if monitor.completed else EXIT_FAILED
 
     def _fail(self, failure: str, executive: Executive, node: ExecutiveNode) -> int:
@@ -347,6 +348,9 @@ class MissionRun:
         if not await_backend_discovery(node, executor, limit_s=DISCOVERY_LIMIT_S, probe=probe):
             print(f"the backend's {probe[1]} did not reach a new reader within "
                   f"{DISCOVERY_LIMIT_S:.0f} s: its first answers may be lost", flush=True)
+        if node.count_publishers(REFEREE_TOPIC) == 0:
+            print(f"the backend publishes no referee state ({REFEREE_TOPIC}): the report "
+                  "cannot say what the referee counted", flush=True)
 
     def _title(self, monitor: RefereeMonitor) -> str:
         fields = monitor.report_fields()

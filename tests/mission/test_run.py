@@ -9,9 +9,11 @@ from typing import Any
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from servicesim_competition.msg import RefereeState
 from std_srvs.srv import Empty
 
 from bt_servicesim.mission import run as mission_run
+from bt_servicesim.mission.referee_monitor import RefereeMonitor
 from bt_servicesim.mission.run import SIM_TIME_BACKSTOP_S, MissionRun, outlived_time_limit
 
 
@@ -65,3 +67,18 @@ def test_the_backstop_counts_from_the_missions_start_not_the_clocks_zero(
     now_ns = started_ns + round(since_start_s * SECOND_NS)
     assert outlived_time_limit(started_ns=started_ns, now_ns=now_ns,
                                time_limit_s=30.0) is outlived
+
+
+def test_a_backend_without_referee_state_leaves_the_referees_books_unknown(
+        ros_context: Any) -> None:
+    node = Node("no_referee", context=ros_context)
+    try:
+        monitor = RefereeMonitor(node)
+        assert monitor.report_fields()["referee_heard"] is False
+        assert "what the referee counted is unknown" in monitor.unheard()
+        assert "/servicesim/referee" in monitor.unheard()
+        monitor.latest = RefereeState(checkpoint_names=["a"], checkpoint_done=[True],
+                                      checkpoint_sim_time=[1.0])
+        assert monitor.unheard() == "" and monitor.report_fields()["referee_heard"] is True
+    finally:
+        node.destroy_node()
