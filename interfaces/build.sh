@@ -4,7 +4,8 @@
 #
 #   servicesim_competition  the competition's messages and services
 #   tf2_msgs                tf2_msgs/msg/TFMessage, upstream's definition unchanged
-#   nav2_msgs               nav2_msgs/action/NavigateToPose, upstream's (Kilted) unchanged
+#   nav2_msgs               nav2_msgs/action/NavigateToPose and nav2_msgs/srv/ClearEntireCostmap,
+#                           upstream's (Kilted) unchanged
 #
 #   interfaces/build.sh VENV_DIR
 #

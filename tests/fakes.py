@@ -39,6 +39,7 @@ import numpy as np
 import py_trees
 from builtin_interfaces.msg import Time
 from nav2_msgs.action import NavigateToPose
+from nav2_msgs.srv import ClearEntireCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.blackboard import Blackboard
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
@@ -246,12 +247,15 @@ class FakeReferee(FakeServer):
     (``task_running``) they give the error answer, everything empty. RoomInfo answers the box of
     a room in ``rooms`` and the zero box for any other. A pick-up works for the robot
     ``servicebot`` while ``pickup_ok``; a drop-off for the task's guest while ``dropoff_ok``.
-    Every request is kept in ``requests`` and logged.
+    Navigation's clearing services are here too: move_base's ``clear_costmaps`` (the baseline's)
+    and Nav2's two ``ClearEntireCostmap`` services (the tree's); ``move_base_clearing=False``
+    leaves move_base's out, as on a Nav2 robot. Every request is kept in ``requests`` and
+    logged.
     """
 
     def __init__(self, context: object, node_name: str = "referee", *, namespace: str = "",
                  rooms: dict[str, Box] | None = None, task: Task | None = None,
-                 log: EventLog | None = None) -> None:
+                 log: EventLog | None = None, move_base_clearing: bool = True) -> None:
         super().__init__(context, node_name, log)
         self.rooms = ROOMS if rooms is None else rooms
         self.task = task or Task()
@@ -266,7 +270,15 @@ class FakeReferee(FakeServer):
         self.node.create_service(srv.PickUpGuest, f"{ns}/servicesim/pickup_guest", self.pickup)
         self.node.create_service(srv.DropOffGuest, f"{ns}/servicesim/dropoff_guest",
                                  self.dropoff)
-        self.node.create_service(Empty, f"{ns}/servicebot/move_base/clear_costmaps", self.clear)
+        if move_base_clearing:  # a Nav2 robot has none
+            self.node.create_service(Empty, f"{ns}/servicebot/move_base/clear_costmaps",
+                                     self.clear)
+        self.node.create_service(
+            ClearEntireCostmap, f"{ns}/servicebot/global_costmap/clear_entirely_global_costmap",
+            self.clear_global)
+        self.node.create_service(
+            ClearEntireCostmap, f"{ns}/servicebot/local_costmap/clear_entirely_local_costmap",
+            self.clear_local)
 
     def _saw(self, what: str, request: Any, detail: Any = None) -> None:
         self.requests.append(request)
@@ -303,6 +315,14 @@ class FakeReferee(FakeServer):
 
     def clear(self, request: Any, response: Any) -> Any:
         self._saw("clear_costmaps", request)
+        return response
+
+    def clear_global(self, request: Any, response: Any) -> Any:
+        self._saw("clear_global_costmap", request)
+        return response
+
+    def clear_local(self, request: Any, response: Any) -> Any:
+        self._saw("clear_local_costmap", request)
         return response
 
 
@@ -402,10 +422,11 @@ class FakeSimulator:
     thread of their own, writing one :class:`EventLog`."""
 
     def __init__(self, context: object, namespace: str = "", *, task: Task | None = None,
-                 rooms: dict[str, Box] | None = None) -> None:
+                 rooms: dict[str, Box] | None = None, move_base_clearing: bool = True) -> None:
         self.log = EventLog()
         self.referee = FakeReferee(context, unique_name("fake_referee"), namespace=namespace,
-                                   rooms=rooms, task=task, log=self.log)
+                                   rooms=rooms, task=task, log=self.log,
+                                   move_base_clearing=move_base_clearing)
         self.navigator = FakeNavigator(context, f"{namespace}/servicebot/navigate_to_pose",
                                        log=self.log)
         self.navigator.steps = 0

@@ -12,6 +12,12 @@ compares the behaviour tree with what the competition handed out, not with a str
 * there is no search for a guest out of RFID range and no drift handling;
 * the return goal is the start pose −1 m, which can leave the robot just outside the start box.
 
+It clears move_base's costmaps (``std_srvs/Empty`` on ``/servicebot/move_base/clear_costmaps``),
+a ROS 1 service that only our simulator still offers; a Nav2 robot has no such server. So the
+wait for that server is bounded (:data:`CLEAR_SERVER_WAIT_S`): without it the attempt goes on to
+its goal uncleared, and later attempts do not wait for the server again (they still call it if it
+has come): on a Nav2 robot the baseline navigates as the seed did, less the clearing.
+
 BeginTask also publishes the task's start pose on ``/servicebot/initialpose``: in the original
 the competition's launch gave localisation the start pose; here the simulator, like AMCL, needs
 it before any goal can succeed, and the behaviour tree does the same.
@@ -66,6 +72,8 @@ POLL_PERIOD_S = 0.1
 ATTEMPT_PERIOD_S = 1.0  # the seed's 1 Hz loop
 SETTLE_S = 0.5  # the seed's sleep between clearing costmaps and sending the goal
 RESULT_WAIT_S = 10.0  # the seed's wait_for_result limit
+CLEAR_SERVER_WAIT_S = 5.0
+"""Sim seconds an attempt waits for move_base's clearing server before going on without it."""
 GOAL_OFFSET_X = -1.0  # the seed's goal: area centre (or start pose) shifted −1 m in x
 JITTER_M = 0.1
 FACING_MINUS_X = math.pi
@@ -112,6 +120,7 @@ class SeedStateMachine:
         self._clock: SimStopwatch | None = None
         self._body: Iterator[None] | None = None
         self._pending_call: tuple[Client, Future] | None = None
+        self._clearing_missing = False
         self._goal: GoalInFlight | None = None
         self._task: Any = None
 
@@ -250,11 +259,23 @@ class SeedStateMachine:
     def _attempt(self, x: float, y: float, attempt: int) -> Waiting:
         """Cancel, clear costmaps, sleep 0.5 s, send a jittered goal, wait up to 10 s for it."""
         self._cancel_goal()
-        yield from self._call("clear_costmaps", Empty.Request())
+        yield from self._clear_costmaps()
         yield from self._sleep_until(self._now() + SETTLE_S)
         goal = seed_goal(x, y, lambda: self._jitter(-JITTER_M, JITTER_M))
         result = yield from self._send_goal(goal, attempt)
         return result is not None and result.status == GoalStatus.STATUS_SUCCEEDED
+
+    def _clear_costmaps(self) -> Waiting:
+        """Call move_base's clear_costmaps; a server missing for CLEAR_SERVER_WAIT_S (a Nav2
+        robot has none) is skipped, and not waited for again."""
+        limit_s = 0.0 if self._clearing_missing else CLEAR_SERVER_WAIT_S
+        present = yield from self._await_server("clear_costmaps", limit_s=limit_s)
+        self._clearing_missing = not present
+        if present:
+            yield from self._call("clear_costmaps", Empty.Request())
+        else:
+            self._activity = (f"no server for {self._clients['clear_costmaps'].srv_name}: "
+                              "navigating without clearing the costmaps")
 
     def _send_goal(self, goal: Pose2D, attempt: int) -> Waiting:
         """The goal's wrapped result, or None if it did not finish within 10 s."""
@@ -298,6 +319,17 @@ class SeedStateMachine:
         if future.exception() is not None or future.result() is None:
             raise TaskRefusedError(f"{client.srv_name} failed: {future.exception() or 'no answer'}")
         return future.result()
+
+    def _await_server(self, service: str, *, limit_s: float) -> Waiting:
+        """Whether the service's server is up within ``limit_s`` sim seconds."""
+        client = self._clients[service]
+        deadline = self._now() + limit_s
+        while not client.service_is_ready():
+            if self._now() >= deadline:
+                return False
+            self._activity = f"waiting for service {client.srv_name}"
+            yield
+        return True
 
     def _withdraw_call(self) -> None:
         if self._pending_call is not None:

@@ -42,6 +42,7 @@ import rclpy
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped, Twist
 from nav2_msgs.action import NavigateToPose
+from nav2_msgs.srv import ClearEntireCostmap
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.action import CancelResponse, GoalResponse
 from rclpy.action.server import ServerGoalHandle
@@ -107,6 +108,14 @@ BASE_LINK_HEIGHT_M = 0.749  # servicebot.urdf: base_footprint -> base_link
 LIDAR_FRAME = "lidar_frame"
 GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
 NAVIGATION_ACTION = "/servicebot/navigate_to_pose"
+MOVE_BASE_CLEAR_SERVICE = "/servicebot/move_base/clear_costmaps"
+"""move_base's (ROS 1) clearing service, ``std_srvs/Empty``: what the baseline, the original's
+example solution, calls."""
+GLOBAL_COSTMAP_CLEAR_SERVICE = "/servicebot/global_costmap/clear_entirely_global_costmap"
+LOCAL_COSTMAP_CLEAR_SERVICE = "/servicebot/local_costmap/clear_entirely_local_costmap"
+"""Nav2's clearing services, ``nav2_msgs/srv/ClearEntireCostmap``, named as a Nav2 stack in the
+robot's namespace names them (its ``global_costmap`` and ``local_costmap`` nodes). Nav2 clears
+each costmap on its own service; our navigator keeps one costmap, so each clears all of it."""
 INITIAL_POSE_TOPIC = "/servicebot/initialpose"
 CMD_VEL_TOPIC = "/servicebot/cmd_vel"
 """The robot's true pose in map, as Gazebo's model state would give it: for records and
@@ -218,7 +227,9 @@ class SimulatorNode:
             (PickUpGuest, "/servicesim/pickup_guest", self._pickup_guest),
             (DropOffGuest, "/servicesim/dropoff_guest", self._dropoff_guest),
             (Drift, "/servicesim/drift", self._drift),
-            (Empty, "/servicebot/move_base/clear_costmaps", self._clear_costmaps),
+            (Empty, MOVE_BASE_CLEAR_SERVICE, self._clear_costmaps),
+            (ClearEntireCostmap, GLOBAL_COSTMAP_CLEAR_SERVICE, self._clear_costmaps),
+            (ClearEntireCostmap, LOCAL_COSTMAP_CLEAR_SERVICE, self._clear_costmaps),
         ]
         self._services = [self.node.create_service(kind, name,
                                                    self.lockstep.gated(name, callback),
@@ -312,7 +323,9 @@ class SimulatorNode:
         self._log_call("drift", response.drift, reason)
         return response
 
-    def _clear_costmaps(self, request: Empty.Request, response: Empty.Response) -> Any:
+    def _clear_costmaps(self, request: Any, response: Any) -> Any:
+        """move_base's ``clear_costmaps`` or either of Nav2's ``clear_entirely_*_costmap``:
+        the one costmap forgets its people marks; the answer is empty in both types."""
         self.engine.clear_costmaps()
         return response
 

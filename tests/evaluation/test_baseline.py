@@ -22,7 +22,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from bt_servicesim.evaluation.baseline import SEED_STATES, SeedStateMachine
+from bt_servicesim.evaluation.baseline import CLEAR_SERVER_WAIT_S, SEED_STATES, SeedStateMachine
 from bt_servicesim.mission.settings import RunSettings
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.run import executive_factory
@@ -152,6 +152,27 @@ def test_each_attempt_clears_costmaps_then_waits_half_a_second(
     # a request reaches the fake simulator up to one clock step after it was sent
     jitter = Driver.STEP_S + 1e-6
     assert all(gap >= 1.0 - jitter for gap in gaps), f"attempts faster than 1 Hz: {gaps}"
+
+
+def test_without_move_bases_clearing_service_goals_are_still_sent(
+    ros_context: object, namespace: str
+) -> None:
+    """A Nav2 robot has no move_base clear_costmaps: the first attempt waits for it a bounded
+    time, then sends its goal; later attempts do not wait for it again."""
+    simulator = FakeSimulator(ros_context, namespace, task=TASK, rooms=ROOMS,
+                              move_base_clearing=False)
+    simulator.navigator.outcomes = ["abort", "succeed"]
+    driver = Driver(ros_context, namespace)
+    try:
+        driver.run_until(simulator, lambda: len(simulator.named("pickup_guest")) == 1)
+        first, second = simulator.named("goal")[:2]
+        asked_for_the_room = simulator.named("room_info")[0].sim_time
+        assert not simulator.named("clear_costmaps")
+        assert first.sim_time - asked_for_the_room >= CLEAR_SERVER_WAIT_S
+        assert second.sim_time - first.sim_time < CLEAR_SERVER_WAIT_S
+    finally:
+        driver.shutdown()
+        simulator.shutdown()
 
 
 def test_a_goal_without_result_is_cancelled_and_resent_after_ten_seconds(

@@ -13,6 +13,7 @@ import pytest
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav2_msgs.action import NavigateToPose
+from nav2_msgs.srv import ClearEntireCostmap
 from nav_msgs.msg import OccupancyGrid
 from rclpy.action import ActionClient
 from rclpy.context import Context
@@ -23,6 +24,7 @@ from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import RefereeState, Score
 from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, TaskInfo
 
+from servicesim_sim.costmap import PersonMark
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.node import SimulatorNode
 from servicesim_sim.scenario import Difficulty
@@ -128,6 +130,39 @@ def test_a_refused_pickup_is_booked_and_the_score_runs_with_the_task(graph: Grap
     assert scores[-1] >= 40.0
     drift = graph.call(Drift, "/servicesim/drift", Drift.Request())
     assert drift.drift is True  # armed even with nobody following, as the original
+
+
+NAV2_CLEARING = ("/servicebot/global_costmap/clear_entirely_global_costmap",
+                 "/servicebot/local_costmap/clear_entirely_local_costmap")
+
+
+def mark_someone_behind_the_robot(graph: Graph) -> PersonMark:
+    """A person mark 2 m behind the robot, out of the lidar's view, so no sweep clears it: set
+    (from this thread, while the loop runs) until it is seen to stay."""
+    costmap = graph.simulator.engine.navigator.costmap
+    x, y, yaw = graph.simulator.engine.robot_pose()
+    mark = PersonMark(x - 2.0 * math.cos(yaw), y - 2.0 * math.sin(yaw), seen_at=-1.0)
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        costmap.marks = (*costmap.marks, mark)
+        time.sleep(0.1)
+        if mark in costmap.marks:
+            return mark
+    raise AssertionError("the mark never stayed in the costmap")
+
+
+def test_nav2s_two_clearing_services_are_served_through_the_gate_and_forget_the_people(
+        graph: Graph) -> None:
+    graph.spin_until(lambda: all(
+        (name, ["nav2_msgs/srv/ClearEntireCostmap"]) in graph.client.get_service_names_and_types()
+        for name in NAV2_CLEARING))
+    assert set(NAV2_CLEARING) <= graph.simulator.lockstep.served  # counted and gated
+    costmap = graph.simulator.engine.navigator.costmap
+    for service in NAV2_CLEARING:
+        mark = mark_someone_behind_the_robot(graph)
+        answer = graph.call(ClearEntireCostmap, service, ClearEntireCostmap.Request())
+        assert isinstance(answer, ClearEntireCostmap.Response)
+        assert mark not in costmap.marks, f"{service} left the mark"
 
 
 def navigate(graph: Graph, x: float, y: float, *, cancel_after_s: float | None = None) -> Any:

@@ -13,11 +13,15 @@ from pathlib import Path
 
 import py_trees
 import pytest
+from nav2_msgs.srv import ClearEntireCostmap
 from py_trees.blackboard import Blackboard
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
-from std_srvs.srv import Empty
 
-from bt_servicesim.behaviours.actions.clear_costmaps import ClearCostmaps
+from bt_servicesim.behaviours.actions.clear_costmaps import (
+    GLOBAL_COSTMAP_SERVICE,
+    LOCAL_COSTMAP_SERVICE,
+    ClearCostmaps,
+)
 from bt_servicesim.behaviours.actions.guest_services import DropOffGuest, PickUpGuest
 from bt_servicesim.behaviours.actions.room_info import RoomInfo
 from bt_servicesim.behaviours.actions.service_call import ServiceCall
@@ -135,16 +139,38 @@ def test_drop_off_succeeds_only_on_success(graph: ExecutiveGraph, ros_context: o
     assert drop_off.feedback_message.startswith("drop-off of human_99999 refused")
 
 
-def test_clear_costmaps(graph: ExecutiveGraph, ros_context: object) -> None:
+def test_clear_costmaps_asks_nav2s_global_and_local_costmaps_and_succeeds_on_both_answers(
+    graph: ExecutiveGraph, ros_context: object
+) -> None:
     referee = graph.serve(FakeReferee(ros_context))
     clear = ready(ClearCostmaps(name="clear"), graph.node)
+    assert clear.services == (
+        "/servicebot/global_costmap/clear_entirely_global_costmap",
+        "/servicebot/local_costmap/clear_entirely_local_costmap",
+    )
     assert graph.tick_until_done(clear) == Status.SUCCESS
-    assert clear.feedback_message == "costmaps cleared"
-    assert len(referee.requests) == 1
+    assert clear.feedback_message == "costmaps cleared (global and local)"
+    assert sorted(event.what for event in referee.log.events) == [
+        "clear_global_costmap", "clear_local_costmap"]
+    assert all(isinstance(request, ClearEntireCostmap.Request) for request in referee.requests)
+    assert all(exchange.client.srv_type is ClearEntireCostmap for exchange in clear.exchanges)
+
+
+def test_clear_costmaps_fails_when_one_costmap_has_no_server(
+    graph: ExecutiveGraph, ros_context: object
+) -> None:
+    referee = graph.serve(FakeReferee(ros_context))
+    clear = ready(ClearCostmaps(name="clear", local_costmap_service="/nobody/clear_local",
+                                server_timeout=0.3), graph.node)
+    assert graph.tick_until_done(clear) == Status.FAILURE
+    assert clear.feedback_message == "service /nobody/clear_local not available after 0.3 sim s"
+    assert [event.what for event in referee.log.events] == ["clear_global_costmap"]
 
 
 def test_missing_server_fails_after_server_timeout(graph: ExecutiveGraph) -> None:
-    clear = ready(ClearCostmaps(name="clear", service="/nobody/clear", server_timeout=0.3),
+    clear = ready(ClearCostmaps(name="clear", global_costmap_service="/nobody/clear_global",
+                                local_costmap_service="/nobody/clear_local",
+                                server_timeout=0.3),
                   graph.node)
     started = time.monotonic()
     clear.tick_once()
@@ -158,23 +184,25 @@ def test_missing_server_fails_after_server_timeout(graph: ExecutiveGraph) -> Non
 def test_server_appearing_within_server_timeout_is_used(
     graph: ExecutiveGraph, ros_context: object
 ) -> None:
+    late = "/late/clear_entirely_global_costmap"
     clear = ready(
-        ClearCostmaps(name="clear", service="/late/clear_costmaps", server_timeout=10.0),
+        ClearCostmaps(name="clear", global_costmap_service=late, server_timeout=10.0),
         graph.node,
     )
     clear.tick_once()
     assert clear.status == Status.RUNNING
-    assert "waiting for service" in clear.feedback_message
+    assert f"waiting for service {late}" in clear.feedback_message
     referee = graph.serve(FakeReferee(ros_context))
-    referee.node.create_service(Empty, "/late/clear_costmaps", referee.clear)
+    referee.node.create_service(ClearEntireCostmap, late, referee.clear_global)
     assert graph.tick_until_done(clear) == Status.SUCCESS
-    assert len(referee.requests) == 1
+    assert len(referee.requests) == 2
 
 
 def test_a_server_that_never_answers_times_out(graph: ExecutiveGraph, ros_context: object) -> None:
     referee = FakeReferee(ros_context, node_name="silent_referee")  # never spun: never answers
     clear = ready(ClearCostmaps(name="clear", timeout=0.3), graph.node)
-    graph.spin_until(clear.client.service_is_ready)
+    graph.spin_until(lambda: all(exchange.client.service_is_ready()
+                                 for exchange in clear.exchanges))
     assert graph.tick_until_done(clear) == Status.FAILURE
     assert "no answer" in clear.feedback_message and "0.3" in clear.feedback_message
     assert referee.requests == []
@@ -189,7 +217,7 @@ def test_interrupting_withdraws_the_pending_request(
     graph.spin_until(pick_up.client.service_is_ready)
     pick_up.tick_once()
     assert pick_up.status == Status.RUNNING
-    in_flight = pick_up._future
+    in_flight = pick_up.exchange.future
     assert in_flight is not None and not in_flight.done()
     pick_up.stop(Status.INVALID)
     assert pick_up.feedback_message == "call to /servicesim/pickup_guest cancelled"
@@ -199,6 +227,28 @@ def test_interrupting_withdraws_the_pending_request(
     for _ in range(20):
         graph.executor.spin_once(timeout_sec=0.01)
     assert pick_up.client._pending_requests == {}
+
+
+def test_interrupting_the_clearing_withdraws_both_requests(
+    graph: ExecutiveGraph, ros_context: object
+) -> None:
+    referee = FakeReferee(ros_context, node_name="slow_costmaps")  # not spun until after the stop
+    clear = ready(ClearCostmaps(name="clear"), graph.node)
+    graph.spin_until(lambda: all(exchange.client.service_is_ready()
+                                 for exchange in clear.exchanges))
+    clear.tick_once()
+    assert clear.status == Status.RUNNING
+    in_flight = [exchange.future for exchange in clear.exchanges]
+    assert all(future is not None and not future.done() for future in in_flight)
+    clear.stop(Status.INVALID)
+    assert clear.feedback_message == (f"call to {GLOBAL_COSTMAP_SERVICE} cancelled; "
+                                      f"call to {LOCAL_COSTMAP_SERVICE} cancelled")
+    assert all(future is not None and future.cancelled() for future in in_flight)
+    graph.serve(referee)  # the late answers arrive and are dropped
+    graph.spin_until(lambda: len(referee.requests) == 2)
+    for _ in range(20):
+        graph.executor.spin_once(timeout_sec=0.01)
+    assert all(exchange.client._pending_requests == {} for exchange in clear.exchanges)
 
 
 def test_service_call_base_is_abstract_and_not_a_tag() -> None:
@@ -222,7 +272,8 @@ XML = """
         <SimWait name="pause" seconds="0.05"/>
       </SimTimeout>
       <PickUpGuest name="pick_up" guest_name="{guest}"/>
-      <ClearCostmaps name="clear" server_timeout="2.0"/>
+      <ClearCostmaps name="clear" server_timeout="2.0"
+                     global_costmap_service="/elsewhere/clear_entirely_global_costmap"/>
     </Sequence>
   </BehaviorTree>
 </root>
@@ -233,6 +284,8 @@ def test_tags_work_from_xml_with_remapping(
     graph: ExecutiveGraph, ros_context: object, tmp_path: Path
 ) -> None:
     referee = graph.serve(FakeReferee(ros_context))
+    referee.node.create_service(ClearEntireCostmap, "/elsewhere/clear_entirely_global_costmap",
+                                referee.clear_global)
     xml_file = tmp_path / "mission.xml"
     xml_file.write_text(textwrap.dedent(XML))
     root = parse_behaviour_tree_xml(str(xml_file), node_registry="auto")
@@ -243,6 +296,7 @@ def test_tags_work_from_xml_with_remapping(
     assert new_task.timeout == 5.0
     clear = next(n for n in nodes.values() if isinstance(n, ClearCostmaps))
     assert clear.server_timeout == 2.0
+    assert clear.services == ("/elsewhere/clear_entirely_global_costmap", LOCAL_COSTMAP_SERVICE)
 
     deadline = time.monotonic() + 15.0
     while root.status != Status.SUCCESS:
@@ -256,5 +310,7 @@ def test_tags_work_from_xml_with_remapping(
     assert isinstance(Blackboard.get("/start"), Pose2D)
     assert [type(r).__name__ for r in referee.requests] == [
         "NewTask_Request", "RoomInfo_Request", "RoomInfo_Request",
-        "PickUpGuest_Request", "Empty_Request",
+        "PickUpGuest_Request", "ClearEntireCostmap_Request", "ClearEntireCostmap_Request",
     ]
+    clears = [event.what for event in referee.log.events if event.what.startswith("clear")]
+    assert sorted(clears) == ["clear_global_costmap", "clear_local_costmap"]
