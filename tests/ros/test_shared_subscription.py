@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from typing import TypeVar
 
 import pytest
 from rclpy.context import Context
@@ -25,14 +26,15 @@ from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.shared_subscription import SharedSubscription, shared_subscription
 from tests.fakes import spin_until, wait_for_subscription
 
+N = TypeVar("N", bound=Node)
 RELIABLE_50 = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
-@pytest.fixture
-def nodes(ros_context: Context) -> Iterator[tuple[Node, Node, SingleThreadedExecutor]]:
-    reader = Node("shared_reader", context=ros_context)
+def reader_and_writer(reader: N, ros_context: Context) -> Iterator[
+        tuple[N, Node, SingleThreadedExecutor]]:
+    """``reader`` spun by an executor, and a writer node beside it; both destroyed after."""
     writer = Node("shared_writer", context=ros_context)
     executor = SingleThreadedExecutor(context=ros_context)
     executor.add_node(reader)
@@ -40,6 +42,11 @@ def nodes(ros_context: Context) -> Iterator[tuple[Node, Node, SingleThreadedExec
     executor.shutdown()
     reader.destroy_node()
     writer.destroy_node()
+
+
+@pytest.fixture
+def nodes(ros_context: Context) -> Iterator[tuple[Node, Node, SingleThreadedExecutor]]:
+    yield from reader_and_writer(Node("shared_reader", context=ros_context), ros_context)
 
 
 def subscription_count(node: Node) -> int:
@@ -101,14 +108,8 @@ def test_a_subscription_covers_a_request_of_the_same_reliability_asking_no_more(
 @pytest.fixture
 def executive(ros_context: Context) -> Iterator[tuple[ExecutiveNode, Node,
                                                       SingleThreadedExecutor]]:
-    reader = ExecutiveNode("shared_executive", context=ros_context)
-    writer = Node("shared_writer", context=ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(reader)
-    yield reader, writer, executor
-    executor.shutdown()
-    reader.destroy_node()
-    writer.destroy_node()
+    yield from reader_and_writer(ExecutiveNode("shared_executive", context=ros_context),
+                                 ros_context)
 
 
 def test_a_best_effort_reader_after_a_reliable_one_hears_a_best_effort_publisher(
