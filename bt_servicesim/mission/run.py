@@ -306,7 +306,9 @@ class MissionRun:
         if self.settings.clock == "system":
             print("free running: the run keeps the system clock (--clock system)", flush=True)
             return None
-        if not lockstep.offered(node, executor):
+        # this project's simulator always offers it: wait for it as long as for the simulator
+        wait_s = STARTUP_LIMIT_S if self.simulator is not None else lockstep.OFFER_WAIT_S
+        if not lockstep.offered(node, executor, wait_s=wait_s):
             print("free running: the backend offers no lockstep", flush=True)
             return None
         node.reliable_subscriptions = True
@@ -316,7 +318,8 @@ class MissionRun:
                        executor: Executor) -> None:
         if client is None:
             return
-        if client.join(executor):
+        if client.join(executor, wait_s=STARTUP_LIMIT_S if self.simulator is not None
+                       else lockstep.OFFER_WAIT_S):
             self.timing, self.lockstep = "lockstep", client
             print("lockstep with the simulator", flush=True)
         else:

@@ -36,7 +36,9 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Callable
+from typing import Any
 
+from rclpy.client import Client
 from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -153,11 +155,18 @@ class LockstepClient:
         self._sent_at_join: dict[str, int] = {}
         self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
         node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
+        self._joining: Client[Any, Any] | None = node.create_client(LockstepJoin, JOIN_SERVICE)
+        """Made with the client, before the run waits for the backend to discover its readers
+        (:mod:`bt_servicesim.ros.discovery`): a join client made after that wait could have its
+        answer sent before the simulator had discovered the reader it goes to, and lost (the
+        run then went on free running: a seed's replay decided by a race)."""
 
     # ------------------------------------------------------------------ join
     def join(self, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
         """Join the simulator's lockstep; whether it took us (bounded in wall time)."""
-        client = self.node.create_client(LockstepJoin, JOIN_SERVICE)
+        client = self._joining
+        if client is None:
+            raise RuntimeError(f"{self.name}: joins once")
         try:
             future = client.call_async(LockstepJoin.Request(name=self.name))
             deadline = time.monotonic() + wait_s
@@ -169,6 +178,7 @@ class LockstepClient:
             self._take_what_came_before(executor, answer.joined_at)
         finally:
             self.node.destroy_client(client)
+            self._joining = None
         self._synchronise(answer.joined_at)
         self._ticked = int(answer.joined_at.period)
         self.client_id = int(answer.client)
