@@ -218,6 +218,7 @@ class MissionRun:
         executive.setup()
         self._wait_for_servers(node, executor)
         self._await_discovery(node, executor)
+        self._say_if_no_referee(node)
         self._join_lockstep(client, executor)
         _keep_out_of_the_collector()
         started_ns = node.get_clock().now().nanoseconds
@@ -306,20 +307,22 @@ class MissionRun:
         if self.settings.clock == "system":
             print("free running: the run keeps the system clock (--clock system)", flush=True)
             return None
-        # this project's simulator always offers it: wait for it as long as for the simulator
-        wait_s = STARTUP_LIMIT_S if self.simulator is not None else lockstep.OFFER_WAIT_S
-        if not lockstep.offered(node, executor, wait_s=wait_s):
+        if not lockstep.offered(node, executor, wait_s=self._lockstep_wait_s()):
             print("free running: the backend offers no lockstep", flush=True)
             return None
         node.reliable_subscriptions = True
         return lockstep.LockstepClient(node, name=node.get_fully_qualified_name())
 
+    def _lockstep_wait_s(self) -> float:
+        """How long the offer and the join may take: this project's simulator always offers
+        lockstep, so as long as it may take to come up; another backend, briefly."""
+        return STARTUP_LIMIT_S if self.simulator is not None else lockstep.OFFER_WAIT_S
+
     def _join_lockstep(self, client: lockstep.LockstepClient | None,
                        executor: Executor) -> None:
         if client is None:
             return
-        if client.join(executor, wait_s=STARTUP_LIMIT_S if self.simulator is not None
-                       else lockstep.OFFER_WAIT_S):
+        if client.join(executor, wait_s=self._lockstep_wait_s()):
             self.timing, self.lockstep = "lockstep", client
             print("lockstep with the simulator", flush=True)
         else:
@@ -351,6 +354,10 @@ class MissionRun:
         if not await_backend_discovery(node, executor, limit_s=DISCOVERY_LIMIT_S, probe=probe):
             print(f"the backend's {probe[1]} did not reach a new reader within "
                   f"{DISCOVERY_LIMIT_S:.0f} s: its first answers may be lost", flush=True)
+
+    @staticmethod
+    def _say_if_no_referee(node: Node) -> None:
+        """Once the backend is discovered: whether it keeps the referee's books (our extension)."""
         if node.count_publishers(REFEREE_TOPIC) == 0:
             print(f"the backend publishes no referee state ({REFEREE_TOPIC}): the report "
                   "cannot say what the referee counted", flush=True)
