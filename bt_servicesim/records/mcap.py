@@ -79,27 +79,47 @@ class MessageDefinitionError(LookupError):
 
 @dataclass(frozen=True)
 class RecordedTopic:
-    """A topic the recorder subscribes to, and how it is published."""
+    """A topic the recorder subscribes to, and how it is published.
+
+    ``sensor``: a robot's driver may publish it best effort (``qos_profile_sensor_data``), as
+    the tree reads it. The recorder then reads it best effort too: a best-effort reader hears
+    reliable and best-effort publishers alike, while a reliable one hears no best-effort
+    publisher at all (DDS matches reliability "at least": the offer must be as strong as the
+    request). rosbag2 adapts to the offered QoS for the same reason. Our simulator publishes
+    these reliably; in lockstep the run makes every subscription reliable
+    (:func:`~bt_servicesim.ros.node.reliable`), so there nothing is lost.
+    """
 
     name: str
     message_type: type
     latched: bool = False
+    sensor: bool = False
 
     @property
     def qos(self) -> QoSProfile:
         if self.latched:
             return QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                               durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        if self.sensor:
+            return QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
+        return self.playback_qos
+
+    @property
+    def playback_qos(self) -> QoSProfile:
+        """What the channel's metadata offers a player: reliable, which readers of either
+        reliability match, however the recorder read it."""
+        if self.latched:
+            return self.qos
         return QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 
 
 RECORDED_TOPICS = (
-    RecordedTopic("/servicebot/odom", Odometry),
+    RecordedTopic("/servicebot/odom", Odometry, sensor=True),
     RecordedTopic(GROUND_TRUTH_TOPIC, Odometry),
     RecordedTopic("/servicebot/amcl_pose", PoseWithCovarianceStamped, latched=True),
     RecordedTopic("/tf", TFMessage),
     RecordedTopic("/tf_static", TFMessage, latched=True),
-    RecordedTopic("/servicebot/rfid", ActorNames),
+    RecordedTopic("/servicebot/rfid", ActorNames, sensor=True),
     RecordedTopic("/servicesim/referee", RefereeState, latched=True),
     RecordedTopic("/servicesim/actors", ActorStates),
     RecordedTopic("/servicebot/map", OccupancyGrid, latched=True),
@@ -222,7 +242,7 @@ class McapRecorder:
                     name=name, encoding="ros2msg", data=complete_definition(name).encode())
             channel = self._writer.register_channel(
                 topic=topic.name, message_encoding="cdr", schema_id=schemas[name],
-                metadata={"offered_qos_profiles": offered_qos_yaml(topic.qos)})
+                metadata={"offered_qos_profiles": offered_qos_yaml(topic.playback_qos)})
             self.counts[topic.name] = 0
             write = self._writes_to(topic.name, channel)
             if topic.name in own_topics:

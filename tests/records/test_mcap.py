@@ -23,6 +23,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from servicesim_competition.msg import ActorNames, ActorStates, RefereeState
 from servicesim_competition.srv import TaskInfo
 from std_msgs.msg import String
@@ -183,11 +184,13 @@ def test_a_burst_of_messages_is_recorded_whole_and_in_order_in_one_callback(
 
 
 def test_a_reader_of_a_recorded_topic_shares_the_recorders_subscription(graph: Graph) -> None:
+    """The tree reads odometry as sensor data (best effort, 5 deep), as the recorder does."""
     recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
     heard: list[float] = []
     subscriptions = len(list(graph.recorder_node.subscriptions))
     shared_subscription(graph.recorder_node, Odometry, "/servicebot/odom",
-                        lambda message: heard.append(message.pose.pose.position.x), 10)
+                        lambda message: heard.append(message.pose.pose.position.x),
+                        qos_profile_sensor_data)
     assert len(list(graph.recorder_node.subscriptions)) == subscriptions
     graph.start_sim_clock()
     odom = graph.publishers["/servicebot/odom"]
@@ -197,6 +200,31 @@ def test_a_reader_of_a_recorded_topic_shares_the_recorders_subscription(graph: G
     graph.spin_until(lambda: recorder.counts["/servicebot/odom"] == 3, "three odometries")
     recorder.close()
     assert heard == [0.0, 1.0, 2.0]
+
+
+@pytest.mark.parametrize("offered", [ReliabilityPolicy.BEST_EFFORT, ReliabilityPolicy.RELIABLE],
+                         ids=["best-effort", "reliable"])
+def test_sensor_topics_are_recorded_whether_published_best_effort_or_reliably(
+        graph: Graph, offered: ReliabilityPolicy) -> None:
+    """A robot's drivers often publish odometry and sensors best effort, which a reliable
+    reader would never hear; our simulator publishes them reliably. Both must be recorded."""
+    recorder = McapRecorder(node=graph.recorder_node, path=graph.path)
+    graph.start_sim_clock()
+    sensors = {"/servicebot/odom": odometry_at(2.5),
+               "/servicebot/rfid": ActorNames(actor_names=["human_20843"])}
+    publishers = {topic: graph.publisher_node.create_publisher(
+        type(message), topic, QoSProfile(depth=5, reliability=offered))
+        for topic, message in sensors.items()}
+    graph.spin_until(lambda: all(p.get_subscription_count() > 0 for p in publishers.values()),
+                     "the recorder to match the sensors' publishers")
+    for topic, message in sensors.items():
+        publishers[topic].publish(message)
+    graph.spin_until(lambda: all(recorder.counts[topic] == 1 for topic in sensors),
+                     "both sensor messages to be recorded")
+    recorder.close()
+    recorded = {topic: decoded for topic, _, _, decoded in read_back(graph.path)}
+    assert recorded["/servicebot/odom"].pose.pose.position.x == 2.5
+    assert list(recorded["/servicebot/rfid"].actor_names) == ["human_20843"]
 
 
 def test_the_file_follows_the_ros2_profile_with_qos_metadata(graph: Graph) -> None:
