@@ -17,11 +17,14 @@ from bt_servicesim.evaluation.reproducibility import reproducibility_section
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.evaluation.summary import (
+    completed_by_one,
     episode_wall_s,
+    exact_binomial_p,
     mean_or_none,
     paired_drop_off_times,
     paired_scores,
     played,
+    sign_test,
     summarise,
     summary_of,
     time_over_bound,
@@ -44,11 +47,17 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"{settings.episode_timeout_s:g} s. Definitions: "
              "[evaluation.md](evaluation.md).", "",
              "## Per executive and scenario set", "", *_not_run_note(settings, rows),
+             "The interval is the success rate's 95 % Wilson score interval: with this many "
+             "episodes, rates inside it are not told apart by chance alone.", "",
              *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
         lines += ["## Paired: the same episodes, both executives", "",
-                  "Scores where both completed the mission; the task sim time to the drop-off "
-                  "(checkpoints 1–3) where both got the guest there.", "",
+                  "Which executive completed episodes the other did not; scores where both "
+                  "completed the mission; the task sim time to the drop-off (checkpoints 1–3) "
+                  "where both got the guest there. Each comparison carries its exact two-sided "
+                  "p-value (McNemar's test on the episodes only one completed, the sign test on "
+                  "the paired scores and times): the chance of a split at least that uneven if "
+                  "neither executive were better.", "",
                   *paired_table(settings, rows), ""]
     lines += ["## How far from the physical limit", "",
               "Mission time (the task sim time at the fourth checkpoint) over the task's "
@@ -104,7 +113,7 @@ def source_revision() -> str:
 
 
 def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
-    lines = ["| executive | set | episodes | success | mean score | median score | "
+    lines = ["| executive | set | episodes | success (95 % interval) | mean score | median score | "
              "mean sim time (s) | mean wall time (s) | failed pick-ups | failed drop-offs | "
              "too fast | approximation | contact |", "|" + "---|" * 13]
     for scenario in settings.scenarios:
@@ -115,7 +124,7 @@ def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> l
             penalties = summary["penalties"]
             lines.append(
                 f"| {executive} | {scenario} | {summary['episodes']} | "
-                f"{summary['success_rate']:.0%} | {_number(summary['mean_score'])} | "
+                f"{_success(summary)} | {_number(summary['mean_score'])} | "
                 f"{_number(summary['median_score'])} | {_number(summary['mean_sim_time_s'])} | "
                 f"{_number(mean_or_none(walls))} | {penalties['failed_pickup']:.2f} | "
                 f"{penalties['failed_dropoff']:.2f} | {penalties['too_fast']:.2f} | "
@@ -123,19 +132,34 @@ def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> l
     return lines
 
 
+def _success(summary: dict[str, Any]) -> str:
+    interval = summary.get("success_interval")
+    rate = f"{summary['success_rate']:.0%}"
+    return rate if interval is None else f"{rate} ({interval[0]:.0%}–{interval[1]:.0%})"
+
+
 def paired_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
-    """Each set, paired: scores where both completed, drop-off times where both dropped off."""
-    lines = ["| set | both completed | bt mean score | baseline mean score | bt lower on | "
-             "both dropped off | bt mean time to drop-off (s) | baseline mean time to "
-             "drop-off (s) | bt faster on |", "|" + "---|" * 9]
+    """Each set, paired: who completed, scores where both completed, drop-off times where both
+    dropped off; each comparison with its exact two-sided p-value."""
+    lines = ["| set | completed by bt only / baseline only (p) | both completed | bt mean score | "
+             "baseline mean score | bt lower on (p) | both dropped off | bt mean time to "
+             "drop-off (s) | baseline mean time to drop-off (s) | bt faster on (p) |",
+             "|" + "---|" * 10]
     for scenario in settings.scenarios:
         tree, seed = paired_scores(rows, scenario, "bt", "baseline")
         tree_time, seed_time = paired_drop_off_times(rows, scenario, "bt", "baseline")
-        lines.append(f"| {scenario} | {len(tree)} | {_number(mean_or_none(tree))} | "
-                     f"{_number(mean_or_none(seed))} | {_below(tree, seed)} | {len(tree_time)} | "
+        only_tree, only_seed = completed_by_one(rows, scenario, "bt", "baseline")
+        lines.append(f"| {scenario} | {only_tree} / {only_seed} "
+                     f"{_p(exact_binomial_p(only_tree, only_seed))} | {len(tree)} | "
+                     f"{_number(mean_or_none(tree))} | {_number(mean_or_none(seed))} | "
+                     f"{_below(tree, seed)} | {len(tree_time)} | "
                      f"{_number(mean_or_none(tree_time))} | {_number(mean_or_none(seed_time))} | "
                      f"{_below(tree_time, seed_time)} |")
     return lines
+
+
+def _p(value: float | None) -> str:
+    return "" if value is None else f"(p {value:.2g})"
 
 
 def bound_table(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
@@ -159,7 +183,9 @@ def _ratio(value: float | None) -> str:
 
 
 def _below(first: list[float], second: list[float]) -> str:
-    return f"{sum(a < b for a, b in zip(first, second, strict=True))}/{len(first)}"
+    below = f"{sum(a < b for a, b in zip(first, second, strict=True))}/{len(first)}"
+    p_value = sign_test(first, second)
+    return below if p_value is None else f"{below} {_p(p_value)}"
 
 
 def failure_table(rows: list[dict[str, Any]]) -> list[str]:
@@ -204,7 +230,7 @@ def _number(value: float | None) -> str:
 
 PLOTS = (("scores", "Score of completed episodes (lower is better)"),
          ("times", "Task sim time of completed episodes"),
-         ("success", "Success rate per scenario set"),
+         ("success", "Success rate per scenario set, with its 95 % Wilson interval"),
          ("bound", "Mission time over the kinematic bound (completed episodes; 1 = the limit)"))
 FIELDS = {"scores": "score", "times": "sim_time_s", "bound": "time_over_bound"}
 Y_LABELS = {"score": "score", "sim_time_s": "sim seconds",
@@ -261,15 +287,21 @@ def _distributions(axes: Any, settings: EvaluationSettings, rows: list[dict[str,
 def _success_bars(axes: Any, settings: EvaluationSettings, rows: list[dict[str, Any]]) -> None:
     width = 0.8 / len(settings.executives)
     for number, executive in enumerate(settings.executives):
-        rates = []
+        rates, below, above = [], [], []
         for scenario in settings.scenarios:
             group = [row for row in rows
                      if row["executive"] == executive and row["scenario"] == scenario]
-            rates.append(100.0 * summarise(group)["success_rate"])
+            summary = summarise(group)
+            rate = 100.0 * summary["success_rate"]
+            low, high = summary["success_interval"] or (rate / 100.0, rate / 100.0)
+            rates.append(rate)
+            below.append(max(rate - 100.0 * low, 0.0))
+            above.append(max(100.0 * high - rate, 0.0))
         positions = [index + (number - (len(settings.executives) - 1) / 2) * width
                      for index in range(len(settings.scenarios))]
         bars = axes.bar(positions, rates, width=width, label=executive, color=f"C{number}",
-                        alpha=0.8)
+                        alpha=0.8, yerr=[below, above], capsize=3,
+                        error_kw={"elinewidth": 0.8, "alpha": 0.6})
         axes.bar_label(bars, fmt="%.0f%%", fontsize=8)
     axes.set_xticks(range(len(settings.scenarios)), settings.scenarios)
     axes.set_ylabel("completed (%)")

@@ -3,6 +3,13 @@ paired comparisons.
 
 Plain functions over the rows the episodes wrote (one dict per episode), so they are tested
 without running anything. Paired figures compare two executives on the same seeds only.
+
+A few dozen seeds are a small sample, so the figures carry how far chance alone could move
+them: the success rate a 95 % Wilson score interval (sound at rates near 0 and 1, where the
+normal approximation is not), and each paired comparison an exact two-sided binomial test --
+a sign test on which executive did better, episode by episode, and McNemar's exact test on the
+episodes only one of the two completed. scipy computes them (``scipy.stats.binomtest``);
+importing it takes seconds, so only a report does.
 """
 
 from __future__ import annotations
@@ -30,9 +37,11 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     rows = played(every)
     completed = [row for row in rows if row["completed"]]
     scores = [float(row["score"]) for row in completed]
+    interval = success_interval(len(completed), len(rows))
     return {
         "episodes": len(rows),
         "success_rate": len(completed) / len(rows) if rows else 0.0,
+        "success_interval": None if interval is None else [round(end, 4) for end in interval],
         "mean_score": mean_or_none(scores),
         "median_score": statistics.median(scores) if scores else None,
         "mean_sim_time_s": mean_or_none([float(row["sim_time_s"]) for row in completed]),
@@ -41,6 +50,54 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "not_run": len(every) - len(rows),
         "rows": every,
     }
+
+
+CONFIDENCE = 0.95
+"""The confidence level of the success rate's interval."""
+
+
+def success_interval(successes: int, episodes: int) -> tuple[float, float] | None:
+    """The Wilson score interval of a success rate at :data:`CONFIDENCE`; None without
+    episodes."""
+    if episodes <= 0:
+        return None
+    from scipy.stats import binomtest
+
+    interval = binomtest(successes, episodes).proportion_ci(confidence_level=CONFIDENCE,
+                                                             method="wilson")
+    return float(interval.low), float(interval.high)
+
+
+def exact_binomial_p(wins: int, losses: int) -> float | None:
+    """Two-sided p-value of ``wins`` against ``losses`` if either were equally likely (the exact
+    binomial test at 1/2): the sign test of paired values, McNemar's exact test of paired
+    outcomes. None when there is nothing to compare."""
+    if wins + losses == 0:
+        return None
+    from scipy.stats import binomtest
+
+    return float(binomtest(wins, wins + losses, 0.5).pvalue)
+
+
+def sign_test(first: list[float], second: list[float]) -> float | None:
+    """:func:`exact_binomial_p` of how often ``first`` is below ``second``, pair by pair, against
+    how often above (ties left out)."""
+    below = sum(a < b for a, b in zip(first, second, strict=True))
+    above = sum(a > b for a, b in zip(first, second, strict=True))
+    return exact_binomial_p(below, above)
+
+
+def completed_by_one(rows: list[dict[str, Any]], scenario: str, first: str,
+                     second: str) -> tuple[int, int]:
+    """Episodes of a set, played by both, that only ``first`` completed and that only
+    ``second`` completed (McNemar's discordant pairs)."""
+    by_key = {(row["executive"], row["episode"]): bool(row["completed"])
+              for row in played(rows) if row["scenario"] == scenario}
+    both = {episode for (_, episode) in by_key
+            if (first, episode) in by_key and (second, episode) in by_key}
+    only_first = sum(by_key[(first, n)] and not by_key[(second, n)] for n in both)
+    only_second = sum(by_key[(second, n)] and not by_key[(first, n)] for n in both)
+    return only_first, only_second
 
 
 def mean_penalties(rows: list[dict[str, Any]]) -> dict[str, float]:

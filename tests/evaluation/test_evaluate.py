@@ -121,7 +121,8 @@ sys.exit(main(sys.argv[3:], command=command))
 """
 """``python -m bt_servicesim.evaluate`` with the fake episodes: ``DRIVER fake.py mode args``."""
 
-SUMMARY_KEYS = {"episodes", "success_rate", "mean_score", "median_score", "mean_sim_time_s",
+SUMMARY_KEYS = {"episodes", "success_rate", "success_interval", "mean_score", "median_score",
+                "mean_sim_time_s",
                 "penalties", "wall_time_s", "not_run", "rows", "time_over_bound"}
 
 
@@ -222,10 +223,12 @@ def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     quietly(tmp_path, chosen, fake())
     results = (chosen.out / "results.md").read_text()
     assert chosen.command_line in results
-    assert "| bt | random | 2 | 100% |" in results
-    assert "| baseline | random | 2 | 50% |" in results
-    # random: both completed episode 0 (100 vs 200); both dropped off in 0 and 1 (60 vs 90 s)
-    assert "| random | 1 | 100.0 | 200.0 | 1/1 | 2 | 60.0 | 90.0 | 2/2 |" in results
+    assert "| bt | random | 2 | 100% (34%–100%) |" in results  # Wilson, 95 %
+    assert "| baseline | random | 2 | 50% (9%–91%) |" in results
+    # random: bt alone completed episode 1; both completed episode 0 (100 vs 200); both
+    # dropped off in 0 and 1 (60 vs 90 s); exact two-sided p-values of 1/0, 1/0 and 2/0 splits
+    assert ("| random | 1 / 0 (p 1) | 1 | 100.0 | 200.0 | 1/1 (p 1) | 2 | 60.0 | 90.0 | "
+            "2/2 (p 0.5) |") in results
     assert "| baseline | random | 1 | 3/4 | the mission tree ended with SUCCESS |" in results
     for name, _ in PLOTS:
         assert (chosen.out / f"results_{name}.png").stat().st_size > 1000
@@ -287,7 +290,7 @@ def test_a_report_that_still_says_running_is_a_failed_episode(tmp_path: Path) ->
     assert row["failure"] == ("the run was killed by SIGKILL before it finished (its report "
                               "still says 'running'): no output")
     assert row["returncode"] == -9 and 1 <= row["ros_domain_id"] <= 101
-    assert "| bt | random | 1 | 0% |" in (chosen.out / "results.md").read_text()
+    assert "| bt | random | 1 | 0% (0%–79%) |" in (chosen.out / "results.md").read_text()
 
 
 def test_resume_keeps_finished_episodes_and_runs_the_rest(tmp_path: Path) -> None:

@@ -1,0 +1,76 @@
+"""The evaluation's uncertainty figures: the success rate's Wilson interval and the exact
+binomial tests of paired comparisons (sign test, McNemar's), checked against values worked
+out by hand."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from bt_servicesim.evaluation.summary import (
+    completed_by_one,
+    exact_binomial_p,
+    sign_test,
+    success_interval,
+    summarise,
+)
+
+
+def test_the_wilson_interval_of_15_of_16_and_of_none_and_all() -> None:
+    # p = 15/16, z = 1.96: centre (p + z²/2n) / (1 + z²/n),
+    # half-width z·sqrt(p(1-p)/n + z²/4n²) / (1 + z²/n)
+    low, high = success_interval(15, 16)
+    assert (low, high) == (pytest.approx(0.7167, abs=1e-4), pytest.approx(0.9889, abs=1e-4))
+    assert success_interval(0, 16) == (pytest.approx(0.0, abs=1e-12),
+                                       pytest.approx(0.1936, abs=1e-4))
+    assert success_interval(16, 16)[1] == pytest.approx(1.0)
+    assert success_interval(0, 0) is None
+
+
+def test_the_summary_carries_the_interval_of_the_episodes_played() -> None:
+    rows = [{"completed": True, "score": 1.0, "sim_time_s": 2.0, "penalties": {}},
+            {"completed": False, "score": 0.0, "sim_time_s": 9.0, "penalties": {}},
+            {"completed": False, "not_run": True}]
+    assert summarise(rows)["success_interval"] == [pytest.approx(0.0945, abs=1e-4),
+                                                   pytest.approx(0.9055, abs=1e-4)]
+    assert summarise([])["success_interval"] is None
+
+
+@pytest.mark.parametrize(("wins", "losses", "p_value"), [
+    (4, 0, 0.125),   # 2 · (1/2)^4
+    (3, 1, 0.625),   # 2 · (1 + 4) / 16
+    (8, 8, 1.0),
+    (10, 0, 2 / 1024),
+])
+def test_the_exact_binomial_test_at_one_half(wins: int, losses: int, p_value: float) -> None:
+    assert exact_binomial_p(wins, losses) == pytest.approx(p_value)
+    assert exact_binomial_p(losses, wins) == pytest.approx(p_value)  # two-sided
+
+
+def test_nothing_to_compare_has_no_p_value() -> None:
+    assert exact_binomial_p(0, 0) is None
+    assert sign_test([], []) is None
+    assert sign_test([1.0, 2.0], [1.0, 2.0]) is None  # ties only
+
+
+def test_the_sign_test_leaves_ties_out() -> None:
+    first, second = [1.0, 2.0, 3.0, 4.0, 5.0], [2.0, 3.0, 4.0, 5.0, 5.0]
+    assert sign_test(first, second) == pytest.approx(0.125)  # 4 below, 0 above, 1 tie
+
+
+def row(executive: str, episode: int, completed: bool, **extra: Any) -> dict[str, Any]:
+    return {"executive": executive, "episode": episode, "scenario": "random",
+            "completed": completed, **extra}
+
+
+def test_completed_by_one_counts_only_episodes_both_played() -> None:
+    rows = [row("bt", 0, True), row("baseline", 0, False),     # bt only
+            row("bt", 1, True), row("baseline", 1, True),      # both
+            row("bt", 2, False), row("baseline", 2, True),     # baseline only
+            row("bt", 3, True), row("baseline", 3, False),     # bt only
+            row("bt", 4, True),                                 # baseline never played it
+            row("bt", 5, True), row("baseline", 5, False, not_run=True),  # stopped: not played
+            {**row("bt", 6, True), "scenario": "hard"}, row("baseline", 6, False)]
+    assert completed_by_one(rows, "random", "bt", "baseline") == (2, 1)
+    assert completed_by_one(rows, "random", "baseline", "bt") == (1, 2)
