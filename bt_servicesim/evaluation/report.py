@@ -18,6 +18,7 @@ from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.evaluation.summary import (
     completed_by_one,
+    distinct_missions,
     episode_wall_s,
     exact_binomial_p,
     mean_or_none,
@@ -47,17 +48,20 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"{settings.episode_timeout_s:g} s. Definitions: "
              "[evaluation.md](evaluation.md).", "",
              "## Per executive and scenario set", "", *_not_run_note(settings, rows),
-             "The interval is the success rate's 95 % Wilson score interval: with this many "
-             "episodes, rates inside it are not told apart by chance alone.", "",
+             "The interval is the success rate's 95 % Wilson score interval over the distinct "
+             "missions (one per seed; every episode of the default set plays the shipped task, "
+             "one mission however often it is replayed): rates inside it are not told apart "
+             "from the one measured by chance alone.", "",
              *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
         lines += ["## Paired: the same episodes, both executives", "",
                   "Which executive completed episodes the other did not; scores where both "
                   "completed the mission; the task sim time to the drop-off (checkpoints 1–3) "
                   "where both got the guest there. Each comparison carries its exact two-sided "
-                  "p-value (McNemar's test on the episodes only one completed, the sign test on "
-                  "the paired scores and times): the chance of a split at least that uneven if "
-                  "neither executive were better.", "",
+                  "p-value (McNemar's test on the missions only one completed, the sign test on "
+                  "the paired scores and times), over distinct missions: the chance of a split "
+                  "at least that uneven if neither executive were better. The completions are "
+                  "counted in missions too.", "",
                   *paired_table(settings, rows), ""]
     lines += ["## How far from the physical limit", "",
               "Mission time (the task sim time at the fourth checkpoint) over the task's "
@@ -141,20 +145,24 @@ def _success(summary: dict[str, Any]) -> str:
 def paired_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
     """Each set, paired: who completed, scores where both completed, drop-off times where both
     dropped off; each comparison with its exact two-sided p-value."""
-    lines = ["| set | completed by bt only / baseline only (p) | both completed | bt mean score | "
+    lines = ["| set | missions completed by bt only / baseline only (p) | both completed | "
+             "bt mean score | "
              "baseline mean score | bt lower on (p) | both dropped off | bt mean time to "
              "drop-off (s) | baseline mean time to drop-off (s) | bt faster on (p) |",
              "|" + "---|" * 10]
+    missions = distinct_missions(rows)
     for scenario in settings.scenarios:
         tree, seed = paired_scores(rows, scenario, "bt", "baseline")
         tree_time, seed_time = paired_drop_off_times(rows, scenario, "bt", "baseline")
         only_tree, only_seed = completed_by_one(rows, scenario, "bt", "baseline")
+        tests = (sign_test(*paired_scores(missions, scenario, "bt", "baseline")),
+                 sign_test(*paired_drop_off_times(missions, scenario, "bt", "baseline")))
         lines.append(f"| {scenario} | {only_tree} / {only_seed} "
                      f"{_p(exact_binomial_p(only_tree, only_seed))} | {len(tree)} | "
                      f"{_number(mean_or_none(tree))} | {_number(mean_or_none(seed))} | "
-                     f"{_below(tree, seed)} | {len(tree_time)} | "
+                     f"{_below(tree, seed, tests[0])} | {len(tree_time)} | "
                      f"{_number(mean_or_none(tree_time))} | {_number(mean_or_none(seed_time))} | "
-                     f"{_below(tree_time, seed_time)} |")
+                     f"{_below(tree_time, seed_time, tests[1])} |")
     return lines
 
 
@@ -182,9 +190,8 @@ def _ratio(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
-def _below(first: list[float], second: list[float]) -> str:
+def _below(first: list[float], second: list[float], p_value: float | None) -> str:
     below = f"{sum(a < b for a, b in zip(first, second, strict=True))}/{len(first)}"
-    p_value = sign_test(first, second)
     return below if p_value is None else f"{below} {_p(p_value)}"
 
 

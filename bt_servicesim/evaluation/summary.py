@@ -10,6 +10,11 @@ normal approximation is not), and each paired comparison an exact two-sided bino
 a sign test on which executive did better, episode by episode, and McNemar's exact test on the
 episodes only one of the two completed. scipy computes them (``scipy.stats.binomtest``);
 importing it takes seconds, so only a report does.
+
+Those figures count *missions*, not episodes: episodes that play the same task (the same set
+and seed, as every episode of the ``default`` set plays the shipped task) are one mission,
+since in lockstep every replay of it is the same mission (:func:`distinct_missions`). Sixteen
+replays of one task are one observation, not sixteen.
 """
 
 from __future__ import annotations
@@ -37,7 +42,8 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     rows = played(every)
     completed = [row for row in rows if row["completed"]]
     scores = [float(row["score"]) for row in completed]
-    interval = success_interval(len(completed), len(rows))
+    missions = distinct_missions(rows)
+    interval = success_interval(sum(bool(row["completed"]) for row in missions), len(missions))
     return {
         "episodes": len(rows),
         "success_rate": len(completed) / len(rows) if rows else 0.0,
@@ -50,6 +56,16 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "not_run": len(every) - len(rows),
         "rows": every,
     }
+
+
+def distinct_missions(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The played rows, one per executive, set and episode seed (the first): the rows that are
+    independent observations. Episodes of one task replay one mission in lockstep."""
+    first: dict[tuple[Any, Any, Any], dict[str, Any]] = {}
+    for row in played(rows):
+        key = (row.get("executive"), row.get("scenario"), row.get("episode_seed"))
+        first.setdefault(key, row)
+    return list(first.values())
 
 
 CONFIDENCE = 0.95
@@ -89,10 +105,10 @@ def sign_test(first: list[float], second: list[float]) -> float | None:
 
 def completed_by_one(rows: list[dict[str, Any]], scenario: str, first: str,
                      second: str) -> tuple[int, int]:
-    """Episodes of a set, played by both, that only ``first`` completed and that only
-    ``second`` completed (McNemar's discordant pairs)."""
-    by_key = {(row["executive"], row["episode"]): bool(row["completed"])
-              for row in played(rows) if row["scenario"] == scenario}
+    """Missions of a set (:func:`distinct_missions`), played by both, that only ``first``
+    completed and that only ``second`` completed (McNemar's discordant pairs)."""
+    by_key = {(row["executive"], row.get("episode_seed")): bool(row["completed"])
+              for row in distinct_missions(rows) if row["scenario"] == scenario}
     both = {episode for (_, episode) in by_key
             if (first, episode) in by_key and (second, episode) in by_key}
     only_first = sum(by_key[(first, n)] and not by_key[(second, n)] for n in both)

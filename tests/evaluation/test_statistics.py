@@ -10,6 +10,7 @@ import pytest
 
 from bt_servicesim.evaluation.summary import (
     completed_by_one,
+    distinct_missions,
     exact_binomial_p,
     sign_test,
     success_interval,
@@ -28,10 +29,12 @@ def test_the_wilson_interval_of_15_of_16_and_of_none_and_all() -> None:
     assert success_interval(0, 0) is None
 
 
-def test_the_summary_carries_the_interval_of_the_episodes_played() -> None:
-    rows = [{"completed": True, "score": 1.0, "sim_time_s": 2.0, "penalties": {}},
-            {"completed": False, "score": 0.0, "sim_time_s": 9.0, "penalties": {}},
-            {"completed": False, "not_run": True}]
+def test_the_summary_carries_the_interval_of_the_missions_played() -> None:
+    rows = [{"episode_seed": 1, "completed": True, "score": 1.0, "sim_time_s": 2.0,
+             "penalties": {}},
+            {"episode_seed": 2, "completed": False, "score": 0.0, "sim_time_s": 9.0,
+             "penalties": {}},
+            {"episode_seed": 3, "completed": False, "not_run": True}]
     assert summarise(rows)["success_interval"] == [pytest.approx(0.0945, abs=1e-4),
                                                    pytest.approx(0.9055, abs=1e-4)]
     assert summarise([])["success_interval"] is None
@@ -60,8 +63,8 @@ def test_the_sign_test_leaves_ties_out() -> None:
 
 
 def row(executive: str, episode: int, completed: bool, **extra: Any) -> dict[str, Any]:
-    return {"executive": executive, "episode": episode, "scenario": "random",
-            "completed": completed, **extra}
+    return {"executive": executive, "episode": episode, "episode_seed": episode,
+            "scenario": "random", "completed": completed, **extra}
 
 
 def test_completed_by_one_counts_only_episodes_both_played() -> None:
@@ -74,3 +77,23 @@ def test_completed_by_one_counts_only_episodes_both_played() -> None:
             {**row("bt", 6, True), "scenario": "hard"}, row("baseline", 6, False)]
     assert completed_by_one(rows, "random", "bt", "baseline") == (2, 1)
     assert completed_by_one(rows, "random", "baseline", "bt") == (1, 2)
+
+
+def test_replays_of_one_task_are_one_mission() -> None:
+    """Every episode of the default set plays the shipped task (no seed): in lockstep, one
+    mission replayed, so one observation, whatever the episode count."""
+    shipped = [{"executive": "bt", "scenario": "default", "episode": n, "episode_seed": None,
+                "completed": True, "score": 5.0, "sim_time_s": 9.0, "penalties": {}}
+               for n in range(16)]
+    assert distinct_missions(shipped) == shipped[:1]
+    summary = summarise(shipped)
+    assert summary["episodes"] == 16 and summary["success_rate"] == 1.0
+    assert summary["success_interval"] == [pytest.approx(0.2065, abs=1e-4), 1.0]  # 1 of 1
+    other = [{**shipped[0], "executive": "baseline", "completed": False}]
+    assert completed_by_one(shipped + other, "default", "bt", "baseline") == (1, 0)
+
+
+def test_distinct_missions_keeps_the_first_played_row_of_each_seed() -> None:
+    rows = [row("bt", 0, False, not_run=True), row("bt", 1, True), row("bt", 2, False),
+            {**row("bt", 3, True), "episode_seed": 1}, row("baseline", 1, False)]
+    assert distinct_missions(rows) == [rows[1], rows[2], rows[4]]
