@@ -6,8 +6,10 @@ episodes of one scenario set twice with the evaluation's own machinery
 (:func:`~bt_servicesim.evaluation.episodes.run_episodes`), ``J`` at once: cold (each episode a
 ``python -m bt_servicesim.run`` process with its own simulator) and warm (``J`` warm pairs
 kept alive between episodes, issue 16). It prints, for each, the wall time, episodes per hour
-and the share completed, then the ratio warm/cold and how many episodes' reports agree between
-the two on what lockstep makes replayable (completed, checkpoint times, penalties, score).
+and the share completed, how the episodes' sim time is spread (the longest episode's share: a
+mission failing only at the time limit costs many others' worth), then the ratio warm/cold and
+how many episodes' reports agree between the two on what lockstep makes replayable (completed,
+checkpoint times, penalties, score).
 
 The default speed is 0 (flat out): in lockstep the simulator still waits for its executive, so
 the missions are the same as at any speed and the figure measures what an episode costs the
@@ -78,6 +80,17 @@ def line(name: str, rows: list[dict[str, Any]], wall_s: float) -> str:
             f"{len(rows) / wall_s * 3600.0:.0f} episodes/hour; {done}/{len(rows)} completed")
 
 
+def sim_time_line(rows: list[dict[str, Any]]) -> str:
+    """How the episodes' sim time is spread: the machine's cost follows it, so one long episode
+    (a mission that fails only at the time limit) can weigh as much as many others."""
+    times = [(float(row.get("sim_time_s") or 0.0), row.get("episode_seed")) for row in rows]
+    total = sum(sim_s for sim_s, _ in times)
+    longest, seed = max(times, default=(0.0, None))
+    share = longest / total if total > 0.0 else 0.0
+    return (f"sim time: {total:.0f} s in all, {total / max(len(times), 1):.0f} s an episode; "
+            f"the longest, seed {seed}, {longest:.0f} s ({share:.0%} of it)")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     parser = build_parser()
@@ -96,6 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(line("cold", cold, cold_s), flush=True)
         warm, warm_s = timed(settings_for(args, out / "warm"), warm=True)
         print(line("warm", warm, warm_s), flush=True)
+        print(sim_time_line(warm), flush=True)
     agree = sum(1 for a, b in zip(cold, warm, strict=True) if judged(a) == judged(b))
     print(f"warm/cold: {cold_s / warm_s:.2f}x episodes per hour; reports agree on "
           f"{agree}/{len(cold)} episodes; load average {os.getloadavg()[0]:.2f} at the end")
