@@ -73,6 +73,7 @@ from bt_servicesim.evaluation.settings import (
 from bt_servicesim.mission.settings import EXECUTIVES
 from bt_servicesim.mission.stopping import StopSignals, Terminated, signal_of
 from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.tree.files import DEFAULT_TREE
 
 if TYPE_CHECKING:  # the local pool imports no distributed engine
     from distributed import Client
@@ -110,6 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="keep the episodes an earlier evaluation in --out finished with "
                              "the same executive, scenario, seed, speed and time limit; run "
                              "only the rest")
+    parser.add_argument("--tree", type=Path, default=None, metavar="FILE",
+                        help="mission tree XML the bt executive plays (default: the shipped "
+                             "trees/servicesim_mission.xml)")
     parser.add_argument("--reproducibility", type=Path, metavar="FILE",
                         help="state in results.md the share of seeds that replay, from the "
                              "figures of benchmarks/reproducibility.py --json FILE")
@@ -140,6 +144,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
     for flag, path in (("--out", args.out), ("--docs", args.docs)):
         _check(path is None or not path.exists() or path.is_dir(),
                f"{flag} {path}: exists and is not a directory")
+    tree = _tree(args.tree, executives)
     reproducibility = None
     if args.reproducibility is not None:
         try:
@@ -151,8 +156,23 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         seed=args.seed, out=args.out, speed=args.speed, episode_timeout_s=args.episode_timeout,
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
-        resume=args.resume, cold=args.cold, reproducibility=reproducibility,
+        resume=args.resume, cold=args.cold, reproducibility=reproducibility, tree=tree,
     )
+
+
+def _tree(path: Path | None, executives: tuple[str, ...]) -> Path:
+    """The tree ``bt`` plays, absolute, loaded once here: a tree that cannot load is one line
+    now, not a failure in every episode."""
+    if path is None:
+        return DEFAULT_TREE
+    _check("bt" in executives, f"--tree {path}: only the bt executive plays a tree")
+    from bt_servicesim.tree.loading import MissionTreeError, load_mission_tree
+
+    try:
+        load_mission_tree(path)
+    except MissionTreeError as error:
+        raise UsageError(f"--tree {error}") from error
+    return path.resolve()
 
 
 def _names(value: str, flag: str, known: Iterable[str]) -> tuple[str, ...]:

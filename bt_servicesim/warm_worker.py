@@ -62,6 +62,7 @@ class WarmEpisode:
     speed: float
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
     sim_args: tuple[str, ...] = ()
+    tree: Path = DEFAULT_TREE
 
     @classmethod
     def from_line(cls, line: str) -> WarmEpisode:
@@ -76,7 +77,8 @@ class WarmEpisode:
                           seed=None if seed is None else int(seed),
                           speed=float(fields["speed"]),
                           time_limit_s=float(fields.get("time_limit_s", DEFAULT_TIME_LIMIT_S)),
-                          sim_args=tuple(str(arg) for arg in fields.get("sim_args", ())))
+                          sim_args=tuple(str(arg) for arg in fields.get("sim_args", ())),
+                          tree=Path(fields.get("tree") or DEFAULT_TREE))
         except (KeyError, TypeError) as error:
             raise ValueError(f"an episode needs out, run_id, executive and speed: {error}") \
                 from error
@@ -91,7 +93,7 @@ class WarmEpisode:
                 *simulator_arguments(self.run_settings(), self.sim_args)]
 
     def run_settings(self) -> RunSettings:
-        return RunSettings(world=None, seed=self.seed, speed=self.speed, tree=DEFAULT_TREE,
+        return RunSettings(world=None, seed=self.seed, speed=self.speed, tree=self.tree,
                            out=self.out, time_limit_s=self.time_limit_s, headless=True,
                            executive=self.executive, run_id=self.run_id, trajectory="failed")
 

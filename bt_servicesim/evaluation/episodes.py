@@ -51,6 +51,7 @@ from bt_servicesim.evaluation.settings import (
     EPISODE_NAME,
     INTERRUPTED,
     EvaluationSettings,
+    tree_digest,
 )
 from bt_servicesim.evaluation.warm_pairs import WarmPair
 from bt_servicesim.mission.report import read_report
@@ -111,10 +112,13 @@ def planned_count(settings: EvaluationSettings) -> int:
 
 def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
     """The episode as a warm pair's worker takes it: what :func:`run_command` says, as JSON."""
-    return json.dumps({"out": str(episode.out), "run_id": episode.run_id,
-                       "executive": episode.executive, "seed": episode.seed,
-                       "speed": settings.speed, "time_limit_s": settings.time_limit_s,
-                       "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args)}) + "\n"
+    fields = {"out": str(episode.out), "run_id": episode.run_id,
+              "executive": episode.executive, "seed": episode.seed,
+              "speed": settings.speed, "time_limit_s": settings.time_limit_s,
+              "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args)}
+    if episode.executive == "bt" and settings.own_tree:  # else the worker's own shipped tree
+        fields["tree"] = str(settings.tree)
+    return json.dumps(fields) + "\n"
 
 
 def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
@@ -129,6 +133,8 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
                "--executive", episode.executive,
                "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s),
                "--trajectory", "failed"]
+    if episode.executive == "bt" and settings.own_tree:  # else the run's own shipped tree
+        command += ["--tree", str(settings.tree)]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
     for argument in SCENARIO_SETS[episode.scenario].sim_args:
@@ -158,6 +164,7 @@ class EpisodeRunner:
         self.finished: Queue[tuple[int, dict[str, Any] | None]] = Queue()
         """Each episode's plan number and row (None: not started), as they finish."""
         self.revision = source_revision()
+        self._tree_digest = tree_digest(settings.tree)
         self._die_with_us = parent_death_signal(os.getpid())
         self._idle_pairs: LifoQueue[WarmPair] = LifoQueue()
         self._pairs_started = itertools.count(1)
@@ -190,9 +197,12 @@ class EpisodeRunner:
 
     def key(self, episode: Episode) -> dict[str, Any]:
         """What makes two runs of an episode the same episode."""
-        return {"executive": episode.executive, "scenario": episode.scenario,
-                "seed": episode.seed, "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args),
-                "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
+        key = {"executive": episode.executive, "scenario": episode.scenario,
+               "seed": episode.seed, "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args),
+               "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
+        if episode.executive == "bt" and self.settings.own_tree:  # the shipped tree: as before
+            key["tree_sha256"] = self._tree_digest
+        return key
 
     def finished_row(self, episode: Episode) -> dict[str, Any] | None:
         """The row an earlier evaluation kept for this very episode, if any."""

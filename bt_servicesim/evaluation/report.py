@@ -15,7 +15,7 @@ from typing import Any
 from bt_servicesim.evaluation.kinematic_bound import add_kinematic_bounds
 from bt_servicesim.evaluation.reproducibility import reproducibility_section
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
-from bt_servicesim.evaluation.settings import EvaluationSettings
+from bt_servicesim.evaluation.settings import EvaluationSettings, tree_digest
 from bt_servicesim.evaluation.summary import (
     completed_by_one,
     distinct_missions,
@@ -45,7 +45,7 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"{settings.episodes} episodes per scenario set, every executive on the same "
              f"seeds, {settings.jobs} at once; speed {settings.speed:g}, mission time limit "
              f"{settings.time_limit_s:g} sim s, episode wall-time limit "
-             f"{settings.episode_timeout_s:g} s. Definitions: "
+             f"{settings.episode_timeout_s:g} s{_tree_note(settings)}. Definitions: "
              "[evaluation.md](evaluation.md).", "",
              "## Per executive and scenario set", "", *_not_run_note(settings, rows),
              "The interval is the success rate's 95 % Wilson score interval over the distinct "
@@ -70,9 +70,18 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
               *bound_table(settings, rows, problem=bound_problem), ""]
     lines += ["## Reproducibility", "",
               *reproducibility_section(rows, settings.reproducibility), ""]
-    lines += ["## Why episodes failed", "", *failure_table(rows), "", "## Plots", ""]
+    tree = settings.tree if settings.own_tree else None
+    lines += ["## Why episodes failed", "", *failure_table(rows, tree=tree), "", "## Plots", ""]
     lines += [f"![{title}]({image_dir}/results_{name}.png)" for name, title in PLOTS]
     return "\n".join(lines) + "\n"
+
+
+def _tree_note(settings: EvaluationSettings) -> str:
+    """Which tree ``bt`` played, when not the shipped one: its path and its file's digest."""
+    if not settings.own_tree:
+        return ""
+    return (f"; the bt executive plays `{settings.tree}` "
+            f"(SHA-256 {tree_digest(settings.tree)[:16]})")
 
 
 def _not_run_note(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
@@ -195,9 +204,10 @@ def _below(first: list[float], second: list[float], p_value: float | None) -> st
     return below if p_value is None else f"{below} {_p(p_value)}"
 
 
-def failure_table(rows: list[dict[str, Any]]) -> list[str]:
+def failure_table(rows: list[dict[str, Any]], *, tree: Path | None = None) -> list[str]:
     """Failed episodes by executive, set, how far the referee saw them get, and reason, with
-    the seeds and knobs that play each again (``run`` replays it exactly in lockstep)."""
+    the seeds and knobs that play each again (``run`` replays it exactly in lockstep); ``tree``:
+    the tree ``bt`` played, if not the shipped one."""
     groups: dict[tuple[str, str, str, str], list[dict[str, Any]]] = {}
     for row in played(rows):
         if not row["completed"]:
@@ -209,19 +219,23 @@ def failure_table(rows: list[dict[str, Any]]) -> list[str]:
              "|---|---|---|---|---|---|"]
     for (executive, scenario, done, reason), group in sorted(groups.items()):
         lines.append(f"| {executive} | {scenario} | {len(group)} | {done} | "
-                     f"{reason.replace('|', '/')} | {_rerun(executive, scenario, group)} |")
+                     f"{reason.replace('|', '/')} | "
+                     f"{_rerun(executive, scenario, group, tree=tree)} |")
     return lines
 
 
-def _rerun(executive: str, scenario: str, group: list[dict[str, Any]]) -> str:
-    """The run options that play the group's episodes again: seeds, then the set's knobs."""
+def _rerun(executive: str, scenario: str, group: list[dict[str, Any]], *,
+           tree: Path | None = None) -> str:
+    """The run options that play the group's episodes again: the tree, seeds, then the set's
+    knobs."""
     seeds = sorted({row.get("episode_seed") for row in group}, key=lambda s: (s is None, s))
     tasks = ", ".join("the shipped task" if seed is None else f"`--seed {seed}`"
                       for seed in seeds)
     scenario_set = SCENARIO_SETS.get(scenario)
     knobs = " ".join(f"`--sim-arg={argument}`"
                      for argument in (scenario_set.sim_args if scenario_set else ()))
-    return f"`--executive {executive}` {tasks} {knobs}".strip()
+    own = f" `--tree {tree}`" if tree is not None and executive == "bt" else ""
+    return f"`--executive {executive}`{own} {tasks} {knobs}".strip()
 
 
 def _checkpoints_done(row: dict[str, Any]) -> str:

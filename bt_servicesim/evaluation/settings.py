@@ -8,11 +8,13 @@ the evaluation slower, never different; a free-running backend would lag behind.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
 from bt_servicesim.evaluation.reproducibility import Reproducibility
 from bt_servicesim.ros.domain import DOMAINS
+from bt_servicesim.tree.files import DEFAULT_TREE
 
 #: Episodes run flat out by default: every episode runs in lockstep with our simulator, which
 #: waits for each tick, so a busy machine makes an episode slower, never different. (Before
@@ -72,6 +74,22 @@ class EvaluationSettings:
     """Every episode a ``run`` process of its own, as before warm pairs (for comparisons)."""
     reproducibility: Reproducibility | None = None
     """The figures of ``benchmarks/reproducibility.py --json`` that results.md states."""
+    tree: Path = DEFAULT_TREE
+    """The mission tree the ``bt`` executive plays (an absolute path, checked to load)."""
+
+    @property
+    def own_tree(self) -> bool:
+        """Whether ``bt`` plays a tree other than the shipped one."""
+        return self.tree.resolve() != DEFAULT_TREE.resolve()
+
+
+def tree_digest(tree: Path) -> str:
+    """The tree file's SHA-256: what an episode kept for ``--resume`` must have played, and
+    what results.md names."""
+    try:
+        return hashlib.sha256(tree.read_bytes()).hexdigest()
+    except OSError:
+        return "unreadable"
 
 
 def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:

@@ -556,3 +556,71 @@ def test_episodes_die_with_an_evaluation_killed_outright(tmp_path: Path) -> None
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.kill(orphan, signal.SIGKILL)  # the fake's own child has no such signal
+
+
+# ------------------------------------------------------------------ a tree of the user's own
+def own_tree(tmp_path: Path, comment: str = "mine") -> Path:
+    """The shipped tree, copied as a user's own (a comment makes its content differ)."""
+    from bt_servicesim.tree.files import DEFAULT_TREE
+
+    path = tmp_path / "my_tree.xml"
+    path.write_text(DEFAULT_TREE.read_text().replace("<root", f"<!-- {comment} -->\n<root", 1))
+    return path
+
+
+def test_the_bt_executive_plays_the_tree_given_cold_or_warm(tmp_path: Path) -> None:
+    from bt_servicesim.evaluation.episodes import warm_line
+    from bt_servicesim.warm_worker import WarmEpisode
+
+    tree = own_tree(tmp_path)
+    chosen = settings(tmp_path, tree=tree)
+    for episode in plan_episodes(chosen):
+        command, line = run_command(episode, chosen), json.loads(warm_line(episode, chosen))
+        if episode.executive == "bt":
+            assert command[command.index("--tree") + 1] == str(tree)
+            assert WarmEpisode.from_line(json.dumps(line)).run_settings().tree == tree
+        else:
+            assert "--tree" not in command and "tree" not in line  # the baseline has none
+    shipped = settings(tmp_path)  # the shipped tree: each run (on a cluster worker, too) its own
+    for episode in plan_episodes(shipped):
+        assert "--tree" not in run_command(episode, shipped)
+        assert "tree" not in json.loads(warm_line(episode, shipped))
+
+
+def test_results_name_the_tree_and_replay_its_failures_with_it(tmp_path: Path) -> None:
+    tree = own_tree(tmp_path)
+    chosen = settings(tmp_path, episodes=1, scenarios=("random",), executives=("bt",),
+                      tree=tree)
+    quietly(tmp_path, chosen, fake({("bt", 0): "crash"}))
+    results = (chosen.out / "results.md").read_text()
+    assert f"the bt executive plays `{tree}` (SHA-256 " in results
+    assert f"`--executive bt` `--tree {tree}` `--seed 0`" in results
+    shipped = settings(tmp_path, episodes=1, scenarios=("random",), executives=("bt",),
+                       out=tmp_path / "shipped")
+    quietly(tmp_path, shipped, fake({("bt", 0): "crash"}))
+    assert "plays `" not in (shipped.out / "results.md").read_text()  # the shipped tree: as ever
+
+
+def test_resume_reruns_the_trees_episodes_when_the_tree_changed(tmp_path: Path) -> None:
+    tree = own_tree(tmp_path)
+    first = settings(tmp_path, episodes=1, scenarios=("random",), tree=tree)
+    quietly(tmp_path, first, fake())
+    same = settings(tmp_path, episodes=1, scenarios=("random",), tree=tree, resume=True)
+    assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
+    own_tree(tmp_path, comment="edited since")
+    rows = quietly(tmp_path, same, fake())
+    resumed = {row["executive"]: bool(row.get("resumed")) for row in rows}
+    assert resumed == {"bt": False, "baseline": True}, "only the tree's episodes play again"
+
+
+def test_a_tree_that_cannot_play_is_one_line_before_anything_starts(tmp_path: Path) -> None:
+    (tmp_path / "broken.xml").write_text("<root BTCPP_format='4'><BehaviorTree ID='x'>")
+    for arguments, named in ((["--tree", "missing.xml"], "missing.xml: no such tree file"),
+                             (["--tree", "broken.xml"], "broken.xml"),
+                             (["--tree", str(own_tree(tmp_path)), "--executive", "baseline"],
+                              "only the bt executive plays a tree")):
+        result = evaluate_command(tmp_path, "--out", "evaluation", *arguments)
+        lines = result.stderr.strip().splitlines()
+        assert result.returncode == 2 and len(lines) == 1, result.stderr
+        assert named in lines[0] and lines[0].count("--tree") == 1
+        assert not (tmp_path / "evaluation").exists(), "nothing is started or written"
