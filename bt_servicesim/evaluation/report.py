@@ -54,14 +54,14 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              "from the one measured by chance alone.", "",
              *results_table(settings, rows), ""]
     if set(EXECUTIVES) <= set(settings.executives):
-        lines += ["## Paired: the same episodes, both executives", "",
-                  "Which executive completed episodes the other did not; scores where both "
-                  "completed the mission; the task sim time to the drop-off (checkpoints 1–3) "
-                  "where both got the guest there. Each comparison carries its exact two-sided "
-                  "p-value (McNemar's test on the missions only one completed, the sign test on "
-                  "the paired scores and times), over distinct missions: the chance of a split "
-                  "at least that uneven if neither executive were better. The completions are "
-                  "counted in missions too.", "",
+        lines += ["## Paired: the same missions, both executives", "",
+                  "Counted over distinct missions (each seed once; the default set's episodes "
+                  "are one mission): which executive completed missions the other did not; "
+                  "scores where both completed; the task sim time to the drop-off (checkpoints "
+                  "1–3) where both got the guest there. Each comparison carries its exact "
+                  "two-sided p-value (McNemar's test on the missions only one completed, the "
+                  "sign test on the paired scores and times): the chance of a split at least "
+                  "that uneven if neither executive were better.", "",
                   *paired_table(settings, rows), ""]
     lines += ["## How far from the physical limit", "",
               "Mission time (the task sim time at the fourth checkpoint) over the task's "
@@ -126,8 +126,9 @@ def source_revision() -> str:
 
 
 def results_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
-    lines = ["| executive | set | episodes | success (95 % interval) | mean score | median score | "
-             "mean sim time (s) | mean wall time (s) | failed pick-ups | failed drop-offs | "
+    lines = ["| executive | set | episodes | success (95 % interval) | mean score | "
+             "median score | mean sim time (s) | mean wall time (s) | failed pick-ups | "
+             "failed drop-offs | "
              "too fast | approximation | contact |", "|" + "---|" * 13]
     for scenario in settings.scenarios:
         for executive in settings.executives:
@@ -152,31 +153,30 @@ def _success(summary: dict[str, Any]) -> str:
 
 
 def paired_table(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:
-    """Each set, paired: who completed, scores where both completed, drop-off times where both
-    dropped off; each comparison with its exact two-sided p-value."""
-    lines = ["| set | missions completed by bt only / baseline only (p) | both completed | "
-             "bt mean score | "
+    """Each set, paired, over distinct missions: who completed, scores where both completed,
+    drop-off times where both dropped off; each comparison with its exact two-sided p-value."""
+    lines = ["| set | completed by bt only / baseline only (p) | both completed | bt mean score | "
              "baseline mean score | bt lower on (p) | both dropped off | bt mean time to "
              "drop-off (s) | baseline mean time to drop-off (s) | bt faster on (p) |",
              "|" + "---|" * 10]
     missions = distinct_missions(rows)
     for scenario in settings.scenarios:
-        tree, seed = paired_scores(rows, scenario, "bt", "baseline")
-        tree_time, seed_time = paired_drop_off_times(rows, scenario, "bt", "baseline")
-        only_tree, only_seed = completed_by_one(rows, scenario, "bt", "baseline")
-        tests = (sign_test(*paired_scores(missions, scenario, "bt", "baseline")),
-                 sign_test(*paired_drop_off_times(missions, scenario, "bt", "baseline")))
-        lines.append(f"| {scenario} | {only_tree} / {only_seed} "
-                     f"{_p(exact_binomial_p(only_tree, only_seed))} | {len(tree)} | "
+        tree, seed = paired_scores(missions, scenario, "bt", "baseline")
+        tree_time, seed_time = paired_drop_off_times(missions, scenario, "bt", "baseline")
+        only_tree, only_seed = completed_by_one(missions, scenario, "bt", "baseline")
+        completions = _with_p(f"{only_tree} / {only_seed}",
+                              exact_binomial_p(only_tree, only_seed))
+        lines.append(f"| {scenario} | {completions} | {len(tree)} | "
                      f"{_number(mean_or_none(tree))} | {_number(mean_or_none(seed))} | "
-                     f"{_below(tree, seed, tests[0])} | {len(tree_time)} | "
+                     f"{_below(tree, seed)} | {len(tree_time)} | "
                      f"{_number(mean_or_none(tree_time))} | {_number(mean_or_none(seed_time))} | "
-                     f"{_below(tree_time, seed_time, tests[1])} |")
+                     f"{_below(tree_time, seed_time)} |")
     return lines
 
 
-def _p(value: float | None) -> str:
-    return "" if value is None else f"(p {value:.2g})"
+def _with_p(text: str, p_value: float | None) -> str:
+    """``text`` with its p-value, if there is one."""
+    return text if p_value is None else f"{text} (p {p_value:.2g})"
 
 
 def bound_table(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
@@ -199,9 +199,9 @@ def _ratio(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
-def _below(first: list[float], second: list[float], p_value: float | None) -> str:
+def _below(first: list[float], second: list[float]) -> str:
     below = f"{sum(a < b for a, b in zip(first, second, strict=True))}/{len(first)}"
-    return below if p_value is None else f"{below} {_p(p_value)}"
+    return _with_p(below, sign_test(first, second))
 
 
 def failure_table(rows: list[dict[str, Any]], *, tree: Path | None = None) -> list[str]:

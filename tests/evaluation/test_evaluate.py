@@ -229,6 +229,10 @@ def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     # dropped off in 0 and 1 (60 vs 90 s); exact two-sided p-values of 1/0, 1/0 and 2/0 splits
     assert ("| random | 1 / 0 (p 1) | 1 | 100.0 | 200.0 | 1/1 (p 1) | 2 | 60.0 | 90.0 | "
             "2/2 (p 0.5) |") in results
+    # default: both episodes of each executive play the shipped task, one mission; both
+    # completed it, so no one completed it alone (no p-value for nothing to compare)
+    assert "| default | 0 / 0 | 1 | 100.0 | 200.0 | 1/1 (p 1) | 1 | 60.0 | 90.0 | 1/1 (p 1) |" \
+        in results
     assert "| baseline | random | 1 | 3/4 | the mission tree ended with SUCCESS |" in results
     for name, _ in PLOTS:
         assert (chosen.out / f"results_{name}.png").stat().st_size > 1000
