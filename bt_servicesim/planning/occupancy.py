@@ -220,6 +220,10 @@ class OccupancyGrid2D:
         room = self._clearances_at(x + (xs[:, None] - x) * t, y + (ys[:, None] - y) * t)
         return np.all(room >= max(clearance, np.finfo(np.float32).tiny), axis=1)
 
+    def clearances_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Clearance at many points at once (0 outside the map), in the points' shape."""
+        return self._clearances_at(np.asarray(xs, dtype=float), np.asarray(ys, dtype=float))
+
     def _clearances_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Clearance at many points at once (0 outside the map)."""
         cols = np.floor((xs - self.origin_x) / self.resolution).astype(np.int64)

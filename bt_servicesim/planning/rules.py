@@ -21,6 +21,8 @@ __all__ = [
     "GUEST_LOST_DISTANCE",
     "GUEST_SPAWN_PADDING",
     "OBJECT_APPROXIMATION_RADIUS",
+    "PEOPLE_LANE_HALF_WIDTH",
+    "PEOPLE_LANE_LENGTH",
     "PERSON_APPROXIMATION_RADIUS",
     "PICKUP_RANGE",
     "PICKUP_REACH",
@@ -48,6 +50,15 @@ FOLLOW_GAP = 1.2
 """A following guest stops this far from the robot."""
 GUEST_LOST_DISTANCE = 4.0
 """A guest this far behind the robot stops following (the task goes back to checkpoint 2)."""
+
+# ---------------------------------------------------------------------------- other people
+PEOPLE_LANE_HALF_WIDTH = 0.6
+"""A walker stops while anyone stands in a lane this many metres either side of its way (and
+:data:`PEOPLE_LANE_LENGTH` ahead), and waits as long as it stays blocked
+(``TrajectoryActorPlugin.cc``)."""
+PEOPLE_LANE_LENGTH = 1.5
+"""Metres ahead of a walker that its lane reaches (measured in 3-D from its origin, 1 m up, so
+the robot on the floor holds it up from about 1.12 m, a person from the full 1.5 m)."""
 
 # ---------------------------------------------------------------------------- RFID
 RFID_RANGE = 2.0

@@ -67,6 +67,7 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
+from servicesim_sim.costmap_message import occupancy_values, serialised_occupancy_grid
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.executor import DrainingExecutor
@@ -82,6 +83,8 @@ from servicesim_sim.settings import SimSettings
 RCLError = rclpy_implementation.RCLError
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
 PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
+COSTMAP_PERIOD_STEPS = 10  # the global costmap every 1 s sim: Nav2's publish_frequency 1.0
+GLOBAL_COSTMAP_TOPIC = "/servicebot/global_costmap/costmap"
 FEEDBACK_PERIOD_S = 0.5  # navigation feedback at 2 Hz sim, as often as anyone reads it
 IDLE_WAIT_S = 0.05  # wall seconds of one wait while an episode is over (see SimulatorNode._idle)
 #: No default QoS-event handlers: each is a waitable the executor adds to every wait set, and
@@ -202,6 +205,7 @@ class SimulatorNode:
         # a period sends up to three frames at once (at most 30 a sim second): keep them all
         self._camera = publisher(Image, "/servicebot/camera_front/image_raw", 4)
         self._map_publisher = publisher(OccupancyGrid, "/servicebot/map", LATCHED)
+        self._costmap = publisher(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, LATCHED)
         self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
                                      latched=LATCHED, now=stamp(self.engine.sim_time))
         # the high-rate messages are built once and refilled: publish serialises at the call
@@ -456,6 +460,21 @@ class SimulatorNode:
             math.sin(yaw / 2.0), math.cos(yaw / 2.0))
         return message
 
+    def _publish_costmap(self) -> None:
+        """Navigation's costmap as Nav2's global costmap publishes it (``map`` frame, values
+        by Nav2's table), only while someone listens; serialised here
+        (:mod:`servicesim_sim.costmap_message`).
+
+        The people on it are where the lidar marked them. Nav2 places marks by the robot's
+        estimated pose; this costmap places them where people stand (docs/fidelity.md)."""
+        if self._costmap.get_subscription_count() == 0:
+            return
+        costmap = self.engine.navigator.costmap
+        now = stamp(self.engine.sim_time)
+        self._send(self._costmap, serialised_occupancy_grid(
+            occupancy_values(costmap.costs()), costmap.frame, frame_id=MAP_FRAME,
+            stamp=(now.sec, now.nanosec)))
+
     def _map_message(self) -> OccupancyGrid:
         occupancy = self.settings.world.map
         message = OccupancyGrid()
@@ -484,6 +503,8 @@ class SimulatorNode:
         if self._io_count % PUBLIC_PERIOD_STEPS == 0:
             self._send(self._actors, self._actor_states())
             self._markers.publish(stamp(now))
+        if self._io_count % COSTMAP_PERIOD_STEPS == 0:
+            self._publish_costmap()
         self._publish_camera()
 
     def _publish_scores(self, scores: list[float]) -> None:

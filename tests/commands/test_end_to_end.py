@@ -98,6 +98,21 @@ def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
     assert picked_up_again or "SUCCESS" in tree_log_statuses(tmp_path, "GuestCaughtUp")
 
 
+def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobody_near(
+        tmp_path: Path) -> None:
+    """Random seed 10: leading its guest west along the office's 1.65 m top corridor, the robot
+    meets a walker coming east, who waits for it as long as it stays in the walker's lane; the
+    guest behind closes the way back. The robot steps into the room beside them, the walker,
+    bound for that room, stops in its door for the guest, and the robot gives way again, to
+    where the costmap shows nobody near. Before giving way learnt where people stand, nothing
+    moved again before the 900 s limit. In lockstep the speed changes nothing: flat out."""
+    code, report = mission(tmp_path, "--seed", "10", "--speed", "0", "--time-limit", "600")
+    assert_completed(code, report)
+    spots = [message for message in tree_log_feedback(tmp_path, "FindGiveWaySpot")
+             if message.startswith("give way at")]
+    assert len(set(spots)) >= 2, spots  # in the corridor, and again in the room
+
+
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
     code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed")
     assert code == 1

@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
+import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
@@ -26,7 +27,7 @@ from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, Ta
 
 from servicesim_sim.costmap import PersonMark
 from servicesim_sim.executor import DrainingExecutor
-from servicesim_sim.node import SimulatorNode
+from servicesim_sim.node import GLOBAL_COSTMAP_TOPIC, SimulatorNode
 from servicesim_sim.scenario import Difficulty
 from servicesim_sim.settings import SimSettings
 from servicesim_sim.world import DEFAULT_WORLD, load_world
@@ -145,6 +146,7 @@ def mark_someone_behind_the_robot(graph: Graph) -> PersonMark:
     deadline = time.monotonic() + 10.0
     while time.monotonic() < deadline:
         costmap.marks = (*costmap.marks, mark)
+        costmap.version += 1  # as a sweep's new mark does: the combined grid is built anew
         time.sleep(0.1)
         if mark in costmap.marks:
             return mark
@@ -236,3 +238,30 @@ def test_a_message_dds_refuses_is_dropped_with_a_warning_and_the_loop_goes_on(
         simulator._publish_io()  # the people go out every fifth period
     assert simulator._dropped == 3
     node.destroy_node()
+
+
+def test_the_global_costmap_is_published_once_a_sim_second_with_the_people_marked(
+        graph: Graph) -> None:
+    costmaps: list[OccupancyGrid] = []
+    graph.client.create_subscription(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, costmaps.append, LATCHED)
+    graph.spin_until(lambda: bool(costmaps))
+    mark = mark_someone_behind_the_robot(graph)
+    frame = graph.simulator.engine.navigator.costmap.frame
+    row, col = frame.cell_of(mark.x, mark.y)
+
+    def marked(message: OccupancyGrid) -> bool:
+        return message.data[row * message.info.width + col] == 100
+
+    graph.spin_until(lambda: len(costmaps) >= 3 and marked(costmaps[-1]))
+    message = costmaps[-1]
+    assert message.header.frame_id == "map"
+    assert (message.info.width, message.info.height) == (frame.cols, frame.rows)
+    assert (message.info.origin.position.x, message.info.origin.position.y) == (
+        pytest.approx(frame.origin_x), pytest.approx(frame.origin_y))
+    assert message.info.resolution == pytest.approx(frame.resolution)
+    # a metre from the mark, in the corridor the robot starts in, the floor is free
+    free_row, free_col = frame.cell_of(mark.x, mark.y + 1.0)
+    assert message.data[free_row * message.info.width + free_col] < 99
+    stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in costmaps[-3:]]
+    assert np.diff(stamps) == pytest.approx([1.0, 1.0])
+

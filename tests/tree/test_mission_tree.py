@@ -136,11 +136,16 @@ def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest()
     assert script.count("NavigateIntoPickUpArea") == 0
 
 
+NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100}
+"""Navigation failed for some other reason than people in the way: no giving way."""
+
+
 def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
         "Explore.GuestInRange": [Status.FAILURE] * 25,
         "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+        **NOT_BLOCKED,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -151,12 +156,29 @@ def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> N
                          "NavigateToWaypoint"], "the same waypoint once more, not the next"
 
 
+def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 400,
+        "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
+                            "ClearCostmapsForWaypoint"))]
+    # the spot is found on the costmap as the robot was blocked: before the clearing wipes it
+    assert steps[:6] == ["NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
+                         "ClearCostmapsForWaypoint", "NavigateToWaypoint"]
+
+
 def test_a_waypoint_that_fails_twice_is_skipped() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
         "Explore.GuestInRange": [Status.FAILURE] * 25,
         "NavigateToWaypoint": [Status.FAILURE, Status.FAILURE, (Status.SUCCESS, 10),
                                (Status.RUNNING, 0)],
+        **NOT_BLOCKED,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -172,6 +194,7 @@ def test_a_waypoint_whose_costmaps_cannot_be_cleared_is_skipped() -> None:
         "Explore.GuestInRange": [Status.FAILURE] * 25,
         "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
         "ClearCostmapsForWaypoint": [Status.FAILURE],
+        **NOT_BLOCKED,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS

@@ -22,6 +22,12 @@ from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
 from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
+from bt_servicesim.planning.give_way import (
+    PEOPLE_REACH,
+    give_way_spot,
+    recent_trail,
+    without_the_guest,
+)
 from bt_servicesim.planning.goals import (
     TrailingPlan,
     drop_off_goal,
@@ -30,7 +36,9 @@ from bt_servicesim.planning.goals import (
     pickup_goal,
     return_goal,
 )
+from bt_servicesim.planning.guest_localisation import RfidHistory
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 
 
 class _Computation(ActionNode, register=False):
@@ -189,6 +197,50 @@ class JitterGoal(_Computation):
         self.feedback_message = (f"jittered goal {describe(jittered)}" if jittered != goal
                                  else f"no free spot near {describe(goal)}: goal unchanged")
         return jittered
+
+
+class GiveWaySpot(_Computation):
+    """Where to wait while people the robot cannot pass go by (:func:`give_way_spot`).
+
+    The robot's trail comes from the RFID history, which keeps where the robot was at each
+    reading (the last two minutes). With ``guest_follows`` the spot leaves room for the guest
+    in tow, who stops short of it. The people standing near come from navigation's costmap
+    (:func:`people_on_costmap`), the guest in tow left out (:func:`without_the_guest`): the
+    spot keeps clear of them; without a costmap it is found without.
+    """
+
+    INPUT_PORTS: ClassVar[Ports] = {
+        "robot_pose": ROBOT_POSE,
+        "occupancy": OCCUPANCY,
+        "rfid_history": PortInformation(data_type=RfidHistory,
+                                        description="where the robot was, reading by reading"),
+        "guest_follows": PortInformation(data_type=bool, required=False, default_value=False,
+                                         description="whether a guest follows the robot"),
+        "costmap": PortInformation(data_type=Costmap2D, required=False,
+                                   description="navigation's costmap, where people stand"),
+    }
+    OUTPUT_PORTS: ClassVar[Ports] = {"spot": GOAL_OUT}
+
+    def __init__(self, name: str = "GiveWaySpot", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, robot_pose: Pose2D, occupancy: OccupancyGrid2D,
+                rfid_history: RfidHistory, guest_follows: bool,
+                costmap: Costmap2D | None) -> Pose2D | None:
+        trail = recent_trail([(reading.x, reading.y) for reading in rfid_history])
+        people = None
+        if costmap is not None:
+            people = people_on_costmap(costmap, occupancy, x=robot_pose.x, y=robot_pose.y,
+                                       reach=PEOPLE_REACH)
+            if guest_follows:
+                people = without_the_guest(people, robot=robot_pose, trail=trail)
+        spot = give_way_spot(occupancy, robot=robot_pose, trail=trail,
+                             guest_follows=guest_follows, people=people)
+        seen = ("no costmap" if people is None else f"{len(people)} people near: "
+                + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in people[:4]))
+        self.feedback_message = (f"give way at {describe(spot)} ({seen})" if spot is not None
+                                 else f"no spot off the robot's trail to give way at ({seen})")
+        return spot
 
 
 class ExplorationWaypoints(_Computation):

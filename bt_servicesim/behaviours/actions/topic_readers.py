@@ -32,6 +32,7 @@ from rclpy.qos import (
 from servicesim_competition.msg import ActorNames
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
+from bt_servicesim.planning.people import Costmap2D
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
 
@@ -43,6 +44,7 @@ except ModuleNotFoundError as _missing:
     _OccupancyType = object  # type: ignore[assignment,misc]
 
 __all__ = [
+    "CostmapToBlackboard",
     "MapToBlackboard",
     "RfidToBlackboard",
 ]
@@ -187,6 +189,52 @@ class MapToBlackboard(_TopicReader):
             self._set_output("occupancy", occupancy)
             self._written = occupancy
         self.feedback_message = f"map from {self.topic} on the blackboard"
+        return Status.SUCCESS
+
+
+class CostmapToBlackboard(_TopicReader):
+    """Navigation's costmap (``costmap``, a :class:`~bt_servicesim.planning.people.Costmap2D`),
+    where the lidar marked the people near the robot; always SUCCESS.
+
+    Nav2 publishes its global costmap about once a second; the tree does not wait for it: until
+    the first arrives the port stays unset, and whoever reads it does without. A message that
+    is no costmap (its size does not match its data) is left out with a warning.
+
+    Args:
+        name: the behaviour's name
+        topic: the costmap topic
+    """
+
+    MESSAGE_TYPE = OccupancyGrid
+    QOS = MAP_QOS
+    OUTPUT_PORTS: ClassVar[Ports] = {
+        "costmap": PortInformation(data_type=Costmap2D, required=False),
+    }
+
+    def __init__(self, name: str = "CostmapToBlackboard",
+                 topic: str = "/servicebot/global_costmap/costmap", **kwargs: Any) -> None:
+        super().__init__(name=name, topic=topic, **kwargs)
+        self._written: Any = None
+
+    def _on_message(self, message: Any) -> None:
+        try:
+            costmap = Costmap2D.from_message(message)
+        except ValueError as error:
+            self._require_node().get_logger().warning(f"{self.topic}: left out: {error}")
+            return
+        self._received_s = sim_now_s(self._require_node().get_clock())
+        self._message = costmap
+
+    def update(self) -> Status:
+        """Write the costmap when a new one has arrived."""
+        costmap = self._message
+        if costmap is None:
+            self.feedback_message = f"no costmap on {self.topic} yet"
+            return Status.SUCCESS
+        if costmap is not self._written:
+            self._set_output("costmap", costmap)
+            self._written = costmap
+        self.feedback_message = f"costmap of {costmap.stamp_s:.1f} s on the blackboard"
         return Status.SUCCESS
 
 

@@ -18,9 +18,11 @@ from servicesim_competition.msg import ActorNames
 
 from bt_servicesim.behaviours.actions.topic_readers import (
     MAP_QOS,
+    CostmapToBlackboard,
     MapToBlackboard,
     RfidToBlackboard,
 )
+from bt_servicesim.planning.people import Costmap2D
 from tests.fakes import GUEST, SensorWorld, ready
 
 Status = py_trees.common.Status
@@ -79,6 +81,35 @@ def test_map_reaches_a_late_joining_reader(world: SensorWorld) -> None:
     assert Blackboard.exists("/occupancy")
     # OccupancyGrid2D once bt_servicesim.planning.occupancy exists; the message itself until then
     assert type(Blackboard.get("/occupancy")).__name__ in {"OccupancyGrid2D", "OccupancyGrid"}
+
+
+def costmap_message(width: int, height: int, values: list[int], *, sec: int) -> OccupancyGrid:
+    message = OccupancyGrid()
+    message.header.frame_id = "map"
+    message.header.stamp.sec = sec
+    message.info.resolution, message.info.width, message.info.height = 0.1, width, height
+    message.info.origin.position.x, message.info.origin.position.y = -3.0, 2.0
+    message.data = values
+    return message
+
+
+def test_the_costmap_is_optional_and_written_as_each_one_arrives(world: SensorWorld) -> None:
+    publisher = world.simulator.create_publisher(
+        OccupancyGrid, "/servicebot/global_costmap/costmap", MAP_QOS)
+    reader = ready(CostmapToBlackboard(name="costmap"), world.node, costmap="/costmap")
+    reader.tick_once()
+    assert reader.status == Status.SUCCESS  # the tree does not wait for it
+    assert not Blackboard.exists("/costmap")
+    publisher.publish(costmap_message(3, 2, [0, 0, 100, 0, 99, 0], sec=7))
+    world.spin_until(lambda: reader._message is not None)
+    reader.tick_once()
+    costmap = Blackboard.get("/costmap")
+    assert isinstance(costmap, Costmap2D) and reader.status == Status.SUCCESS
+    assert costmap.values.tolist() == [[0, 0, 100], [0, 99, 0]]
+    assert (costmap.origin_x, costmap.origin_y, costmap.stamp_s) == (-3.0, 2.0, 7.0)
+    reader._on_message(costmap_message(4, 2, [0] * 6, sec=8))  # 4 x 2 cells, 6 values
+    reader.tick_once()
+    assert Blackboard.get("/costmap") is costmap  # the broken one was left out
 
 
 XML = """

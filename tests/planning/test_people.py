@@ -1,0 +1,76 @@
+"""People read off navigation's costmap: a lethal disc in open floor is a person.
+
+The costmap is drawn here as the simulator draws it (a person a disc of lethal cells 0.3 m
+round their centre, inscribed cells out to 0.55 m; walls lethal to their faces), on a 10 x 6 m
+room at 0.1 m, so every expected centre is where the test put someone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap
+from tests.fakes import grid_message
+
+WIDTH, HEIGHT, RESOLUTION = 10.0, 6.0, 0.1
+
+
+def walls() -> OccupancyGrid2D:
+    """The static map: a room with 0.2 m walls round it, at the costmap's resolution."""
+    values = np.zeros((round(HEIGHT / RESOLUTION), round(WIDTH / RESOLUTION)), dtype=np.int8)
+    values[:2, :] = values[-2:, :] = values[:, :2] = values[:, -2:] = 100
+    return OccupancyGrid2D.from_message(grid_message(values, resolution=RESOLUTION))
+
+
+def costmap(people: list[tuple[float, float]]) -> Costmap2D:
+    """The combined costmap: the walls lethal, each person lethal within 0.3 m, 99 to 0.55 m."""
+    grid = walls()
+    xs = (np.arange(grid.width) + 0.5) * RESOLUTION
+    ys = (np.arange(grid.height) + 0.5) * RESOLUTION
+    gx, gy = np.meshgrid(xs, ys)
+    values = np.where(grid.values >= 100, 100, 0).astype(np.int8)
+    for px, py in people:
+        gap = np.hypot(gx - px, gy - py)
+        values = np.where(gap <= 0.55, np.maximum(values, 99), values)
+        values = np.where(gap <= 0.3, 100, values)
+    message = grid_message(values, resolution=RESOLUTION)
+    message.header.stamp.sec = 12
+    return Costmap2D.from_message(message)
+
+
+def test_each_person_is_found_where_they_stand_nearest_first() -> None:
+    found = people_on_costmap(costmap([(6.0, 3.0), (3.0, 3.0)]), walls(), x=2.0, y=3.0,
+                              reach=8.0)
+    assert found == pytest.approx(np.array([[3.0, 3.0], [6.0, 3.0]]), abs=0.06)
+
+
+def test_a_guest_and_the_walker_they_hold_up_a_metre_apart_are_two_people() -> None:
+    found = people_on_costmap(costmap([(4.0, 3.0), (4.9, 3.3)]), walls(), x=4.0, y=2.0,
+                              reach=5.0)
+    assert len(found) == 2
+    assert found == pytest.approx(np.array([[4.0, 3.0], [4.9, 3.3]]), abs=0.06)
+
+
+def test_walls_are_nobody_and_a_person_against_a_wall_is_still_found() -> None:
+    assert people_on_costmap(costmap([]), walls(), x=5.0, y=3.0, reach=10.0).shape == (0, 2)
+    found = people_on_costmap(costmap([(5.0, 0.55)]), walls(), x=5.0, y=3.0, reach=10.0)
+    assert len(found) == 1 and found[0] == pytest.approx([5.0, 0.55], abs=0.15)
+
+
+def test_only_people_within_reach_count() -> None:
+    everyone = costmap([(1.5, 3.0), (8.5, 3.0)])
+    found = people_on_costmap(everyone, walls(), x=1.0, y=3.0, reach=3.0)
+    assert found == pytest.approx(np.array([[1.5, 3.0]]), abs=0.06)
+    assert people_on_costmap(everyone, walls(), x=40.0, y=40.0, reach=3.0).shape == (0, 2)
+
+
+def test_the_costmap_keeps_its_frame_and_stamp_and_a_broken_one_is_refused() -> None:
+    read = costmap([])
+    assert read.values.shape == (60, 100) and read.resolution == pytest.approx(RESOLUTION)
+    assert read.stamp_s == pytest.approx(12.0)
+    broken = grid_message(np.zeros((3, 4), dtype=np.int8), resolution=RESOLUTION)
+    broken.info.width = 5
+    with pytest.raises(ValueError, match="5 x 3 cells with 12 values"):
+        Costmap2D.from_message(broken)
