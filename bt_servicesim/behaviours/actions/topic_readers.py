@@ -32,16 +32,10 @@ from rclpy.qos import (
 from servicesim_competition.msg import ActorNames
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
-
-try:  # written by a colleague; until it exists the port carries whatever the reader stores
-    from bt_servicesim.planning.occupancy import OccupancyGrid2D as _OccupancyType
-except ModuleNotFoundError as _missing:
-    if _missing.name != "bt_servicesim.planning.occupancy":
-        raise
-    _OccupancyType = object  # type: ignore[assignment,misc]
 
 __all__ = [
     "CostmapToBlackboard",
@@ -167,7 +161,7 @@ class MapToBlackboard(_TopicReader):
     MESSAGE_TYPE = OccupancyGrid
     QOS = MAP_QOS
     OUTPUT_PORTS: ClassVar[Ports] = {
-        "occupancy": PortInformation(data_type=_OccupancyType, required=False),
+        "occupancy": PortInformation(data_type=OccupancyGrid2D, required=False),
     }
 
     def __init__(
@@ -178,7 +172,7 @@ class MapToBlackboard(_TopicReader):
 
     def _on_message(self, message: Any) -> None:
         self._received_s = sim_now_s(self._require_node().get_clock())
-        self._message = _to_occupancy(message)
+        self._message = OccupancyGrid2D.from_message(message)
 
     def update(self) -> Status:
         """Write the map when a new one has arrived."""
@@ -236,15 +230,6 @@ class CostmapToBlackboard(_TopicReader):
             self._written = costmap
         self.feedback_message = f"costmap of {costmap.stamp_s:.1f} s on the blackboard"
         return Status.SUCCESS
-
-
-def _to_occupancy(message: OccupancyGrid) -> Any:
-    """The grid as ``OccupancyGrid2D`` once that module exists; the message until then."""
-    if _OccupancyType is object:
-        return message
-    from bt_servicesim.planning.occupancy import OccupancyGrid2D
-
-    return OccupancyGrid2D.from_message(message)
 
 
 # ------------------------------------------------------------------------- the guest

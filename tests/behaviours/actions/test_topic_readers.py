@@ -22,6 +22,7 @@ from bt_servicesim.behaviours.actions.topic_readers import (
     MapToBlackboard,
     RfidToBlackboard,
 )
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D
 from tests.fakes import GUEST, SensorWorld, ready
 
@@ -78,9 +79,10 @@ def test_map_reaches_a_late_joining_reader(world: SensorWorld) -> None:
     world.spin_until(lambda: reader._message is not None)
     reader.tick_once()
     assert reader.status == Status.SUCCESS
-    assert Blackboard.exists("/occupancy")
-    # OccupancyGrid2D once bt_servicesim.planning.occupancy exists; the message itself until then
-    assert type(Blackboard.get("/occupancy")).__name__ in {"OccupancyGrid2D", "OccupancyGrid"}
+    occupancy = Blackboard.get("/occupancy")
+    assert isinstance(occupancy, OccupancyGrid2D)
+    assert (occupancy.width, occupancy.height) == (4, 3)
+    assert occupancy.values[2, 3] == 100  # the last cell, row 2 from the origin
 
 
 def costmap_message(width: int, height: int, values: list[int], *, sec: int) -> OccupancyGrid:
