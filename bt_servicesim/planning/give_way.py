@@ -10,8 +10,9 @@ The original's walkers use the same corridors (its ``trajectory_private_d`` loop
 office's top corridor), so this is a situation of the competition, not of our simulator.
 
 :func:`give_way_spot` picks where the robot waits instead: the nearest spot by route that the
-robot reaches without going on towards the blocked way (a disc ahead of it counts as a wall),
-that has room around it, and that lies off every lane the robot can tell people use:
+robot reaches without going on towards the blocked way (the people it sees there are obstacles;
+seeing nobody, it takes a disc ahead of it for a wall), that has room around it, and that lies
+off every lane the robot can tell people use:
 
 * the passage the robot stands in: the line through the robot along the passage's longest free
   span (a corridor's axis), which is where walkers come down;
