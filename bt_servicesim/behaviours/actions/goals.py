@@ -15,6 +15,7 @@ import random
 import zlib
 from typing import Any, ClassVar
 
+import numpy as np
 import py_trees
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -44,8 +45,9 @@ from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 class _Computation(ActionNode, register=False):
     """Read every input port, compute, write the one output port.
 
-    FAILURE with a feedback message if an input is missing or of the wrong type, if a box is
-    empty, or if :meth:`compute` finds nothing (it returns None and sets the message).
+    FAILURE with a feedback message if a required input is missing or an input is of the wrong
+    type, if a box is empty, or if :meth:`compute` finds nothing (it returns None and sets the
+    message). An optional input without data (and without a default) is passed as None.
     """
 
     INPUT_PORTS: ClassVar[Ports] = {}
@@ -75,6 +77,9 @@ class _Computation(ActionNode, register=False):
             try:
                 inputs[port] = self.get_input(port)
             except NoDataAvailable:
+                if not self.INPUT_PORTS[port].required:  # optional: the computation does without
+                    inputs[port] = None
+                    continue
                 self.feedback_message = f"no {port} on the blackboard"
                 return None
             except TypeError:
@@ -236,11 +241,19 @@ class GiveWaySpot(_Computation):
                 people = without_the_guest(people, robot=robot_pose, trail=trail)
         spot = give_way_spot(occupancy, robot=robot_pose, trail=trail,
                              guest_follows=guest_follows, people=people)
-        seen = ("no costmap" if people is None else f"{len(people)} people near: "
-                + ", ".join(f"({x:.1f}, {y:.1f})" for x, y in people[:4]))
-        self.feedback_message = (f"give way at {describe(spot)} ({seen})" if spot is not None
-                                 else f"no spot off the robot's trail to give way at ({seen})")
+        self.feedback_message = (f"give way at {describe(spot)}" if spot is not None
+                                 else "no spot to give way at") + f" ({_seen(people)})"
         return spot
+
+
+def _seen(people: np.ndarray | None) -> str:
+    """Who the costmap showed near, for a feedback message."""
+    if people is None:
+        return "no costmap"
+    if not len(people):
+        return "nobody near"
+    shown = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in people[:4])
+    return f"{len(people)} people near: {shown}" + (", ..." if len(people) > 4 else "")
 
 
 class ExplorationWaypoints(_Computation):
