@@ -192,11 +192,13 @@ class CostmapToBlackboard(_TopicReader):
 
     Nav2 publishes its global costmap about once a second; the tree does not wait for it: until
     the first arrives the port stays unset, and whoever reads it does without. A message that
-    is no costmap (its size does not match its data) is left out with a warning.
+    is no costmap (its size does not match its data) or lies in another frame than
+    ``global_frame`` (a local costmap in ``odom``) is left out, with a warning the first time.
 
     Args:
         name: the behaviour's name
         topic: the costmap topic
+        global_frame: the frame the costmap must be in, the map's
     """
 
     MESSAGE_TYPE = OccupancyGrid
@@ -206,15 +208,23 @@ class CostmapToBlackboard(_TopicReader):
     }
 
     def __init__(self, name: str = "CostmapToBlackboard",
-                 topic: str = "/servicebot/global_costmap/costmap", **kwargs: Any) -> None:
+                 topic: str = "/servicebot/global_costmap/costmap", global_frame: str = "map",
+                 **kwargs: Any) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
+        self.global_frame = global_frame
         self._written: Any = None
+        self._refused = ""
 
     def _on_message(self, message: Any) -> None:
         try:
+            if message.header.frame_id != self.global_frame:
+                raise ValueError(f"a costmap in frame {message.header.frame_id!r}, "
+                                 f"not {self.global_frame!r}")
             costmap = Costmap2D.from_message(message)
         except ValueError as error:
-            self._require_node().get_logger().warning(f"{self.topic}: left out: {error}")
+            if str(error) != self._refused:
+                self._refused = str(error)
+                self._require_node().get_logger().warning(f"{self.topic}: left out: {error}")
             return
         self._received_s = sim_now_s(self._require_node().get_clock())
         self._message = costmap

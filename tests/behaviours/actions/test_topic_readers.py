@@ -110,8 +110,11 @@ def test_the_costmap_is_optional_and_written_as_each_one_arrives(world: SensorWo
     assert costmap.values.tolist() == [[0, 0, 100], [0, 99, 0]]
     assert (costmap.origin_x, costmap.origin_y, costmap.stamp_s) == (-3.0, 2.0, 7.0)
     reader._on_message(costmap_message(4, 2, [0] * 6, sec=8))  # 4 x 2 cells, 6 values
+    local = costmap_message(3, 2, [0] * 6, sec=9)
+    local.header.frame_id = "odom"  # a local costmap: its cells are not where the map's are
+    reader._on_message(local)
     reader.tick_once()
-    assert Blackboard.get("/costmap") is costmap  # the broken one was left out
+    assert Blackboard.get("/costmap") is costmap  # both were left out
 
 
 XML = """
