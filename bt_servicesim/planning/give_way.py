@@ -229,8 +229,7 @@ def _give_way_spot(grid: OccupancyGrid2D, *, robot: Pose2D, trail: np.ndarray,
     if routes is None:
         return None
     rows, cols = routes.node_cells[:, 0], routes.node_cells[:, 1]
-    xs = local.origin_x + (cols + 0.5) * local.resolution
-    ys = local.origin_y + (rows + 0.5) * local.resolution
+    xs, ys = routes.points(np.arange(len(routes.node_cells))).T
     near = (routes.distances <= max_route) & (local.clearances[rows, cols] >= SPOT_ROOM)
     candidates = np.flatnonzero(near)
     candidates = candidates[np.argsort(routes.distances[candidates], kind="stable")]
@@ -289,16 +288,16 @@ def _guest_stops(routes: RouteTree, nodes: np.ndarray) -> np.ndarray:
     point back along the route :data:`FOLLOW_GAP` from the node in a straight line (the guest
     stops that far from the robot, however the route bends; the start, for a shorter route);
     shape (n, 2)."""
-    ends = _points(routes, nodes)
+    ends = routes.points(nodes)
     current = np.array(nodes, copy=True)
     while True:
         previous = routes.predecessors[current]
-        here = _points(routes, current)
+        here = routes.points(current)
         step = (previous >= 0) & (np.hypot(*(here - ends).T) < FOLLOW_GAP)
         if not step.any():
             break
         current = np.where(step, previous, current)
-    return _points(routes, current)
+    return routes.points(current)
 
 
 def _clear_of_doorway(grid: OccupancyGrid2D, routes: RouteTree, node: int, *,
@@ -307,8 +306,8 @@ def _clear_of_doorway(grid: OccupancyGrid2D, routes: RouteTree, node: int, *,
     axis of the narrowest doorway its route passes; True when the route passes none. ``grid``
     is the map itself, without the way ahead blocked (that is no doorway); ``doorways`` caches
     what each route node stands in."""
-    nodes = _nodes_to(routes, node)
-    points = _points(routes, nodes)
+    nodes = routes.route_to(node)
+    points = routes.points(nodes)
     near_walls = np.flatnonzero(grid.clearances_at(points[:, 0], points[:, 1]) < DOORWAY_WIDTH / 2)
     found = []
     for index in near_walls:
@@ -324,22 +323,6 @@ def _clear_of_doorway(grid: OccupancyGrid2D, routes: RouteTree, node: int, *,
     waiting = [points[-1]] + ([_guest_stops(routes, np.array([node]))[0]] if guest_follows else [])
     return all(abs(ux * (py - door.y) - uy * (px - door.x)) >= DOOR_LANE_OFFSET
                for px, py in waiting)
-
-
-def _nodes_to(routes: RouteTree, node: int) -> np.ndarray:
-    """The route's nodes from the start to ``node``."""
-    nodes = []
-    while node >= 0:
-        nodes.append(node)
-        node = int(routes.predecessors[node])
-    return np.array(nodes[::-1])
-
-
-def _points(routes: RouteTree, nodes: np.ndarray) -> np.ndarray:
-    """World points (centres) of route nodes; shape (n, 2)."""
-    centres = (routes.node_cells[nodes] + 0.5) * routes.grid.resolution
-    return np.column_stack([routes.grid.origin_x + centres[:, 1],
-                            routes.grid.origin_y + centres[:, 0]])
 
 
 def travel_heading(trail: np.ndarray, robot: Pose2D) -> float:

@@ -358,9 +358,21 @@ class RouteTree:
         while node >= 0 and self.distances[node] >= stop_at:
             nodes.append(node)
             node = int(self.predecessors[node])
+        return self.points(np.array(nodes, dtype=np.int64))
+
+    def points(self, nodes: np.ndarray) -> np.ndarray:
+        """World points (cell centres) of ``nodes``; shape (n, 2)."""
         centres = (self.node_cells[nodes] + 0.5) * self.grid.resolution
         return np.column_stack([self.grid.origin_x + centres[:, 1],
                                 self.grid.origin_y + centres[:, 0]])
+
+    def route_to(self, node: int) -> np.ndarray:
+        """The nodes of the route from the start to ``node``, in order."""
+        nodes = []
+        while node >= 0:
+            nodes.append(node)
+            node = int(self.predecessors[node])
+        return np.array(nodes[::-1], dtype=np.int64)
 
     def _best_node(self, x: float, y: float) -> tuple[int, float] | None:
         """The node within one lattice step of (x, y) minimising route length plus the last hop.

@@ -133,6 +133,14 @@ def test_routes_go_round_the_wall_through_the_door() -> None:
     assert len(routes.path_back_from(8.0, 1.0, max_length=1.0)) <= 12
     assert routes.distance_to(5.1, 1.0) == math.inf
     assert grid.routes_from(-1.0, -1.0, 0.35) is None
+    # node by node, the same route from the start, in order
+    end = int(np.argmin(np.hypot(*(routes.points(np.arange(len(routes.node_cells)))
+                                   - (8.0, 1.0)).T)))
+    nodes = routes.route_to(end)
+    assert routes.distances[nodes[0]] == 0.0 and nodes[-1] == end
+    assert np.all(np.diff(routes.distances[nodes]) > 0.0)
+    steps = np.hypot(*np.diff(routes.points(nodes), axis=0).T)  # lattice neighbours each
+    assert np.all(steps <= routes.stride * grid.resolution * math.sqrt(2) + 1e-9)
 
 
 def test_window_holds_the_cells_whose_centres_lie_inside() -> None:
