@@ -12,7 +12,8 @@ One place for each stand-in, so that the tests of different packages script the 
   (spins fakes in a thread of their own, as a real server runs) and :class:`FakeSimulator`
   (referee and navigation under one namespace, one event log);
 - leaves: :func:`ready` (ports remapped as given) and :func:`wire` (every port to ``/<port>``);
-- maps and RFID: :func:`grid_message`, :func:`cells`, :func:`fill`, :func:`open_room`,
+- maps, costmaps and RFID: :func:`grid_message`, :func:`cells`, :func:`fill`, :func:`open_room`,
+  :func:`costmap_of` (navigation's costmap with people on it),
   :func:`drive` (RFID readings along a path), :func:`check_approach`;
 - recorded runs: :class:`RecordedRun` (the errand tree of :class:`Step` leaves run to its end
   with a tree log, and what every tick really was);
@@ -58,6 +59,7 @@ from tf2_msgs.msg import TFMessage
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.guest_localisation import RfidHistory, RfidReading
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.people import Costmap2D
 from bt_servicesim.records.drawing import tree_text
 from bt_servicesim.records.tree_log import TreeLog
 from bt_servicesim.ros.messages import pose_from_msg, pose_to_msg
@@ -492,6 +494,22 @@ def fill(values: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: 
     """Mark the cells of the rectangle [x0, x1] x [y0, y1] (origin at 0, 0)."""
     values[round(y0 / RESOLUTION):round(y1 / RESOLUTION),
            round(x0 / RESOLUTION):round(x1 / RESOLUTION)] = value
+
+
+def costmap_of(grid: OccupancyGrid2D, people: list[tuple[float, float]], *,
+               stamp_s: float = 0.0) -> Costmap2D:
+    """Navigation's costmap over ``grid`` as the simulator draws it: walls lethal, each person
+    lethal within 0.3 m of their centre and inscribed (99) out to 0.55 m."""
+    xs = grid.origin_x + (np.arange(grid.width) + 0.5) * grid.resolution
+    ys = grid.origin_y + (np.arange(grid.height) + 0.5) * grid.resolution
+    gx, gy = np.meshgrid(xs, ys)
+    values = np.where(grid.values >= 100, 100, 0).astype(np.int8)
+    for px, py in people:
+        gap = np.hypot(gx - px, gy - py)
+        values = np.where(gap <= 0.55, np.maximum(values, 99), values)
+        values = np.where(gap <= 0.3, 100, values)
+    return Costmap2D(values=values.astype(np.int8), origin_x=grid.origin_x,
+                     origin_y=grid.origin_y, resolution=grid.resolution, stamp_s=stamp_s)
 
 
 def open_room(size: float = 14.0) -> OccupancyGrid2D:

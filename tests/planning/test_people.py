@@ -12,7 +12,7 @@ import pytest
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
-from tests.fakes import grid_message
+from tests.fakes import costmap_of, grid_message
 
 WIDTH, HEIGHT, RESOLUTION = 10.0, 6.0, 0.1
 
@@ -25,19 +25,8 @@ def walls() -> OccupancyGrid2D:
 
 
 def costmap(people: list[tuple[float, float]]) -> Costmap2D:
-    """The combined costmap: the walls lethal, each person lethal within 0.3 m, 99 to 0.55 m."""
-    grid = walls()
-    xs = (np.arange(grid.width) + 0.5) * RESOLUTION
-    ys = (np.arange(grid.height) + 0.5) * RESOLUTION
-    gx, gy = np.meshgrid(xs, ys)
-    values = np.where(grid.values >= 100, 100, 0).astype(np.int8)
-    for px, py in people:
-        gap = np.hypot(gx - px, gy - py)
-        values = np.where(gap <= 0.55, np.maximum(values, 99), values)
-        values = np.where(gap <= 0.3, 100, values)
-    message = grid_message(values, resolution=RESOLUTION)
-    message.header.stamp.sec = 12
-    return Costmap2D.from_message(message)
+    """The combined costmap over :func:`walls`, stamped at 12 s."""
+    return costmap_of(walls(), people, stamp_s=12.0)
 
 
 def test_each_person_is_found_where_they_stand_nearest_first() -> None:
@@ -67,9 +56,13 @@ def test_only_people_within_reach_count() -> None:
 
 
 def test_the_costmap_keeps_its_frame_and_stamp_and_a_broken_one_is_refused() -> None:
-    read = costmap([])
-    assert read.values.shape == (60, 100) and read.resolution == pytest.approx(RESOLUTION)
-    assert read.stamp_s == pytest.approx(12.0)
+    drawn = costmap([(3.0, 3.0)])
+    message = grid_message(drawn.values, resolution=RESOLUTION, origin=(-1.0, 2.0))
+    message.header.stamp.sec, message.header.stamp.nanosec = 12, 500_000_000
+    read = Costmap2D.from_message(message)
+    assert read.values.tolist() == drawn.values.tolist()  # rows from the origin, as drawn
+    assert (read.origin_x, read.origin_y) == (-1.0, 2.0)
+    assert read.resolution == pytest.approx(RESOLUTION) and read.stamp_s == pytest.approx(12.5)
     broken = grid_message(np.zeros((3, 4), dtype=np.int8), resolution=RESOLUTION)
     broken.info.width = 5
     with pytest.raises(ValueError, match="5 x 3 cells with 12 values"):

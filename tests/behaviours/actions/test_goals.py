@@ -34,9 +34,8 @@ from bt_servicesim.behaviours.actions.next_waypoint import NextWaypoint
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.guest_localisation import RfidHistory
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
-from bt_servicesim.planning.people import Costmap2D
 from bt_servicesim.tree.loading import DEFAULT_TREE
-from tests.fakes import cells, drive, fill, grid_message, open_room, wire
+from tests.fakes import cells, costmap_of, drive, fill, grid_message, open_room, wire
 from tests.planning.test_give_way import ROBOT, office
 
 Status = py_trees.common.Status
@@ -526,18 +525,6 @@ def test_goal_behaviours_build_and_run_from_xml(tmp_path: Path) -> None:
 
 
 # ------------------------------------------------------------------------------ giving way
-def costmap_of(grid: OccupancyGrid2D, people: list[tuple[float, float]]) -> Costmap2D:
-    """The map's walls lethal and each person a lethal disc of 0.3 m, as navigation marks them."""
-    xs = grid.origin_x + (np.arange(grid.width) + 0.5) * grid.resolution
-    ys = grid.origin_y + (np.arange(grid.height) + 0.5) * grid.resolution
-    gx, gy = np.meshgrid(xs, ys)
-    values = np.where(grid.values >= 100, 100, 0).astype(np.int8)
-    for px, py in people:
-        values[np.hypot(gx - px, gy - py) <= 0.3] = 100
-    return Costmap2D(values=values, origin_x=grid.origin_x, origin_y=grid.origin_y,
-                     resolution=grid.resolution, stamp_s=0.0)
-
-
 def test_give_way_spot_keeps_clear_of_the_people_on_the_costmap_but_not_of_the_guest() -> None:
     """In the corridor of tests/planning/test_give_way.py: a walker ahead holds the robot up,
     its guest stands on its trail behind it."""
