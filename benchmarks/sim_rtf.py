@@ -1,7 +1,7 @@
 """The simulator's real-time factor: alone, and with one executive driving a full mission.
 
 ``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]
-[--missions N] [--timing lockstep|free|both|all]`` prints
+[--missions N | --seeds 0-4] [--timing lockstep|free|both|all]`` prints
 
 * alone: the simulator as fast as it can run (speed 0) with its task started (before
   ``new_task`` it never runs faster than real time) but nobody driving the robot and nobody
@@ -21,6 +21,13 @@
   lockstep the tree ticks exactly 10 times a sim second by construction, and the factor says
   what that costs; ``--timing all`` adds lockstep *taking turns* (the simulator waits for each
   tick before it steps on, as before the pipeline), to show what the pipeline gains;
+* with ``--seeds``, one mission per task seed (``run --seed``) instead of ``N`` of the shipped
+  task, each played every way in turn: a mission's cost per sim second depends on what happens
+  in it (a robot held up by people replans all the while), and free running, whose timing
+  changes the mission, plays a different one from lockstep even on the same task, so one task
+  compares the timings on the content of one or two missions only. The summary gives each
+  timing's factor pooled over its missions (all sim seconds over all wall seconds) and
+  lockstep against the others mission by mission;
 * the CPU time the executive's and the simulator's processes spent over the task (from
   ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
   second cannot keep X times real time even with a core of its own, so these say which of
@@ -32,6 +39,7 @@ with its load; nothing here is asserted. Bad arguments give one line and exit st
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import json
 import os
@@ -72,7 +80,27 @@ def build_parser() -> OneLineArgumentParser:
     parser.add_argument("--missions", type=int, default=5,
                         help="driven missions to run one after another (default 5): a "
                              "mission's cost per sim second depends on what happens in it")
+    parser.add_argument("--seeds", type=seed_list, default=None,
+                        help="comma-separated task seeds (run --seed) to drive instead of the "
+                             "shipped task, one mission each, every timing on each seed: "
+                             "compares the timings over several missions' content; overrides "
+                             "--missions")
     return parser
+
+
+def seed_list(text: str) -> list[int]:
+    """``0,1,2`` or a range ``0-4`` (both ends included) as seeds."""
+    try:
+        if "-" in text.strip("-") and "," not in text:
+            first, last = (int(part) for part in text.split("-", 1))
+            seeds = list(range(first, last + 1))
+        else:
+            seeds = [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: not seeds like 0,1,2 or 0-4") from None
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: not seeds like 0,1,2 or 0-4")
+    return seeds
 
 
 class Stamps:
@@ -161,8 +189,8 @@ class ProcessCpu:
 
 
 def measure_mission(*, speed: float, executive: str, free_running: bool = False,
-                    taking_turns: bool = False) -> float:
-    """Run one mission, print its figures; the real-time factor over its task.
+                    taking_turns: bool = False, seed: int | None = None) -> tuple[float, float]:
+    """Run one mission, print its figures; the sim and wall seconds of its task.
 
     The run claims a ROS domain of its own and names it in the report it writes as it starts;
     the benchmark reads the referee there, on a context of that domain.
@@ -175,7 +203,8 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
         command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed",
                    repr(speed), "--executive", executive, "--out", out,
-                   *(["--free-running"] if free_running else [])]
+                   *(["--free-running"] if free_running else []),
+                   *(["--seed", str(seed)] if seed is not None else [])]
         started = time.monotonic()
         errors = (Path(out) / "run.err").open("w")  # a pipe nobody reads would block the run
         environment = os.environ.copy()
@@ -212,8 +241,9 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
     timing = "free running" if free_running else report.get("timing", "?")
     if taking_turns:
         timing += ", taking turns"
-    print(f"driven by {executive} ({timing}, speed {speed:g}): {sim_s:7.1f} sim s of task in "
-          f"{wall_s:5.1f} wall s  real-time factor {factor:6.1f}")
+    shown = f"seed {seed}, " if seed is not None else ""
+    print(f"driven by {executive} ({shown}{timing}, speed {speed:g}): {sim_s:7.1f} sim s of task "
+          f"in {wall_s:5.1f} wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
@@ -226,7 +256,7 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
         print("  CPU over the task: " + ", ".join(
             f"{name} {cpu.spent(pid):.2f} s ({1000.0 * cpu.spent(pid) / sim_s:.1f} ms "
             f"per sim s)" for name, pid in processes))
-    return factor
+    return sim_s, wall_s
 
 
 def run_domain(out: Path, run: subprocess.Popen[bytes]) -> int:
@@ -293,6 +323,27 @@ def print_ticks(ticks: list[float], *, start: float, end: float) -> None:
 
 
 
+def summarise(executive: str, tasks: dict[str, list[tuple[float, float]]]) -> None:
+    """Each timing's factor over its missions (median, least, greatest, and pooled: all sim
+    seconds over all wall seconds), and each timing against lockstep mission by mission."""
+    for name, missions in tasks.items():
+        if len(missions) < 2:
+            continue
+        factors = [sim_s / wall_s for sim_s, wall_s in missions]
+        pooled = sum(sim_s for sim_s, _ in missions) / sum(wall_s for _, wall_s in missions)
+        print(f"driven by {executive}, {name}, {len(missions)} missions: real-time factor "
+              f"median {statistics.median(factors):.1f}, min {min(factors):.1f}, "
+              f"max {max(factors):.1f}, pooled {pooled:.1f}")
+    lockstep = tasks.get("lockstep")
+    for name, missions in tasks.items():
+        if name == "lockstep" or not lockstep:
+            continue
+        ratios = [(ls / lw) / (s / w) for (ls, lw), (s, w) in zip(lockstep, missions, strict=True)]
+        print(f"lockstep against {name}, mission by mission: "
+              + ", ".join(f"{ratio:.2f}" for ratio in ratios)
+              + f" (median {statistics.median(ratios):.2f})")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if not args.seconds > 0.0:
@@ -314,18 +365,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     executor.add_node(node)
     try:
         measure_alone(node, executor, speed=0.0, seconds=args.seconds)
-        factors: dict[str, list[float]] = {name: [] for name in TIMINGS[args.timing]}
-        for _mission in range(args.missions):
-            for name in factors:
-                factors[name].append(measure_mission(
+        seeds = args.seeds or [None] * args.missions
+        tasks: dict[str, list[tuple[float, float]]] = {name: [] for name in TIMINGS[args.timing]}
+        for seed in seeds:
+            for name in tasks:
+                tasks[name].append(measure_mission(
                     speed=args.speed, executive=args.executive,
                     free_running=name == "free running",
-                    taking_turns=name == "lockstep, taking turns"))
-        for name, values in factors.items():
-            if len(values) > 1:
-                print(f"driven by {args.executive}, {name}, {len(values)} missions: real-time "
-                      f"factor median {statistics.median(values):.1f}, min {min(values):.1f}, "
-                      f"max {max(values):.1f}")
+                    taking_turns=name == "lockstep, taking turns", seed=seed))
+        summarise(args.executive, tasks)
     finally:
         executor.shutdown()
         node.destroy_node()
