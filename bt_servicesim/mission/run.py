@@ -147,9 +147,23 @@ class MissionRun:
             return code if stops.first is None or code >= 128 else 128 + stops.first
 
     def _node(self) -> ExecutiveNode:
-        """The executive's node, on sim time unless the run keeps the system clock."""
-        return ExecutiveNode("bt_servicesim_executive",
+        """The executive's node, on sim time unless the run keeps the system clock.
+
+        Its subscriptions are reliable from the start when the backend is this project's
+        simulator and the run will ask it for lockstep (which it always offers), rather than
+        from the offer on: the records subscribe before the offer, and a best-effort recording
+        subscription cannot be shared with the tree's reliable reader of the same topic, so
+        the simulator would send odometry, transforms and RFID to the executive twice.
+        """
+        node = ExecutiveNode("bt_servicesim_executive",
                              use_sim_time=self.settings.clock == "sim")
+        node.reliable_subscriptions = self.reliable_from_the_start()
+        return node
+
+    def reliable_from_the_start(self) -> bool:
+        """Whether the node's subscriptions are reliable before the lockstep offer: the backend
+        is this project's simulator (which always offers lockstep) and the run will join."""
+        return self._asks_for_lockstep() and self.simulator is not None
 
     def _stopped_while_starting(self, stop: BaseException, stops: StopSignals) -> int:
         stops.hold(stop)
@@ -301,17 +315,19 @@ class MissionRun:
         Decided before the tree sets up: in lockstep every subscription is reliable, so that
         the client can count every message the simulator announces.
         """
-        if self.settings.free_running:
-            print("free running: --free-running asked for it", flush=True)
-            return None
-        if self.settings.clock == "system":
-            print("free running: the run keeps the system clock (--clock system)", flush=True)
+        if not self._asks_for_lockstep():
+            print("free running: " + ("--free-running asked for it" if self.settings.free_running
+                                      else "the run keeps the system clock (--clock system)"),
+                  flush=True)
             return None
         if not lockstep.offered(node, executor, wait_s=self._lockstep_wait_s()):
             print("free running: the backend offers no lockstep", flush=True)
             return None
         node.reliable_subscriptions = True
         return lockstep.LockstepClient(node, name=node.get_fully_qualified_name())
+
+    def _asks_for_lockstep(self) -> bool:
+        return not self.settings.free_running and self.settings.clock == "sim"
 
     def _lockstep_wait_s(self) -> float:
         """How long the offer and the join may take: this project's simulator always offers

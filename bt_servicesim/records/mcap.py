@@ -64,6 +64,10 @@ the executive never reads it (a real robot has no such topic)."""
 MARKERS_TOPIC, AREA_MARKERS_TOPIC = "/servicesim/markers", "/servicesim/markers/areas"
 """The simulator's ``visualization_msgs/MarkerArray`` in ``map``: people, guest and plan; the
 target areas (latched), for a 3D viewer such as Foxglove's."""
+RECORDING_DEPTH = 100
+"""The history depth the recorder subscribes with: as deep as tf2's listener asks for /tf, so
+that the tree's readers, which ask no deeper, share the recording's subscription of a topic
+(:mod:`bt_servicesim.ros.shared_subscription`) rather than each having the topic sent again."""
 SNAPSHOT_PERIOD_S = 0.5  # sim s between tree snapshots while the tip stays put
 DEFINITION_SEPARATOR = "=" * 80
 PRIMITIVE_TYPES = frozenset({
@@ -100,9 +104,8 @@ class RecordedTopic:
         if self.latched:
             return QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                               durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        if self.sensor:
-            return QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
-        return self.playback_qos
+        reliability = ReliabilityPolicy.BEST_EFFORT if self.sensor else ReliabilityPolicy.RELIABLE
+        return QoSProfile(depth=RECORDING_DEPTH, reliability=reliability)
 
     @property
     def playback_qos(self) -> QoSProfile:

@@ -4,6 +4,7 @@ sim-time backstop counts from the mission's start."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -15,6 +16,8 @@ from std_srvs.srv import Empty
 from bt_servicesim.mission import run as mission_run
 from bt_servicesim.mission.referee_monitor import RefereeMonitor
 from bt_servicesim.mission.run import SIM_TIME_BACKSTOP_S, MissionRun, outlived_time_limit
+from bt_servicesim.mission.settings import RunSettings
+from bt_servicesim.tree.loading import DEFAULT_TREE
 
 
 def test_the_run_waits_until_every_client_has_its_server(ros_context: Any) -> None:
@@ -82,3 +85,18 @@ def test_a_backend_without_referee_state_leaves_the_referees_books_unknown(
         assert monitor.unheard() == "" and monitor.report_fields()["referee_heard"] is True
     finally:
         node.destroy_node()
+
+
+@pytest.mark.parametrize(("attach", "free_running", "reliable"), [
+    (False, False, True), (False, True, False), (True, False, False)],
+    ids=["own simulator", "free running", "attached"])
+def test_subscriptions_are_reliable_from_the_start_only_with_our_simulator_in_lockstep(
+        tmp_path: Path, attach: bool, free_running: bool, reliable: bool) -> None:
+    """The records subscribe before the lockstep offer; with our simulator the run knows the
+    answer already. Attached to another backend it cannot: a reliable reader would hear
+    nothing of a driver publishing best effort."""
+    settings = RunSettings(world=None, seed=None, speed=0.0, tree=DEFAULT_TREE, out=tmp_path,
+                           time_limit_s=900.0, headless=True, executive="bt", attach=attach,
+                           free_running=free_running)
+    run = MissionRun(settings=settings, make_executive=lambda node: None)  # type: ignore[arg-type]
+    assert run.reliable_from_the_start() is reliable

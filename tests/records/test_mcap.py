@@ -30,6 +30,8 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
+from bt_servicesim.behaviours.actions.localised_pose import LocalisedPoseToBlackboard
+from bt_servicesim.behaviours.actions.topic_readers import RfidToBlackboard
 from bt_servicesim.records.mcap import (
     RECORDED_TOPICS,
     TASK_TOPIC,
@@ -41,6 +43,7 @@ from bt_servicesim.records.mcap import (
     field_types,
 )
 from bt_servicesim.records.tree_log import TickRecord
+from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from tests.fakes import SimTimeGraph
 
@@ -200,6 +203,23 @@ def test_a_reader_of_a_recorded_topic_shares_the_recorders_subscription(graph: G
     graph.spin_until(lambda: recorder.counts["/servicebot/odom"] == 3, "three odometries")
     recorder.close()
     assert heard == [0.0, 1.0, 2.0]
+
+
+@pytest.mark.parametrize("lockstep", [False, True], ids=["free running", "lockstep"])
+def test_the_trees_readers_of_recorded_topics_add_no_subscription(
+        ros_context: Any, tmp_path: Path, lockstep: bool) -> None:
+    """Odometry, transforms and RFID each come once a period: a second subscription would
+    have the backend send each to the executive twice. In lockstep every subscription is
+    reliable, the recorder's too (the run decides that before it records)."""
+    node = ExecutiveNode("recording_executive", context=ros_context)
+    node.reliable_subscriptions = lockstep
+    recorder = McapRecorder(node=node, path=tmp_path / "run.mcap")
+    recording = len(list(node.subscriptions))
+    LocalisedPoseToBlackboard(name="pose").setup(node=node)
+    RfidToBlackboard(name="rfid").setup(node=node)
+    assert len(list(node.subscriptions)) == recording
+    recorder.close()
+    node.destroy_node()
 
 
 @pytest.mark.parametrize("offered", [ReliabilityPolicy.BEST_EFFORT, ReliabilityPolicy.RELIABLE],
