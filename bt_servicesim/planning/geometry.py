@@ -26,6 +26,11 @@ class Pose2D:
         return math.hypot(other.x - self.x, other.y - self.y)
 
 
+def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
+    """The rotation about z of the quaternion (x, y, z, w): a planar pose's heading."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
 def compose(frame: Pose2D, pose: Pose2D) -> Pose2D:
     """``pose``, given in a frame whose origin lies at ``frame``, in the frame ``frame`` is
     given in: the planar transform product frame * pose.

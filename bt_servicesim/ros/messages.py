@@ -12,13 +12,13 @@ from typing import Any
 
 from geometry_msgs.msg import Pose
 
-from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.planning.geometry import Pose2D, yaw_of
 
 __all__ = ["pose_from_msg", "pose_from_transform", "pose_to_msg"]
 
 
 def _yaw(q: Any) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return yaw_of(q.x, q.y, q.z, q.w)
 
 
 def pose_from_msg(pose: Any) -> Pose2D:

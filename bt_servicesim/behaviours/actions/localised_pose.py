@@ -22,11 +22,13 @@ from nav_msgs.msg import Odometry
 from py_trees.ports import PortInformation
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 from tf2_msgs.msg import TFMessage
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.planning.geometry import Pose2D, compose
 from bt_servicesim.ros.messages import pose_from_msg, pose_from_transform
+from bt_servicesim.ros.planar_cdr import odometry_pose, transforms
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs
 
@@ -62,11 +64,13 @@ class LocalisedPoseToBlackboard(ActionNode):
         self._wrong_frame = ""
 
     def setup(self, **kwargs: Any) -> None:
-        """Subscribe to odometry (newest of a burst) and to every transform message."""
+        """Subscribe to odometry (newest of a burst) and to every transform message, both
+        read from their bytes (:mod:`bt_servicesim.ros.planar_cdr`)."""
         self.node = node_from_setup_kwargs(self.name, kwargs)
         shared_subscription(self.node, Odometry, self.odom_topic, self._on_odometry,
-                            qos_profile_sensor_data, latest_only=True)
-        shared_subscription(self.node, TFMessage, self.tf_topic, self._on_transforms, TF_QOS)
+                            qos_profile_sensor_data, latest_only=True, raw=True)
+        shared_subscription(self.node, TFMessage, self.tf_topic, self._on_transforms, TF_QOS,
+                            raw=True)
 
     def initialise(self) -> None:
         """Nothing to start: the subscriptions run from setup onwards."""
@@ -74,17 +78,26 @@ class LocalisedPoseToBlackboard(ActionNode):
             raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
         self.feedback_message = f"reading {self.tf_topic} and {self.odom_topic}"
 
-    def _on_odometry(self, message: Odometry) -> None:
-        if message.header.frame_id != self.odom_frame:
-            self._wrong_frame = message.header.frame_id
+    def _on_odometry(self, data: bytes) -> None:
+        read = odometry_pose(data)
+        if read is None:  # not plain little-endian CDR: rclpy reads any encoding
+            message = deserialize_message(data, Odometry)
+            read = message.header.frame_id, pose_from_msg(message.pose.pose)
+        frame, pose = read
+        if frame != self.odom_frame:
+            self._wrong_frame = frame
             return
-        self._odometry = pose_from_msg(message.pose.pose)
+        self._odometry = pose
 
-    def _on_transforms(self, message: TFMessage) -> None:
-        for stamped in message.transforms:
-            if (stamped.header.frame_id == self.global_frame
-                    and stamped.child_frame_id == self.odom_frame):
-                self._map_to_odom = pose_from_transform(stamped.transform)
+    def _on_transforms(self, data: bytes) -> None:
+        read = transforms(data)
+        if read is None:
+            read = [(stamped.header.frame_id, stamped.child_frame_id,
+                     pose_from_transform(stamped.transform))
+                    for stamped in deserialize_message(data, TFMessage).transforms]
+        for parent, child, pose in read:
+            if parent == self.global_frame and child == self.odom_frame:
+                self._map_to_odom = pose
 
     def update(self) -> Status:
         """Write map -> odom -> base once both are known."""
