@@ -110,3 +110,34 @@ def test_the_latest_state_survives_an_interrupt(tmp_path: Path) -> None:
     assert shadow.text() == drawn
     assert tip == "Errand.Deliver.Deliver.Detour"
     log.close()
+
+
+class Token:
+    """A blackboard value whose repr is its text: a new object may repr alike."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+def test_blackboard_changes_are_new_objects_with_new_reprs_and_keys_that_went(
+        tmp_path: Path) -> None:
+    store: dict[str, object] = {}
+    log = TreeLog(tree=errand_tree(tmp_path), path=tmp_path / "tree_log.jsonl",
+                  sim_time_s=lambda: 0.0, blackboard=lambda: store)
+    pose = Token("at A")
+    store.update({"/pose": pose, "/goal": Token("B"), "/left": Token("x")})
+    assert log.capture(tick=1).blackboard == {"/pose": "at A", "/goal": "B", "/left": "x"}
+    pose.text = "at C"  # changed in place: not noticed, as the module says
+    store["/goal"] = Token("B")  # another object, the same repr: no change
+    assert log.capture(tick=2) is None
+    store["/pose"] = Token("at D")
+    del store["/left"]
+    store["/right"] = Token("y")  # as many keys as before, other ones
+    assert log.capture(tick=3).blackboard == {"/pose": "at D", "/right": "y", "/left": None}
+    del store["/right"]
+    assert log.capture(tick=4).blackboard == {"/right": None}
+    assert log.capture(tick=5) is None
+    log.close()
