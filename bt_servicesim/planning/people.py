@@ -16,7 +16,7 @@ Pure: numpy and scipy's labelling, no ROS, no py_trees.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -38,9 +38,13 @@ MIN_CELLS = 3
 @dataclass(frozen=True)
 class Costmap2D:
     """A costmap as published: ``values`` (rows grow with +y, columns with +x) from the
-    origin, in the ``map`` frame, stamped with the sim time it was published at."""
+    origin, in the ``map`` frame, stamped with the sim time it was published at.
 
-    values: np.ndarray
+    Its repr leaves the values out, as the static map's does: the tree log writes the repr of
+    every new blackboard value, and numpy took a millisecond to summarise the grid each time.
+    """
+
+    values: np.ndarray = field(repr=False)
     origin_x: float
     origin_y: float
     resolution: float

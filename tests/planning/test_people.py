@@ -67,3 +67,12 @@ def test_the_costmap_keeps_its_frame_and_stamp_and_a_broken_one_is_refused() -> 
     broken.info.width = 5
     with pytest.raises(ValueError, match="5 x 3 cells with 12 values"):
         Costmap2D.from_message(broken)
+
+
+def test_a_costmaps_repr_is_one_short_line_without_its_cells() -> None:
+    """The tree log writes the repr of each new costmap on the blackboard, once a second."""
+    costmap = Costmap2D(values=np.zeros((350, 360), dtype=np.int8), origin_x=-30.0,
+                        origin_y=-30.0, resolution=0.05, stamp_s=12.5)
+    text = repr(costmap)
+    assert "stamp_s=12.5" in text and "values" not in text and "\n" not in text
+    assert len(text) < 100
