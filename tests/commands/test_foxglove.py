@@ -52,6 +52,12 @@ class WatchedRun:
     code: int
     live: dict[str, list[Any]]  # topic -> messages decoded from the live server, until it closed
 
+    def account(self) -> str:
+        """What the viewer got and what the run said: for a failing assertion's message."""
+        got = {topic: len(messages) for topic, messages in self.live.items()}
+        said = self.out.with_name("stdout.txt").read_text().splitlines()[-8:]
+        return f"streamed {got}; the run exited {self.code}, its last lines: {said}"
+
 
 @pytest.fixture(scope="module")
 def watched_run(tmp_path_factory: pytest.TempPathFactory) -> WatchedRun:
@@ -261,7 +267,7 @@ def test_the_live_server_streams_transforms_and_markers_until_the_run_ends(
         watched_run: WatchedRun) -> None:
     live = watched_run.live
     frames = {(t.header.frame_id, t.child_frame_id) for m in live["/tf"] for t in m.transforms}
-    assert {("map", "odom"), ("odom", "base_footprint")} <= frames
+    assert {("map", "odom"), ("odom", "base_footprint")} <= frames, watched_run.account()
     areas = live["/servicesim/markers/areas"]
     assert areas and any(m.text.startswith("PublicCafe") for m in areas[-1].markers)
     recorded = scene_of(read_with_mcap_ros2(watched_run.out / "run.mcap"))

@@ -134,10 +134,19 @@ class Graph:
         return outcome
 
     def navigate(self, goal: NavigateToPose.Goal, limit_s: float = 60.0) -> tuple[int, Any]:
-        assert self.spin_until(self.navigation.server_is_ready)
+        assert self.spin_until(self.navigation.server_is_ready), self.account()
         outcome = self.send(goal)
         assert self.spin_until(outcome.done, limit_s), "the goal got no result"
         return outcome.result()
+
+    def account(self) -> str:
+        """What the probe sees of the graph and whether the simulator's loop lives: for a
+        failing assertion's message."""
+        services = [name for name, _ in self.probe.get_service_names_and_types()
+                    if "navigate_to_pose" in name]
+        return (f"the probe sees {services or 'no navigation services'}; simulator loop "
+                f"{'alive' if self.alive() else f'gone: {self.crashed}'} at sim time "
+                f"{self.simulator.engine.sim_time:.1f} s")
 
     def shutdown(self) -> None:
         self.probe.destroy_node()
