@@ -153,6 +153,8 @@ class LockstepClient:
         self._answer_offsets: dict[str, int] = {}
         self._answers_at_join: dict[str, int] = {}
         self._sent_at_join: dict[str, int] = {}
+        self._done_message: LockstepDone | None = None
+        self._done_counts: dict[str, int] = {}
         self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
         node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
         self._joining: Client[Any, Any] | None = node.create_client(LockstepJoin, JOIN_SERVICE)
@@ -250,6 +252,7 @@ class LockstepClient:
             endpoint: self._answers_at_join.get(endpoint, 0)
             - self.traffic.answered.get(endpoint, 0) for endpoint in self.traffic.endpoints}
         self._sent_at_join = dict(self.traffic.sent)
+        self._done_message = None  # counted from this join, by this client id
 
     def _counted_readers(self) -> list[tuple[int, str]]:
         """The subscriptions that receive every message of their topic: reliable, matched."""
@@ -390,9 +393,18 @@ class LockstepClient:
             note(error, where=f"handing on period {period.period}")
 
     def _publish_done(self, period: int) -> None:
-        sent = {endpoint: count - self._sent_at_join.get(endpoint, 0)
-                for endpoint, count in self.traffic.sent.items()}
-        endpoints = sorted(sent)
-        self._done.publish(LockstepDone(client=self.client_id or 0, period=period,
-                                        endpoints=endpoints,
-                                        requests=[sent[e] for e in endpoints]))
+        """Say the tick of ``period`` is done, with the requests sent since the join.
+
+        Most ticks send nothing: the message of the last tick then goes again with the new
+        period alone, rather than its endpoint names and counts being built and checked anew.
+        """
+        sent = self.traffic.sent
+        if self._done_message is None or self._done_counts != sent:
+            counts = {endpoint: count - self._sent_at_join.get(endpoint, 0)
+                      for endpoint, count in sent.items()}
+            endpoints = sorted(counts)
+            self._done_message = LockstepDone(client=self.client_id or 0, endpoints=endpoints,
+                                              requests=[counts[e] for e in endpoints])
+            self._done_counts = dict(sent)
+        self._done_message.period = period
+        self._done.publish(self._done_message)
