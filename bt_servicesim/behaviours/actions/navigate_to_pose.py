@@ -9,8 +9,9 @@ server's reply, whether the behaviour was interrupted by a higher priority or ga
 Only ``STATUS_SUCCEEDED`` is success. A rejected, aborted or cancelled goal is a FAILURE that
 carries Nav2's ``error_code`` and ``error_msg``. Because a navigation server can die mid-goal
 (and an rclpy future then simply never completes), the behaviour watches the server too: if
-``server_is_ready()`` turns false, or nothing (acceptance, feedback, result) has arrived for
-``silence_timeout`` sim seconds, it fails with "navigation server lost". All times are sim time;
+nothing (acceptance, feedback, result) has arrived for :data:`SERVER_CHECK_AFTER_S` and
+``server_is_ready()`` is false, or nothing has arrived for ``silence_timeout`` sim seconds, it
+fails with "navigation server lost". All times are sim time;
 the silence allowed is generous because an executive that falls behind a fast simulator
 sees sim time jump before it has read the feedback that came with it.
 """
@@ -31,8 +32,13 @@ from bt_servicesim.ros.messages import pose_to_msg
 from bt_servicesim.ros.node import shared_action_client
 from bt_servicesim.ros.sim_clock import SimStopwatch, node_from_setup_kwargs
 
-__all__ = ["NavigateToPose"]
+__all__ = ["SERVER_CHECK_AFTER_S", "NavigateToPose"]
 
+SERVER_CHECK_AFTER_S = 1.0
+"""Sim seconds without word from the server (acceptance, feedback, result) after which a tick
+looks whether it is still on the ROS graph. While feedback comes (Nav2's and the simulator's
+several times a sim second) the server plainly is; looking at the graph on every tick cost a
+running navigation about 40 µs a tick."""
 
 _STATUS_NAMES = {
     GoalStatus.STATUS_ABORTED: "aborted",
@@ -227,7 +233,8 @@ class NavigateToPose(ActionNode):
         client = self._require_setup()
         assert self._silence is not None
         silence = self._silence.elapsed()
-        if not client.server_is_ready() or silence > self.silence_timeout:
+        if silence > self.silence_timeout or (silence > SERVER_CHECK_AFTER_S
+                                              and not client.server_is_ready()):
             self.feedback_message = (
                 f"navigation server lost: no feedback or result for {silence:.1f} sim s"
                 if silence > self.silence_timeout
