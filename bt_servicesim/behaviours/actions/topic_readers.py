@@ -125,6 +125,7 @@ class RfidToBlackboard(_TopicReader):
     ) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
         self.stale_after = float(stale_after)
+        self._names: tuple[Any, list[str]] = (None, [])
 
     def update(self) -> Status:
         """Write the list, emptied once it is stale; always SUCCESS."""
@@ -138,7 +139,9 @@ class RfidToBlackboard(_TopicReader):
             self._write([], age)
             self.feedback_message = f"RFID silent for {age:.1f} sim s: nobody in range"
             return Status.SUCCESS
-        names = [str(name) for name in message.actor_names]
+        if self._names[0] is not message:  # one list per message: the tree log compares
+            self._names = (message, [str(name) for name in message.actor_names])  # by identity
+        names = self._names[1]
         self._write(names, age)
         self.feedback_message = f"in range: {', '.join(names) or 'nobody'}"
         return Status.SUCCESS
