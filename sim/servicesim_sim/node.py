@@ -72,10 +72,17 @@ from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
-from servicesim_sim.localisation import Estimate, Pose
+from servicesim_sim.localisation import Pose
 from servicesim_sim.lockstep import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.marker_topics import MarkerTopics
 from servicesim_sim.pacing import Pacer
+from servicesim_sim.pose_messages import (
+    ClockBytes,
+    Link,
+    OdometryBytes,
+    PoseWithCovarianceBytes,
+    TransformsBytes,
+)
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
@@ -208,15 +215,18 @@ class SimulatorNode:
         self._costmap = publisher(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, LATCHED)
         self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
                                      latched=LATCHED, now=stamp(self.engine.sim_time))
-        # the high-rate messages are built once and refilled: publish serialises at the call
-        self._clock_message = Clock()
+        # the high-rate messages are serialised by hand (servicesim_sim.pose_messages), or
+        # built once and refilled: publish serialises at the call
+        self._clock_bytes = ClockBytes()
+        self._clock_message = self._clock_bytes.encode(stamp_ns=0)  # the last one sent
         self._score_message = Score()
-        self._odom_message = Odometry()
-        self._odom_message.header.frame_id = ODOM_FRAME
-        self._odom_message.child_frame_id = BASE_FRAME
-        self._truth_message = Odometry()
-        self._truth_message.header.frame_id = MAP_FRAME
-        self._truth_message.child_frame_id = BASE_FRAME
+        self._odom_bytes = OdometryBytes(frame_id=ODOM_FRAME, child_frame_id=BASE_FRAME)
+        self._truth_bytes = OdometryBytes(frame_id=MAP_FRAME, child_frame_id=BASE_FRAME)
+        self._amcl_pose_bytes = PoseWithCovarianceBytes(frame_id=MAP_FRAME)
+        odom_link = Link(parent=ODOM_FRAME, child=BASE_FRAME)
+        self._tf_unlocalised = TransformsBytes([odom_link])
+        self._tf_localised = TransformsBytes([odom_link, Link(parent=MAP_FRAME,
+                                                              child=ODOM_FRAME)])
         self._scan_next = 0.0
         self._send(self._tf_static, TFMessage(transforms=[
             transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
@@ -489,7 +499,7 @@ class SimulatorNode:
 
     def _publish_io(self) -> None:
         now = self.engine.sim_time
-        self._clock_message.clock = stamp(now)
+        self._clock_message = self._clock_bytes.encode(stamp_ns=stamp_ns(now))
         self._send(self._clock, self._clock_message)
         self._publish_odom()
         self._publish_localisation()
@@ -540,26 +550,29 @@ class SimulatorNode:
 
     def _publish_odom(self) -> None:
         """Odometry (in ``odom``, zero at spawn) and the ground truth (in ``map``)."""
-        now = stamp(self.engine.sim_time)
+        now = stamp_ns(self.engine.sim_time)
         twist = self.engine.robot_velocity()
-        for publisher, message, pose in ((self._odom, self._odom_message,
-                                          self.engine.odometry_pose()),
-                                         (self._truth, self._truth_message,
-                                          self.engine.robot_pose())):
-            fill_odometry(message, pose, twist, now)
-            self._send(publisher, message)
+        self._send(self._odom, self._odom_bytes.encode(
+            stamp_ns=now, pose=self.engine.odometry_pose(), twist=twist))
+        self._send(self._truth, self._truth_bytes.encode(
+            stamp_ns=now, pose=self.engine.robot_pose(), twist=twist))
 
     def _publish_localisation(self) -> None:
         """/tf every period (odom -> base as the diff drive does, map -> odom once AMCL is
         running), and ``amcl_pose`` when the filter updated."""
-        now = stamp(self.engine.sim_time)
-        transforms = [transform(ODOM_FRAME, BASE_FRAME, self.engine.odometry_pose(), now)]
+        now = stamp_ns(self.engine.sim_time)
         if self.engine.localisation.localised:
-            transforms.append(transform(MAP_FRAME, ODOM_FRAME, self.engine.map_to_odom(), now))
-        self._send(self._tf, TFMessage(transforms=transforms))
+            transforms = self._tf_localised.encode(
+                stamp_ns=now, poses=(self.engine.odometry_pose(), self.engine.map_to_odom()))
+        else:
+            transforms = self._tf_unlocalised.encode(stamp_ns=now,
+                                                     poses=(self.engine.odometry_pose(),))
+        self._send(self._tf, transforms)
         estimate = self.engine.new_estimate()
         if estimate is not None:
-            self._send(self._amcl_pose, amcl_pose(estimate, now))
+            self._send(self._amcl_pose, self._amcl_pose_bytes.encode(
+                stamp_ns=now, pose=estimate.pose, std_m=estimate.std_m,
+                std_rad=estimate.std_rad))
 
     def _publish_scan(self) -> None:
         """A sweep every 0.1 sim s (the original's 10 Hz), only while someone listens."""
@@ -725,14 +738,6 @@ class SimulatorNode:
         return 1.0
 
 
-def fill_odometry(message: Odometry, pose: Pose, twist: tuple[float, float], now: Time) -> None:
-    message.header.stamp = now
-    message.pose.pose.position.x, message.pose.pose.position.y = pose[0], pose[1]
-    message.pose.pose.orientation.z = math.sin(pose[2] / 2.0)
-    message.pose.pose.orientation.w = math.cos(pose[2] / 2.0)
-    message.twist.twist.linear.x, message.twist.twist.angular.z = twist
-
-
 def transform(parent: str, child: str, pose: Pose, now: Time | None = None, *,
               z: float = 0.0) -> TransformStamped:
     """The planar transform parent -> child (``pose``: the child's origin in the parent)."""
@@ -743,21 +748,6 @@ def transform(parent: str, child: str, pose: Pose, now: Time | None = None, *,
     translation, rotation = message.transform.translation, message.transform.rotation
     translation.x, translation.y, translation.z = float(pose[0]), float(pose[1]), z
     rotation.z, rotation.w = math.sin(pose[2] / 2.0), math.cos(pose[2] / 2.0)
-    return message
-
-
-def amcl_pose(estimate: Estimate, now: Time) -> PoseWithCovarianceStamped:
-    """The estimate as AMCL publishes it: in ``map``, with a diagonal covariance."""
-    message = PoseWithCovarianceStamped()
-    message.header.stamp, message.header.frame_id = now, MAP_FRAME
-    x, y, yaw = estimate.pose
-    message.pose.pose.position.x, message.pose.pose.position.y = x, y
-    message.pose.pose.orientation.z = math.sin(yaw / 2.0)
-    message.pose.pose.orientation.w = math.cos(yaw / 2.0)
-    covariance = [0.0] * 36
-    covariance[0] = covariance[7] = estimate.std_m ** 2
-    covariance[35] = estimate.std_rad ** 2
-    message.pose.covariance = covariance
     return message
 
 
