@@ -22,11 +22,11 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["ClockBytes", "OdometryBytes", "PoseWithCovarianceBytes", "TransformsBytes",
+from servicesim_sim.cdr import STAMP, CdrTemplate
+
+__all__ = ["ClockBytes", "Link", "OdometryBytes", "PoseWithCovarianceBytes", "TransformsBytes",
            "split_stamp"]
 
-_ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian
-_STAMP = struct.Struct("<iI")
 _POSE = struct.Struct("<7d")  # position x y z, orientation x y z w
 _TWIST = struct.Struct("<6d")  # linear x y z, angular x y z
 _TRANSFORM = struct.Struct("<7d")  # translation x y z, rotation x y z w
@@ -40,46 +40,6 @@ def split_stamp(stamp_ns: int) -> tuple[int, int]:
     return divmod(stamp_ns, 1_000_000_000)
 
 
-class _Template:
-    """A message's CDR bytes laid out once: constants written, number slots zeroed.
-
-    Offsets count from the start of the message's bytes, encapsulation included; CDR aligns
-    each primitive to its own size, counted from the end of the encapsulation.
-    """
-
-    def __init__(self) -> None:
-        self._body = bytearray()
-
-    def slot(self, layout: struct.Struct, *, alignment: int) -> int:
-        """Room for ``layout``'s numbers (zero until packed); its offset."""
-        self._align(alignment)
-        offset = len(_ENCAPSULATION) + len(self._body)
-        self._body += bytes(layout.size)
-        return offset
-
-    def string(self, text: str) -> None:
-        encoded = text.encode() + b"\x00"
-        self._align(4)
-        self._body += struct.pack("<I", len(encoded)) + encoded
-
-    def count(self, number: int) -> None:
-        """A sequence's length."""
-        self._align(4)
-        self._body += struct.pack("<I", number)
-
-    def header(self, frame_id: str) -> int:
-        """``std_msgs/Header``: the stamp's slot (its offset) and the frame's name."""
-        offset = self.slot(_STAMP, alignment=4)
-        self.string(frame_id)
-        return offset
-
-    def done(self) -> bytes:
-        return _ENCAPSULATION + bytes(self._body)
-
-    def _align(self, size: int) -> None:
-        self._body += bytes(-len(self._body) % size)
-
-
 def _planar_pose(pose: Pose, *, z: float = 0.0) -> tuple[float, ...]:
     """Position and orientation numbers of a pose in the plane (yaw about z)."""
     return (float(pose[0]), float(pose[1]), z, 0.0, 0.0,
@@ -90,13 +50,13 @@ class ClockBytes:
     """``rosgraph_msgs/Clock``."""
 
     def __init__(self) -> None:
-        template = _Template()
-        self._stamp = template.slot(_STAMP, alignment=4)
+        template = CdrTemplate()
+        self._stamp = template.slot(STAMP, alignment=4)
         self._template = template.done()
 
     def encode(self, *, stamp_ns: int) -> bytes:
         out = bytearray(self._template)
-        _STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
+        STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
         return bytes(out)
 
 
@@ -105,7 +65,7 @@ class OdometryBytes:
     pose's x, y and yaw, the forward and turning speeds; covariances zero."""
 
     def __init__(self, *, frame_id: str, child_frame_id: str) -> None:
-        template = _Template()
+        template = CdrTemplate()
         self._stamp = template.header(frame_id)
         template.string(child_frame_id)
         self._pose = template.slot(_POSE, alignment=8)
@@ -116,7 +76,7 @@ class OdometryBytes:
 
     def encode(self, *, stamp_ns: int, pose: Pose, twist: tuple[float, float]) -> bytes:
         out = bytearray(self._template)
-        _STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
+        STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
         _POSE.pack_into(out, self._pose, *_planar_pose(pose))
         _TWIST.pack_into(out, self._twist, float(twist[0]), 0.0, 0.0, 0.0, 0.0, float(twist[1]))
         return bytes(out)
@@ -135,7 +95,7 @@ class TransformsBytes:
     """``tf2_msgs/TFMessage`` of one planar transform per link, all stamped alike."""
 
     def __init__(self, links: Sequence[Link]) -> None:
-        template = _Template()
+        template = CdrTemplate()
         template.count(len(links))
         self._links = tuple(links)
         self._slots: list[tuple[int, int]] = []
@@ -150,7 +110,7 @@ class TransformsBytes:
         out = bytearray(self._template)
         sec, nanosec = split_stamp(stamp_ns)
         for (stamp, transform), link, pose in zip(self._slots, self._links, poses, strict=True):
-            _STAMP.pack_into(out, stamp, sec, nanosec)
+            STAMP.pack_into(out, stamp, sec, nanosec)
             _TRANSFORM.pack_into(out, transform, *_planar_pose(pose, z=link.z))
         return bytes(out)
 
@@ -160,7 +120,7 @@ class PoseWithCovarianceBytes:
     diagonal covariance (x and y alike, yaw), as AMCL publishes its estimate."""
 
     def __init__(self, *, frame_id: str) -> None:
-        template = _Template()
+        template = CdrTemplate()
         self._stamp = template.header(frame_id)
         self._pose = template.slot(_POSE, alignment=8)
         self._covariance = template.slot(_COVARIANCE, alignment=8)
@@ -168,7 +128,7 @@ class PoseWithCovarianceBytes:
 
     def encode(self, *, stamp_ns: int, pose: Pose, std_m: float, std_rad: float) -> bytes:
         out = bytearray(self._template)
-        _STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
+        STAMP.pack_into(out, self._stamp, *split_stamp(stamp_ns))
         _POSE.pack_into(out, self._pose, *_planar_pose(pose))
         covariance = [0.0] * 36
         covariance[0] = covariance[7] = std_m ** 2
