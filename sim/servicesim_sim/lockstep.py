@@ -41,7 +41,7 @@ from servicesim_competition.srv import LockstepJoin
 
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.lockstep_gate import PIPELINE_LAG, Admission, LockstepGate
-from servicesim_sim.lockstep_message import AnnouncementBytes
+from servicesim_sim.lockstep_message import AnnouncementBytes, DoneReader
 
 __all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
            "LockstepServer"]
@@ -86,6 +86,7 @@ class LockstepServer:
         """The endpoints the node answers on, announced from the start (with 0 answers): a
         client holds answers only on those, and passes on the answers of anyone else's."""
         self._announcements = AnnouncementBytes()
+        self._done_reader = DoneReader()
         self._last: bytes | None = None
         """The last announcement, serialised (:mod:`servicesim_sim.lockstep_message`)."""
         self.callback_group = ReentrantCallbackGroup()
@@ -95,8 +96,9 @@ class LockstepServer:
         self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
         node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
                             callback_group=self.callback_group)
-        self._dones = node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done,
-                                               PROTOCOL_QOS, callback_group=self.callback_group)
+        self._dones = node.create_subscription(  # raw: DoneReader reads the bytes
+            LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS, raw=True,
+            callback_group=self.callback_group)
         self._periods_unlooked = 0
 
     @property
@@ -222,7 +224,7 @@ class LockstepServer:
         while True:
             try:
                 with self._dones.handle:
-                    taken = self._dones.handle.take_message(LockstepDone, False)
+                    taken = self._dones.handle.take_message(LockstepDone, True)
             except InvalidHandle:
                 return self.gate.is_open()
             if taken is None:
@@ -265,14 +267,15 @@ class LockstepServer:
             f"(id {response.client})")
         return response
 
-    def _on_done(self, message: LockstepDone) -> None:
-        if message.leaving:
-            name = self.gate.leave(int(message.client))
+    def _on_done(self, data: bytes) -> None:
+        """A done message, serialised (:class:`~servicesim_sim.lockstep_message.DoneReader`)."""
+        done = self._done_reader.read(data)
+        if done.leaving:
+            name = self.gate.leave(done.client)
             if name is not None:
                 self.node.get_logger().info(f"lockstep: client {name!r} left")
             return
-        requests = dict(zip(message.endpoints, (int(n) for n in message.requests), strict=False))
-        self.gate.done(int(message.client), int(message.period), requests)
+        self.gate.done(done.client, done.period, done.requests)
 
 
 def drain_completely(executor: DrainingExecutor) -> None:

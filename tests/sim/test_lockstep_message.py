@@ -1,14 +1,22 @@
 """The lockstep announcement, serialised by hand: what rclpy would send, field for field and in
 length, for varied names (lengths that move the alignment, none at all) and counts, and again
-after names were added."""
+after names were added; and the done messages, read by hand as rclpy reads them."""
 
 from __future__ import annotations
 
+import struct
+
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from servicesim_competition.msg import LockstepPeriod
+from servicesim_competition.msg import LockstepDone, LockstepPeriod
 
-from servicesim_sim.lockstep_message import AnnouncementBytes
+from servicesim_sim.lockstep_message import (
+    AnnouncementBytes,
+    Done,
+    DoneReader,
+    done_of,
+    read_done,
+)
 
 NAMES = ["/clock", "/tf", "/a", "/ab", "/abc", "/abcd", "/servicebot/odom",
          "/servicebot/navigate_to_pose:feedback", "/servicesim/room_info", "/x:goal"]
@@ -65,3 +73,37 @@ def test_new_names_lay_the_announcement_out_again() -> None:
     served.add("/servicesim/new_one")
     read = check(encoder, 99, 0, messages, served, answers)
     assert "/servicesim/new_one" in read.endpoints
+
+
+@pytest.mark.parametrize("endpoints", [[], ["/a"], ["/ab", "/abc"], ["/abcd"], NAMES])
+@pytest.mark.parametrize("leaving", [False, True])
+@pytest.mark.parametrize(("client", "period"), [(0, 0), (1, 5), (2**32 - 1, 2**64 - 1)])
+def test_a_done_reads_as_rclpy_reads_it(endpoints: list[str], leaving: bool, client: int,
+                                        period: int) -> None:
+    requests = [3 * index + 2**33 * (index % 2) for index in range(len(endpoints))]
+    message = LockstepDone(client=client, period=period, endpoints=endpoints,
+                           requests=requests, leaving=leaving)
+    data = serialize_message(message)
+    assert read_done(data) == done_of(message) == Done(
+        client=client, period=period, leaving=leaving,
+        requests=dict(zip(endpoints, requests, strict=True)))
+
+
+def test_a_done_in_big_endian_cdr_is_read_by_rclpy() -> None:
+    message = LockstepDone(client=7, period=9, endpoints=["/a"], requests=[1])
+    data = bytearray(serialize_message(message))
+    assert read_done(bytes(data)) == done_of(message)
+    big = b"\x00\x00\x00\x00" + struct.pack(">I4xQI", 7, 9, 1) + struct.pack(">I", 3) + b"/a\x00"
+    big += b"\x00" + struct.pack(">I", 1) + struct.pack(">Q", 1) + b"\x00"
+    assert read_done(big) == done_of(message) == done_of(deserialize_message(big, LockstepDone))
+
+
+def test_a_reader_reads_each_done_right_as_the_names_change() -> None:
+    reader = DoneReader()
+    names = [[], ["/ab"], ["/ab"], ["/ba"], ["/ab", "/cd"], ["/abc", "/d"], ["/abc", "/d"],
+             ["/ab"], NAMES, NAMES, NAMES[1:], []]
+    for period, endpoints in enumerate(names):
+        message = LockstepDone(client=3, period=period, endpoints=endpoints,
+                               requests=[period + index for index in range(len(endpoints))],
+                               leaving=period == len(names) - 1)
+        assert reader.read(serialize_message(message)) == done_of(message)
