@@ -67,7 +67,7 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
-from servicesim_sim.costmap_message import occupancy_values, serialised_occupancy_grid
+from servicesim_sim.costmap_message import OccupancyValues, serialised_occupancy_grid
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.executor import DrainingExecutor
@@ -228,6 +228,7 @@ class SimulatorNode:
         self._tf_localised = TransformsBytes([odom_link, Link(parent=MAP_FRAME,
                                                               child=ODOM_FRAME)])
         self._scan_next = 0.0
+        self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
         self._send(self._tf_static, TFMessage(transforms=[
             transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
             transform("base_link", LIDAR_FRAME, LIDAR_OFFSET,
@@ -480,9 +481,11 @@ class SimulatorNode:
         if self._costmap.get_subscription_count() == 0:
             return
         costmap = self.engine.navigator.costmap
+        if self._costmap_values is None:
+            self._costmap_values = OccupancyValues(costmap.static)
         now = stamp(self.engine.sim_time)
         self._send(self._costmap, serialised_occupancy_grid(
-            occupancy_values(costmap.costs()), costmap.frame, frame_id=MAP_FRAME,
+            self._costmap_values.of(costmap.costs()), costmap.frame, frame_id=MAP_FRAME,
             stamp=(now.sec, now.nanosec)))
 
     def _map_message(self) -> OccupancyGrid:
