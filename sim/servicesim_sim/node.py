@@ -167,6 +167,7 @@ class SimulatorNode:
         self._io_count = 0
         self._had_client = False
         self._dropped = 0
+        self._topic_names: dict[Any, str] = {}
         self._camera_next = 0.0
         self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
         self.lockstep = LockstepServer(node)
@@ -543,13 +544,20 @@ class SimulatorNode:
         """
         try:
             publisher.publish(message)
-            self.lockstep.published(publisher.topic_name)
+            self.lockstep.published(self._topic_of(publisher))
         except RCLError as error:
             self._dropped += 1
             if self._dropped in (1, 10, 100) or self._dropped % 1000 == 0:
                 self.node.get_logger().warning(
                     f"{publisher.topic_name}: message dropped ({self._dropped} so far): "
                     f"{str(error).splitlines()[0]}")
+
+    def _topic_of(self, publisher: Any) -> str:
+        """The publisher's topic, asked of rclpy once (each ask takes its handle's lock)."""
+        topic = self._topic_names.get(publisher)
+        if topic is None:
+            topic = self._topic_names[publisher] = publisher.topic_name
+        return topic
 
     def _publish_odom(self) -> None:
         """Odometry (in ``odom``, zero at spawn) and the ground truth (in ``map``)."""
