@@ -67,6 +67,7 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
+from servicesim_sim.actor_messages import ActorNamesBytes, ActorStatesBytes
 from servicesim_sim.costmap_message import OccupancyValues, serialised_occupancy_grid
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
@@ -230,6 +231,8 @@ class SimulatorNode:
                                                               child=ODOM_FRAME)])
         self._scan_next = 0.0
         self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
+        self._rfid_bytes = ActorNamesBytes()
+        self._actor_states_bytes = ActorStatesBytes()
         self._send(self._tf_static, TFMessage(transforms=[
             transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
             transform("base_link", LIDAR_FRAME, LIDAR_OFFSET,
@@ -510,7 +513,7 @@ class SimulatorNode:
         self._publish_scan()
         names = self.engine.rfid_names()
         if names is not None:  # silent when nobody is near, or when a reading is dropped
-            self._send(self._rfid, ActorNames(actor_names=names))
+            self._send(self._rfid, self._rfid_bytes.encode(names))
         self._io_count += 1
         if self._io_count % PUBLIC_PERIOD_STEPS == 0 or self.engine.referee_changed():
             self._send(self._referee, self._referee_state())
@@ -647,17 +650,11 @@ class SimulatorNode:
         state.approximation = float(penalties["approximation"])
         return state
 
-    def _actor_states(self) -> ActorStates:
-        from geometry_msgs.msg import Point
-
-        message = ActorStates()
-        message.stamp = stamp(self.engine.sim_time)
-        for name, role, x, y in self.engine.people_states():
-            message.names.append(name)
-            message.roles.append(role)
-            message.positions.append(Point(x=float(x), y=float(y)))
-        message.guest_state = self.engine.guest_state()
-        return message
+    def _actor_states(self) -> bytes:
+        """Everyone's place, serialised (:mod:`servicesim_sim.actor_messages`)."""
+        return self._actor_states_bytes.encode(
+            stamp=divmod(stamp_ns(self.engine.sim_time), 1_000_000_000),
+            people=self.engine.people_states(), guest_state=self.engine.guest_state())
 
     # ----------------------------------------------------------------- loop
     def run(self, executor: DrainingExecutor) -> None:
