@@ -10,7 +10,10 @@ difference: ``tests/sim/test_costmap_message.py`` reads it back and compares it,
 and in length, with rclpy's own ``serialize_message``.
 
 Costs become values by Nav2's ``Costmap2DPublisher`` table (free 0, inflated 1..252 scaled to
-1..98, inscribed 99, lethal 100, unknown -1), looked up in one step.
+1..98, inscribed 99, lethal 100, unknown -1), looked up in one step. The costmap published is
+its static layer with people marked on a few patches of it, so :class:`OccupancyValues` looks
+the static layer up once and, each time, only the cells the people changed: looking up all
+126 000 cells was about a third of the costmap's publishing.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import numpy as np
 
 from servicesim_sim.costmap import FREE, INSCRIBED, LETHAL, GridFrame
 
-__all__ = ["occupancy_values", "serialised_occupancy_grid"]
+__all__ = ["OccupancyValues", "occupancy_values", "serialised_occupancy_grid"]
 
 _ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian
 _TABLE = np.array([0, *(1 + (97 * (cost - 1)) // 251 for cost in range(1, INSCRIBED)), 99, 100,
@@ -34,6 +37,26 @@ assert _TABLE[FREE] == 0 and _TABLE[INSCRIBED] == 99 and _TABLE[LETHAL] == 100
 def occupancy_values(costs: np.ndarray) -> np.ndarray:
     """Costs (0..255) as ``OccupancyGrid`` values, by Nav2's table."""
     return _TABLE[np.asarray(costs, dtype=np.uint8)]
+
+
+class OccupancyValues:
+    """Costs as ``OccupancyGrid`` values, for grids that differ from ``static`` in few cells."""
+
+    def __init__(self, static: np.ndarray) -> None:
+        self._static = np.ascontiguousarray(static, dtype=np.uint8)
+        self._values = occupancy_values(self._static)
+
+    def of(self, costs: np.ndarray) -> np.ndarray:
+        """:func:`occupancy_values` of ``costs``; looked up only where they differ from the
+        static costs (all of them if their shape does)."""
+        costs = np.ascontiguousarray(costs, dtype=np.uint8)
+        if costs.shape != self._static.shape:
+            return occupancy_values(costs)
+        flat = costs.ravel()
+        changed = np.flatnonzero(flat != self._static.ravel())
+        values = self._values.copy()
+        values.ravel()[changed] = _TABLE[flat[changed]]
+        return values
 
 
 def serialised_occupancy_grid(values: np.ndarray, frame: GridFrame, *, frame_id: str,

@@ -34,12 +34,14 @@ from rclpy.exceptions import InvalidHandle
 from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from rclpy.task import Future
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.lockstep_gate import PIPELINE_LAG, Admission, LockstepGate
+from servicesim_sim.lockstep_message import AnnouncementBytes, DoneReader
 
 __all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
            "LockstepServer"]
@@ -83,7 +85,10 @@ class LockstepServer:
         self.served: set[str] = set()
         """The endpoints the node answers on, announced from the start (with 0 answers): a
         client holds answers only on those, and passes on the answers of anyone else's."""
-        self._last = LockstepPeriod(period=0)
+        self._announcements = AnnouncementBytes()
+        self._done_reader = DoneReader()
+        self._last: bytes | None = None
+        """The last announcement, serialised (:mod:`servicesim_sim.lockstep_message`)."""
         self.callback_group = ReentrantCallbackGroup()
         """For every handler of the node: a handler waiting for its turn (or for sim time)
         must not keep the others from running, as one mutually exclusive group would -- the
@@ -91,8 +96,9 @@ class LockstepServer:
         self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
         node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
                             callback_group=self.callback_group)
-        self._dones = node.create_subscription(LockstepDone, DONE_TOPIC, self._on_done,
-                                               PROTOCOL_QOS, callback_group=self.callback_group)
+        self._dones = node.create_subscription(  # raw: DoneReader reads the bytes
+            LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS, raw=True,
+            callback_group=self.callback_group)
         self._periods_unlooked = 0
 
     @property
@@ -160,7 +166,9 @@ class LockstepServer:
         """
         if self.gate.active and executor.resumable:  # requests wait for the gate anyway
             drain_completely(executor)
-        self._last = self._announcement(period, sim_time_ns)
+        self._last = self._announcements.encode(
+            period=period, sim_time_ns=sim_time_ns, messages=self.messages, served=self.served,
+            answers=self.answers)
         self._announcer.publish(self._last)
         self.gate.announced(period)
 
@@ -216,7 +224,7 @@ class LockstepServer:
         while True:
             try:
                 with self._dones.handle:
-                    taken = self._dones.handle.take_message(LockstepDone, False)
+                    taken = self._dones.handle.take_message(LockstepDone, True)
             except InvalidHandle:
                 return self.gate.is_open()
             if taken is None:
@@ -244,32 +252,30 @@ class LockstepServer:
             drain_completely(executor)
 
     # ------------------------------------------------------------- protocol
-    def _announcement(self, period: int, sim_time_ns: int) -> LockstepPeriod:
-        message = LockstepPeriod(period=period)
-        message.sim_time.sec, message.sim_time.nanosec = divmod(sim_time_ns, 1_000_000_000)
-        message.topics = sorted(self.messages)
-        message.messages = [self.messages[topic] for topic in message.topics]
-        message.endpoints = sorted(self.served | set(self.answers))
-        message.answers = [self.answers.get(endpoint, 0) for endpoint in message.endpoints]
-        return message
+    def last_announcement(self) -> LockstepPeriod:
+        """The last period announced, as announced (period 0 before the first)."""
+        if self._last is None:
+            return LockstepPeriod(period=0)
+        return deserialize_message(self._last, LockstepPeriod)
 
     def _on_join(self, request: LockstepJoin.Request,
                  response: LockstepJoin.Response) -> LockstepJoin.Response:
         response.client = self.gate.join(request.name)
-        response.joined_at = self._last
+        response.joined_at = self.last_announcement()
         self.node.get_logger().info(
-            f"lockstep: client {request.name!r} joined at period {self._last.period} "
+            f"lockstep: client {request.name!r} joined at period {response.joined_at.period} "
             f"(id {response.client})")
         return response
 
-    def _on_done(self, message: LockstepDone) -> None:
-        if message.leaving:
-            name = self.gate.leave(int(message.client))
+    def _on_done(self, data: bytes) -> None:
+        """A done message, serialised (:class:`~servicesim_sim.lockstep_message.DoneReader`)."""
+        done = self._done_reader.read(data)
+        if done.leaving:
+            name = self.gate.leave(done.client)
             if name is not None:
                 self.node.get_logger().info(f"lockstep: client {name!r} left")
             return
-        requests = dict(zip(message.endpoints, (int(n) for n in message.requests), strict=False))
-        self.gate.done(int(message.client), int(message.period), requests)
+        self.gate.done(done.client, done.period, done.requests)
 
 
 def drain_completely(executor: DrainingExecutor) -> None:

@@ -180,6 +180,8 @@ class LockstepGate:
 
     def due_admissions(self) -> list[Admission]:
         """The admissions to serve now, in their fixed order; the rest wait."""
+        if not self._admissions:  # most periods: nothing taken while the gate was shut
+            return []
         allowed = self.allowed() if self.active else None
         due = sorted(admission for admission in self._admissions
                      if allowed is None or admission.number <= allowed.get(admission.endpoint, 0))

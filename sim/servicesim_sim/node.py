@@ -67,15 +67,23 @@ from servicesim_competition.srv import (
 from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
 
-from servicesim_sim.costmap_message import occupancy_values, serialised_occupancy_grid
+from servicesim_sim.actor_messages import ActorNamesBytes, ActorStatesBytes
+from servicesim_sim.costmap_message import OccupancyValues, serialised_occupancy_grid
 from servicesim_sim.engine import NavigationState, SimEngine
 from servicesim_sim.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map
-from servicesim_sim.localisation import Estimate, Pose
+from servicesim_sim.localisation import Pose
 from servicesim_sim.lockstep import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.marker_topics import MarkerTopics
 from servicesim_sim.pacing import Pacer
+from servicesim_sim.pose_messages import (
+    ClockBytes,
+    Link,
+    OdometryBytes,
+    PoseWithCovarianceBytes,
+    TransformsBytes,
+)
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
@@ -160,6 +168,7 @@ class SimulatorNode:
         self._io_count = 0
         self._had_client = False
         self._dropped = 0
+        self._topic_names: dict[Any, str] = {}
         self._camera_next = 0.0
         self._frames: list[tuple[float, np.ndarray]] = []  # captured, not yet sent
         self.lockstep = LockstepServer(node)
@@ -208,16 +217,22 @@ class SimulatorNode:
         self._costmap = publisher(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, LATCHED)
         self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
                                      latched=LATCHED, now=stamp(self.engine.sim_time))
-        # the high-rate messages are built once and refilled: publish serialises at the call
-        self._clock_message = Clock()
+        # the high-rate messages are serialised by hand (servicesim_sim.pose_messages), or
+        # built once and refilled: publish serialises at the call
+        self._clock_bytes = ClockBytes()
+        self._clock_message = self._clock_bytes.encode(stamp_ns=0)  # the last one sent
         self._score_message = Score()
-        self._odom_message = Odometry()
-        self._odom_message.header.frame_id = ODOM_FRAME
-        self._odom_message.child_frame_id = BASE_FRAME
-        self._truth_message = Odometry()
-        self._truth_message.header.frame_id = MAP_FRAME
-        self._truth_message.child_frame_id = BASE_FRAME
+        self._odom_bytes = OdometryBytes(frame_id=ODOM_FRAME, child_frame_id=BASE_FRAME)
+        self._truth_bytes = OdometryBytes(frame_id=MAP_FRAME, child_frame_id=BASE_FRAME)
+        self._amcl_pose_bytes = PoseWithCovarianceBytes(frame_id=MAP_FRAME)
+        odom_link = Link(parent=ODOM_FRAME, child=BASE_FRAME)
+        self._tf_unlocalised = TransformsBytes([odom_link])
+        self._tf_localised = TransformsBytes([odom_link, Link(parent=MAP_FRAME,
+                                                              child=ODOM_FRAME)])
         self._scan_next = 0.0
+        self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
+        self._rfid_bytes = ActorNamesBytes()
+        self._actor_states_bytes = ActorStatesBytes()
         self._send(self._tf_static, TFMessage(transforms=[
             transform(BASE_FRAME, "base_link", (0.0, 0.0, 0.0), z=BASE_LINK_HEIGHT_M),
             transform("base_link", LIDAR_FRAME, LIDAR_OFFSET,
@@ -470,9 +485,11 @@ class SimulatorNode:
         if self._costmap.get_subscription_count() == 0:
             return
         costmap = self.engine.navigator.costmap
+        if self._costmap_values is None:
+            self._costmap_values = OccupancyValues(costmap.static)
         now = stamp(self.engine.sim_time)
         self._send(self._costmap, serialised_occupancy_grid(
-            occupancy_values(costmap.costs()), costmap.frame, frame_id=MAP_FRAME,
+            self._costmap_values.of(costmap.costs()), costmap.frame, frame_id=MAP_FRAME,
             stamp=(now.sec, now.nanosec)))
 
     def _map_message(self) -> OccupancyGrid:
@@ -489,14 +506,14 @@ class SimulatorNode:
 
     def _publish_io(self) -> None:
         now = self.engine.sim_time
-        self._clock_message.clock = stamp(now)
+        self._clock_message = self._clock_bytes.encode(stamp_ns=stamp_ns(now))
         self._send(self._clock, self._clock_message)
         self._publish_odom()
         self._publish_localisation()
         self._publish_scan()
         names = self.engine.rfid_names()
         if names is not None:  # silent when nobody is near, or when a reading is dropped
-            self._send(self._rfid, ActorNames(actor_names=names))
+            self._send(self._rfid, self._rfid_bytes.encode(names))
         self._io_count += 1
         if self._io_count % PUBLIC_PERIOD_STEPS == 0 or self.engine.referee_changed():
             self._send(self._referee, self._referee_state())
@@ -530,7 +547,7 @@ class SimulatorNode:
         """
         try:
             publisher.publish(message)
-            self.lockstep.published(publisher.topic_name)
+            self.lockstep.published(self._topic_of(publisher))
         except RCLError as error:
             self._dropped += 1
             if self._dropped in (1, 10, 100) or self._dropped % 1000 == 0:
@@ -538,28 +555,38 @@ class SimulatorNode:
                     f"{publisher.topic_name}: message dropped ({self._dropped} so far): "
                     f"{str(error).splitlines()[0]}")
 
+    def _topic_of(self, publisher: Any) -> str:
+        """The publisher's topic, asked of rclpy once (each ask takes its handle's lock)."""
+        topic = self._topic_names.get(publisher)
+        if topic is None:
+            topic = self._topic_names[publisher] = publisher.topic_name
+        return topic
+
     def _publish_odom(self) -> None:
         """Odometry (in ``odom``, zero at spawn) and the ground truth (in ``map``)."""
-        now = stamp(self.engine.sim_time)
+        now = stamp_ns(self.engine.sim_time)
         twist = self.engine.robot_velocity()
-        for publisher, message, pose in ((self._odom, self._odom_message,
-                                          self.engine.odometry_pose()),
-                                         (self._truth, self._truth_message,
-                                          self.engine.robot_pose())):
-            fill_odometry(message, pose, twist, now)
-            self._send(publisher, message)
+        self._send(self._odom, self._odom_bytes.encode(
+            stamp_ns=now, pose=self.engine.odometry_pose(), twist=twist))
+        self._send(self._truth, self._truth_bytes.encode(
+            stamp_ns=now, pose=self.engine.robot_pose(), twist=twist))
 
     def _publish_localisation(self) -> None:
         """/tf every period (odom -> base as the diff drive does, map -> odom once AMCL is
         running), and ``amcl_pose`` when the filter updated."""
-        now = stamp(self.engine.sim_time)
-        transforms = [transform(ODOM_FRAME, BASE_FRAME, self.engine.odometry_pose(), now)]
+        now = stamp_ns(self.engine.sim_time)
         if self.engine.localisation.localised:
-            transforms.append(transform(MAP_FRAME, ODOM_FRAME, self.engine.map_to_odom(), now))
-        self._send(self._tf, TFMessage(transforms=transforms))
+            transforms = self._tf_localised.encode(
+                stamp_ns=now, poses=(self.engine.odometry_pose(), self.engine.map_to_odom()))
+        else:
+            transforms = self._tf_unlocalised.encode(stamp_ns=now,
+                                                     poses=(self.engine.odometry_pose(),))
+        self._send(self._tf, transforms)
         estimate = self.engine.new_estimate()
         if estimate is not None:
-            self._send(self._amcl_pose, amcl_pose(estimate, now))
+            self._send(self._amcl_pose, self._amcl_pose_bytes.encode(
+                stamp_ns=now, pose=estimate.pose, std_m=estimate.std_m,
+                std_rad=estimate.std_rad))
 
     def _publish_scan(self) -> None:
         """A sweep every 0.1 sim s (the original's 10 Hz), only while someone listens."""
@@ -623,17 +650,11 @@ class SimulatorNode:
         state.approximation = float(penalties["approximation"])
         return state
 
-    def _actor_states(self) -> ActorStates:
-        from geometry_msgs.msg import Point
-
-        message = ActorStates()
-        message.stamp = stamp(self.engine.sim_time)
-        for name, role, x, y in self.engine.people_states():
-            message.names.append(name)
-            message.roles.append(role)
-            message.positions.append(Point(x=float(x), y=float(y)))
-        message.guest_state = self.engine.guest_state()
-        return message
+    def _actor_states(self) -> bytes:
+        """Everyone's place, serialised (:mod:`servicesim_sim.actor_messages`)."""
+        return self._actor_states_bytes.encode(
+            stamp=divmod(stamp_ns(self.engine.sim_time), 1_000_000_000),
+            people=self.engine.people_states(), guest_state=self.engine.guest_state())
 
     # ----------------------------------------------------------------- loop
     def run(self, executor: DrainingExecutor) -> None:
@@ -725,14 +746,6 @@ class SimulatorNode:
         return 1.0
 
 
-def fill_odometry(message: Odometry, pose: Pose, twist: tuple[float, float], now: Time) -> None:
-    message.header.stamp = now
-    message.pose.pose.position.x, message.pose.pose.position.y = pose[0], pose[1]
-    message.pose.pose.orientation.z = math.sin(pose[2] / 2.0)
-    message.pose.pose.orientation.w = math.cos(pose[2] / 2.0)
-    message.twist.twist.linear.x, message.twist.twist.angular.z = twist
-
-
 def transform(parent: str, child: str, pose: Pose, now: Time | None = None, *,
               z: float = 0.0) -> TransformStamped:
     """The planar transform parent -> child (``pose``: the child's origin in the parent)."""
@@ -743,21 +756,6 @@ def transform(parent: str, child: str, pose: Pose, now: Time | None = None, *,
     translation, rotation = message.transform.translation, message.transform.rotation
     translation.x, translation.y, translation.z = float(pose[0]), float(pose[1]), z
     rotation.z, rotation.w = math.sin(pose[2] / 2.0), math.cos(pose[2] / 2.0)
-    return message
-
-
-def amcl_pose(estimate: Estimate, now: Time) -> PoseWithCovarianceStamped:
-    """The estimate as AMCL publishes it: in ``map``, with a diagonal covariance."""
-    message = PoseWithCovarianceStamped()
-    message.header.stamp, message.header.frame_id = now, MAP_FRAME
-    x, y, yaw = estimate.pose
-    message.pose.pose.position.x, message.pose.pose.position.y = x, y
-    message.pose.pose.orientation.z = math.sin(yaw / 2.0)
-    message.pose.pose.orientation.w = math.cos(yaw / 2.0)
-    covariance = [0.0] * 36
-    covariance[0] = covariance[7] = estimate.std_m ** 2
-    covariance[35] = estimate.std_rad ** 2
-    message.pose.covariance = covariance
     return message
 
 

@@ -11,7 +11,11 @@ from nav_msgs.msg import OccupancyGrid
 from rclpy.serialization import deserialize_message, serialize_message
 
 from servicesim_sim.costmap import FREE, INSCRIBED, LETHAL, MAX_INFLATED, GridFrame
-from servicesim_sim.costmap_message import occupancy_values, serialised_occupancy_grid
+from servicesim_sim.costmap_message import (
+    OccupancyValues,
+    occupancy_values,
+    serialised_occupancy_grid,
+)
 
 
 def by_rclpy(values: np.ndarray, frame: GridFrame, frame_id: str,
@@ -47,3 +51,23 @@ def test_the_bytes_are_rclpys_own(frame_id: str, rows: int, cols: int) -> None:
 def test_costs_translate_to_occupancy_values_by_nav2s_table() -> None:
     costs = np.array([FREE, 1, 126, MAX_INFLATED, INSCRIBED, LETHAL, 255], dtype=np.uint8)
     assert occupancy_values(costs).tolist() == [0, 1, 49, 98, 99, 100, -1]
+
+
+@pytest.mark.parametrize("changes", [0, 1, 50, 5000, 247 * 509])
+def test_values_from_the_static_grid_are_the_tables_own(changes: int) -> None:
+    rng = np.random.default_rng(changes)
+    static = rng.integers(0, 256, size=(247, 509), dtype=np.uint8)
+    values = OccupancyValues(static)
+    costs = static.copy()
+    cells = rng.choice(costs.size, size=changes, replace=False)
+    costs.ravel()[cells] = rng.integers(0, 256, size=changes, dtype=np.uint8)
+    ours = values.of(costs)
+    assert ours.dtype == np.int8 and ours.shape == costs.shape
+    assert ours.tolist() == occupancy_values(costs).tolist()
+    assert values.of(static).tolist() == occupancy_values(static).tolist()  # nothing kept
+
+
+def test_values_of_a_grid_of_another_shape_are_looked_up_whole() -> None:
+    values = OccupancyValues(np.zeros((3, 4), dtype=np.uint8))
+    costs = np.array([[FREE, 1, 126], [MAX_INFLATED, INSCRIBED, 255]], dtype=np.uint8)
+    assert values.of(costs).tolist() == [[0, 1, 49], [98, 99, -1]]
