@@ -18,6 +18,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
+import rclpy
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav2_msgs.action import NavigateToPose
@@ -59,7 +60,12 @@ def office() -> World:
 
 
 class Graph:
-    """A simulator node looping in a thread, and a probe node the test spins."""
+    """A simulator node looping in a thread, and a probe node the test spins.
+
+    The probe has a context (a DDS participant) of its own, as a client in another process
+    would: on one shared participant its action client once saw the server's three services
+    on the graph but never became ready in 30 s under the suite's load.
+    """
 
     def __init__(self, context: Context, world: World) -> None:
         settings = SimSettings(world=world, seed=None, speed=0.0,
@@ -70,8 +76,10 @@ class Graph:
         self.sim_executor.add_node(self.sim_node)
         self.crashed: list[BaseException] = []
         self.thread = threading.Thread(target=self._run, daemon=True)
-        self.probe = Node("probe", context=context)
-        self.executor = SingleThreadedExecutor(context=context)
+        self.probe_context = Context()
+        rclpy.init(context=self.probe_context)
+        self.probe = Node("probe", context=self.probe_context)
+        self.executor = SingleThreadedExecutor(context=self.probe_context)
         self.executor.add_node(self.probe)
         self.rooms = self.probe.create_client(RoomInfo, "/servicesim/room_info",
                                               qos_profile=DEEP)
@@ -144,12 +152,17 @@ class Graph:
         failing assertion's message."""
         services = [name for name, _ in self.probe.get_service_names_and_types()
                     if "navigate_to_pose" in name]
-        return (f"the probe sees {services or 'no navigation services'}; simulator loop "
+        topics = {kind: self.probe.count_publishers(f"/servicebot/navigate_to_pose/_action/{kind}")
+                  for kind in ("feedback", "status")}
+        return (f"the probe sees {services or 'no navigation services'} and publishers of "
+                f"{topics}; simulator loop "
                 f"{'alive' if self.alive() else f'gone: {self.crashed}'} at sim time "
                 f"{self.simulator.engine.sim_time:.1f} s")
 
     def shutdown(self) -> None:
+        self.executor.shutdown()
         self.probe.destroy_node()
+        self.probe_context.try_shutdown()
 
 
 @pytest.fixture
