@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import rclpy
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav2_msgs.action import NavigateToPose
@@ -37,7 +38,12 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 
 
 class Graph:
-    """The simulator spinning in a thread, and a client node the test drives."""
+    """The simulator spinning in a thread, and a client node the test drives.
+
+    The client has a context (a DDS participant) of its own, as a client in another process
+    would: sharing the simulator's, an action client under the suite's load once saw the
+    server's services yet never became ready (as in ``test_hostile_clients``).
+    """
 
     def __init__(self, context: Context, *, speed: float) -> None:
         settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=speed,
@@ -47,10 +53,17 @@ class Graph:
         self.sim_executor = DrainingExecutor(context=context)
         self.sim_executor.add_node(self.sim_node)
         self.thread = threading.Thread(target=self._run, daemon=True)
-        self.client = Node("probe", context=context)
-        self.executor = SingleThreadedExecutor(context=context)
+        self.client_context = Context()
+        rclpy.init(context=self.client_context)
+        self.client = Node("probe", context=self.client_context)
+        self.executor = SingleThreadedExecutor(context=self.client_context)
         self.executor.add_node(self.client)
         self.thread.start()
+
+    def shutdown(self) -> None:
+        self.executor.shutdown()
+        self.client.destroy_node()
+        self.client_context.try_shutdown()
 
     def _run(self) -> None:
         try:
@@ -74,7 +87,9 @@ class Graph:
 
 @pytest.fixture
 def graph(ros_context: Context) -> Iterator[Graph]:
-    yield Graph(ros_context, speed=0.0)
+    built = Graph(ros_context, speed=0.0)
+    yield built
+    built.shutdown()
 
 
 def test_clock_runs_and_the_map_is_latched(graph: Graph) -> None:
