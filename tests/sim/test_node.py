@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-import rclpy
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav2_msgs.action import NavigateToPose
@@ -38,12 +37,7 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 
 
 class Graph:
-    """The simulator spinning in a thread, and a client node the test drives.
-
-    The client has a context (a DDS participant) of its own, as a client in another process
-    would: sharing the simulator's, an action client under the suite's load once saw the
-    server's services yet never became ready (as in ``test_hostile_clients``).
-    """
+    """The simulator spinning in a thread, and a client node the test drives."""
 
     def __init__(self, context: Context, *, speed: float) -> None:
         settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=speed,
@@ -53,17 +47,10 @@ class Graph:
         self.sim_executor = DrainingExecutor(context=context)
         self.sim_executor.add_node(self.sim_node)
         self.thread = threading.Thread(target=self._run, daemon=True)
-        self.client_context = Context()
-        rclpy.init(context=self.client_context)
-        self.client = Node("probe", context=self.client_context)
-        self.executor = SingleThreadedExecutor(context=self.client_context)
+        self.client = Node("probe", context=context)
+        self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.client)
         self.thread.start()
-
-    def shutdown(self) -> None:
-        self.executor.shutdown()
-        self.client.destroy_node()
-        self.client_context.try_shutdown()
 
     def _run(self) -> None:
         try:
@@ -71,10 +58,15 @@ class Graph:
         except Exception:  # the context shutting down ends the loop
             return
 
+    def account(self) -> str:
+        """Whether the simulator's loop lives and how far it got: for a failing wait."""
+        return (f"simulator loop {'alive' if self.thread.is_alive() else 'gone'} at sim time "
+                f"{self.simulator.engine.sim_time:.1f} s")
+
     def spin_until(self, done: Callable[[], bool], limit_s: float = 20.0) -> None:
         deadline = time.monotonic() + limit_s
         while not done():
-            assert time.monotonic() < deadline, "condition not reached in time"
+            assert time.monotonic() < deadline, f"condition not reached in time; {self.account()}"
             self.executor.spin_once(timeout_sec=0.02)
 
     def call(self, kind: Any, name: str, request: Any) -> Any:
@@ -87,9 +79,7 @@ class Graph:
 
 @pytest.fixture
 def graph(ros_context: Context) -> Iterator[Graph]:
-    built = Graph(ros_context, speed=0.0)
-    yield built
-    built.shutdown()
+    yield Graph(ros_context, speed=0.0)
 
 
 def test_clock_runs_and_the_map_is_latched(graph: Graph) -> None:
