@@ -19,7 +19,7 @@ import pytest
 from py_trees.blackboard import Blackboard
 
 from bt_servicesim.ros.domain import DomainClaim, claim_domain
-from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.ros.environment import apply_localhost_defaults, delete_participant
 
 if TYPE_CHECKING:
     from tests.fakes import SensorWorld, SimTimeGraph
@@ -41,7 +41,9 @@ os.environ["ROS_DOMAIN_ID"] = str(TEST_DOMAIN.domain_id)
 
 @pytest.fixture
 def ros_context() -> Iterator[object]:
-    """A fresh rclpy context for one test, shut down afterwards."""
+    """A fresh rclpy context for one test, shut down afterwards and its participant deleted:
+    a participant left to the garbage collector stays in the test process's domain, with the
+    action servers of the test's simulator, for the tests after it to find."""
     import rclpy
     from rclpy.context import Context
 
@@ -50,7 +52,7 @@ def ros_context() -> Iterator[object]:
     try:
         yield context
     finally:
-        context.try_shutdown()
+        delete_participant(context)
 
 
 @pytest.fixture(autouse=True)

@@ -37,8 +37,10 @@ import sys
 import time
 from collections.abc import MutableMapping
 from pathlib import Path
+from typing import Any
 
-__all__ = ["apply_localhost_defaults", "remove_dead_segments", "shut_ros_down_at_exit"]
+__all__ = ["apply_localhost_defaults", "delete_participant", "remove_dead_segments",
+           "shut_ros_down_at_exit"]
 
 DISCOVERY_RANGE_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 LOCALHOST = "LOCALHOST"
@@ -139,19 +141,35 @@ def shut_ros_down_at_exit() -> None:
     if "rclpy" not in sys.modules:
         return
     with contextlib.suppress(Exception):
-        from rclpy.node import Node
         from rclpy.utilities import get_default_context
 
-        context = get_default_context()
-        context.try_shutdown()
-        gc.collect()
-        for node in [item for item in gc.get_objects() if isinstance(item, Node)]:
-            for waitable in list(node.waitables):
-                with contextlib.suppress(Exception):
-                    waitable.destroy()
+        delete_participant(get_default_context(), every_node=True)
+
+
+def delete_participant(context: Any, *, every_node: bool = False) -> None:
+    """Shut ``context`` down and delete its DDS participant now, not when the garbage goes.
+
+    Shutting a context down destroys the publishers, subscriptions, services and timers of the
+    nodes it tracks, but not their waitables: an action server or client holds its node, the
+    node its context, and the participant stays in the domain with the action's endpoints, as
+    a server nobody serves, until the garbage collector frees them (a test process that ran a
+    dozen simulator tests in one domain had four such servers beside the live one). So this
+    collects the garbage, destroys the context's nodes still alive (``every_node``: every
+    node of the process) with their waitables, and destroys the context.
+    """
+    from rclpy.node import Node
+
+    context.try_shutdown()
+    gc.collect()
+    for node in [item for item in gc.get_objects() if isinstance(item, Node)]:
+        if not every_node and node.context is not context:
+            continue
+        for waitable in list(node.waitables):
             with contextlib.suppress(Exception):
-                node.destroy_node()
-        context.destroy()
+                waitable.destroy()
+        with contextlib.suppress(Exception):
+            node.destroy_node()
+    context.destroy()
 
 
 def _register_at_exit() -> None:

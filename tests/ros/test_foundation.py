@@ -15,7 +15,7 @@ from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 
-from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.ros.environment import apply_localhost_defaults, delete_participant
 from tests.fakes import FakeNavigator, FakeReferee, spin_until
 
 
@@ -134,3 +134,26 @@ def test_action_goal_can_be_cancelled(
 def test_rclpy_uses_the_domain_from_the_environment(ros_context: object) -> None:
     assert rclpy.utilities.get_default_context() is not ros_context
     assert ros_context.get_domain_id() == int(os.environ["ROS_DOMAIN_ID"])
+
+
+def test_a_deleted_participant_leaves_no_action_server_in_the_domain(
+        ros_context: Any) -> None:
+    """Shutting a context down leaves its nodes' action servers in the domain until the
+    garbage goes; ``delete_participant`` takes them out at once."""
+    from rclpy.action import ActionServer
+    from rclpy.context import Context
+
+    goals = "/foundation_test/navigate_to_pose/_action/send_goal"
+    probe = Node("probe", context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(probe)
+    served = Context()
+    rclpy.init(context=served)
+    node = Node("served", context=served)
+    ActionServer(node, NavigateToPose, "/foundation_test/navigate_to_pose", lambda _: None)
+    spin_until(executor, lambda: probe.count_services(goals) == 1, "the server")
+    served.try_shutdown()
+    executor.spin_once(timeout_sec=1.0)
+    assert probe.count_services(goals) == 1, "rclpy's shutdown alone takes the server out now"
+    delete_participant(served)
+    spin_until(executor, lambda: probe.count_services(goals) == 0, "the server to go")

@@ -31,6 +31,7 @@ from rclpy.task import Future
 from servicesim_competition.srv import RoomInfo
 from std_srvs.srv import Empty
 
+from bt_servicesim.ros.environment import delete_participant
 from servicesim_sim.engine import SimEngine
 from servicesim_sim.executor import DrainingExecutor
 from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map, yaw_of
@@ -161,8 +162,7 @@ class Graph:
 
     def shutdown(self) -> None:
         self.executor.shutdown()
-        self.probe.destroy_node()
-        self.probe_context.try_shutdown()
+        delete_participant(self.probe_context)  # the probe's action client with it
 
 
 @pytest.fixture
