@@ -1,7 +1,8 @@
 """The simulator's real-time factor: alone, and with one executive driving a full mission.
 
 ``python benchmarks/sim_rtf.py [--seconds S] [--speed X] [--executive bt|baseline]
-[--missions N | --seeds 0-4] [--timing lockstep|free|both|all]`` prints
+[--missions N | --seeds 0-4] [--timing lockstep|free|both|all] [--free-running-code DIR]``
+prints
 
 * alone: the simulator as fast as it can run (speed 0) with its task started (before
   ``new_task`` it never runs faster than real time) but nobody driving the robot and nobody
@@ -28,6 +29,11 @@
   compares the timings on the content of one or two missions only. The summary gives each
   timing's factor pooled over its missions (all sim seconds over all wall seconds) and
   lockstep against the others mission by mission;
+* with ``--free-running-code DIR``, the free-running missions run the code of another checkout
+  of this repository (``DIR``, e.g. ``git worktree add /tmp/filed 5094628^``, the code issue 15
+  was filed on, which knew no lockstep) on this checkout's Python environment, interleaved
+  with this checkout's lockstep missions: lockstep now against free running as it was, on the
+  same machine at the same time;
 * the CPU time the executive's and the simulator's processes spent over the task (from
   ``/proc``), as milliseconds per sim second: a process needing more than 1000/X ms per sim
   second cannot keep X times real time even with a core of its own, so these say which of
@@ -85,7 +91,20 @@ def build_parser() -> OneLineArgumentParser:
                              "shipped task, one mission each, every timing on each seed: "
                              "compares the timings over several missions' content; overrides "
                              "--missions")
+    parser.add_argument("--free-running-code", type=checkout, default=None, metavar="DIR",
+                        help="run the free-running missions with the code of this other "
+                             "checkout of the repository (e.g. from before lockstep)")
     return parser
+
+
+def checkout(text: str) -> Path:
+    """A directory holding a checkout of this repository (its executive and its simulator)."""
+    path = Path(text).resolve()
+    for part in ("bt_servicesim/run.py", "sim/servicesim_sim/__main__.py"):
+        if not (path / part).is_file():
+            raise argparse.ArgumentTypeError(f"{text}: not a checkout of this repository "
+                                             f"(no {part})")
+    return path
 
 
 def seed_list(text: str) -> list[int]:
@@ -189,11 +208,13 @@ class ProcessCpu:
 
 
 def measure_mission(*, speed: float, executive: str, free_running: bool = False,
-                    taking_turns: bool = False, seed: int | None = None) -> tuple[float, float]:
+                    taking_turns: bool = False, seed: int | None = None,
+                    code: Path | None = None) -> tuple[float, float]:
     """Run one mission, print its figures; the sim and wall seconds of its task.
 
     The run claims a ROS domain of its own and names it in the report it writes as it starts;
-    the benchmark reads the referee there, on a context of that domain.
+    the benchmark reads the referee there, on a context of that domain. With ``code``, the run
+    is that checkout's (a checkout from before lockstep runs free without being asked).
     """
     import rclpy
     from rclpy.context import Context
@@ -201,17 +222,20 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
     from rclpy.node import Node
 
     with tempfile.TemporaryDirectory(prefix="benchmark-run-") as out:
+        asks_free = free_running and (code is None or knows_lockstep(code))
         command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed",
                    repr(speed), "--executive", executive, "--out", out,
-                   *(["--free-running"] if free_running else []),
+                   *(["--free-running"] if asks_free else []),
                    *(["--seed", str(seed)] if seed is not None else [])]
         started = time.monotonic()
         errors = (Path(out) / "run.err").open("w")  # a pipe nobody reads would block the run
         environment = os.environ.copy()
+        if code is not None:
+            environment["PYTHONPATH"] = os.pathsep.join([str(code), str(code / "sim")])
         if taking_turns:  # the simulator (started by the run) waits for each tick
             environment[LAG_VARIABLE] = "0"
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,
-                               env=environment)
+                               env=environment, cwd=code)  # ``-m`` looks in cwd first
         errors.close()
         domain = run_domain(Path(out), run)
         context = Context()
@@ -239,6 +263,8 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
     sim_s, wall_s, factor = task.factor()
     verdict = "completed" if report["completed"] else f"failed ({report['failure']})"
     timing = "free running" if free_running else report.get("timing", "?")
+    if code is not None:
+        timing += f", the code of {code}"
     if taking_turns:
         timing += ", taking turns"
     shown = f"seed {seed}, " if seed is not None else ""
@@ -257,6 +283,19 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
             f"{name} {cpu.spent(pid):.2f} s ({1000.0 * cpu.spent(pid) / sim_s:.1f} ms "
             f"per sim s)" for name, pid in processes))
     return sim_s, wall_s
+
+
+def commit_of(code: Path) -> str:
+    """The checkout's commit, as git names it (or why not)."""
+    found = subprocess.run(["git", "-C", str(code), "describe", "--always", "--dirty"],
+                           capture_output=True, text=True, check=False)
+    return found.stdout.strip() or "not a git checkout"
+
+
+def knows_lockstep(code: Path) -> bool:
+    """Whether the checkout's ``run`` has ``--free-running`` (code from before lockstep
+    runs free and would refuse the flag)."""
+    return "--free-running" in (code / "bt_servicesim" / "run.py").read_text()
 
 
 def run_domain(out: Path, run: subprocess.Popen[bytes]) -> int:
@@ -338,10 +377,15 @@ def summarise(executive: str, tasks: dict[str, list[tuple[float, float]]]) -> No
     for name, missions in tasks.items():
         if name == "lockstep" or not lockstep:
             continue
-        ratios = [(ls / lw) / (s / w) for (ls, lw), (s, w) in zip(lockstep, missions, strict=True)]
+        pairs = list(zip(lockstep, missions, strict=True))
+        ratios = [(ls / lw) / (s / w) for (ls, lw), (s, w) in pairs]
         print(f"lockstep against {name}, mission by mission: "
               + ", ".join(f"{ratio:.2f}" for ratio in ratios)
               + f" (median {statistics.median(ratios):.2f})")
+        print(f"  the task's wall seconds, {name} over lockstep (a timing that loses ticks can "
+              "play a longer mission): "
+              + ", ".join(f"{w / lw:.2f}" for (_, lw), (_, w) in pairs)
+              + f" (median {statistics.median(w / lw for (_, lw), (_, w) in pairs):.2f})")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -359,6 +403,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     print(f"ROS domain {domain}, discovery {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}, "
           f"{os.cpu_count()} CPUs")
+    if args.free_running_code is not None:
+        print(f"free running runs the code of {args.free_running_code} "
+              f"({commit_of(args.free_running_code)}); lockstep runs this checkout's")
     rclpy.init()
     node = Node("benchmark_sim_rtf")
     executor = SingleThreadedExecutor()
@@ -372,7 +419,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 tasks[name].append(measure_mission(
                     speed=args.speed, executive=args.executive,
                     free_running=name == "free running",
-                    taking_turns=name == "lockstep, taking turns", seed=seed))
+                    taking_turns=name == "lockstep, taking turns", seed=seed,
+                    code=args.free_running_code if name == "free running" else None))
         summarise(args.executive, tasks)
     finally:
         executor.shutdown()

@@ -1,0 +1,27 @@
+"""``benchmarks/sim_rtf.py``: bad arguments are one line on stderr and exit status 2, before any
+process starts."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SIM_RTF = Path(__file__).resolve().parents[2] / "benchmarks" / "sim_rtf.py"
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--free-running-code", "/nowhere"], "/nowhere: not a checkout of this repository"),
+    (["--free-running-code", str(SIM_RTF.parent)], "not a checkout of this repository"),
+    (["--seeds", "3-x"], "'3-x': not seeds like 0,1,2 or 0-4"),
+    (["--speed", "-1"], "--speed -1.0: must be 0 or more"),
+])
+def test_a_bad_argument_is_one_line_and_status_2(arguments: list[str], named: str) -> None:
+    done = subprocess.run([sys.executable, str(SIM_RTF), *arguments], capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("benchmarks/sim_rtf.py: error: "), lines
+    assert named in lines[0]
