@@ -145,7 +145,7 @@ class Graph:
     def navigate(self, goal: NavigateToPose.Goal, limit_s: float = 60.0) -> tuple[int, Any]:
         assert self.spin_until(self.navigation.server_is_ready), self.account()
         outcome = self.send(goal)
-        assert self.spin_until(outcome.done, limit_s), "the goal got no result"
+        assert self.spin_until(outcome.done, limit_s), f"the goal got no result; {self.account()}"
         return outcome.result()
 
     def account(self) -> str:
@@ -158,7 +158,8 @@ class Graph:
         return (f"the probe sees {services or 'no navigation services'} and publishers of "
                 f"{topics}; simulator loop "
                 f"{'alive' if self.alive() else f'gone: {self.crashed}'} at sim time "
-                f"{self.simulator.engine.sim_time:.1f} s")
+                f"{self.simulator.engine.sim_time:.1f} s, "
+                f"{self.sim_executor.refused_sends} of its replies refused by DDS")
 
     def shutdown(self) -> None:
         self.executor.shutdown()

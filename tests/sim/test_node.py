@@ -61,7 +61,8 @@ class Graph:
     def account(self) -> str:
         """Whether the simulator's loop lives and how far it got: for a failing wait."""
         return (f"simulator loop {'alive' if self.thread.is_alive() else 'gone'} at sim time "
-                f"{self.simulator.engine.sim_time:.1f} s")
+                f"{self.simulator.engine.sim_time:.1f} s, "
+                f"{self.sim_executor.refused_sends} of its replies refused by DDS")
 
     def spin_until(self, done: Callable[[], bool], limit_s: float = 20.0) -> None:
         deadline = time.monotonic() + limit_s
