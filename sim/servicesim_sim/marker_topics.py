@@ -9,7 +9,10 @@ the building:
   (every 0.5 sim s); only what :class:`~servicesim_sim.markers.SceneTracker` says changed is
   deleted, the people are sent every time (they move).
 
-What is drawn and how is :mod:`servicesim_sim.markers`; this module only builds the messages.
+What is drawn and how is :mod:`servicesim_sim.markers`; this module only publishes the messages.
+Both are sent as CDR bytes serialised by hand (:mod:`servicesim_sim.marker_messages`);
+:func:`marker_array` builds the same message with rclpy, the reference those bytes are tested
+against.
 """
 
 from __future__ import annotations
@@ -22,16 +25,19 @@ from geometry_msgs.msg import Point
 from visualization_msgs.msg import Marker, MarkerArray
 
 from servicesim_sim.engine import SimEngine
+from servicesim_sim.marker_messages import MAP_FRAME, MarkerArrayBytes
 from servicesim_sim.markers import SceneTracker, Shape, Update, areas_update
 
-MAP_FRAME = "map"
 MARKERS_TOPIC = "/servicesim/markers"
 AREA_MARKERS_TOPIC = "/servicesim/markers/areas"
 
 
 def marker_array(update: Update, *, now: Time, built: MarkerCache | None = None) -> MarkerArray:
     """The message for ``update``: a DELETEALL per cleared namespace, DELETEs, then ADDs;
-    ``built`` keeps the markers made before, to refill rather than make again."""
+    ``built`` keeps the markers made before, to refill rather than make again.
+
+    The simulator sends :class:`~servicesim_sim.marker_messages.MarkerArrayBytes`' encoding
+    instead; this is the rclpy message its bytes must equal once serialised."""
     cache = built if built is not None else MarkerCache()
     markers = [_bare(namespace, 0, Marker.DELETEALL, now) for namespace in update.clear]
     markers += [_bare(namespace, number, Marker.DELETE, now)
@@ -105,14 +111,15 @@ class MarkerTopics:
         self._scene = make_publisher(MarkerArray, MARKERS_TOPIC, 10)
         self._areas = make_publisher(MarkerArray, AREA_MARKERS_TOPIC, latched)
         self._tracker = SceneTracker()
-        self._built = MarkerCache()
+        self._encoder = MarkerArrayBytes()
         task = engine.scenario.task
         roles = {task.pick_up: "pick-up", task.drop_off: "drop-off", task.start_area: "start"}
-        send(self._areas, marker_array(areas_update(engine.world.areas, roles=roles), now=now))
+        areas = areas_update(engine.world.areas, roles=roles)
+        send(self._areas, MarkerArrayBytes().encode(areas, stamp=(now.sec, now.nanosec)))
 
     def publish(self, now: Time) -> None:
         """The people, the guest and (when it changed) the plan, as they are now."""
         navigator = self.engine.navigator
         plan = navigator.path if navigator.status == "running" else []
         update = self._tracker.update(self.engine.people_states(), plan)
-        self._send(self._scene, marker_array(update, now=now, built=self._built))
+        self._send(self._scene, self._encoder.encode(update, stamp=(now.sec, now.nanosec)))
