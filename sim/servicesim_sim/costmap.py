@@ -22,6 +22,9 @@ Design intent:
   A person is a disc.
 * The lidar is approximated by one ray per person to the person's centre, walls sampled on the
   map's own grid; people's legs, the scan's angular resolution and noise are not modelled.
+  A sweep traces only the rays whose answer can change its result (people within the marking
+  range, or near enough to an old mark in view to stand on it or hide it): rays are worked
+  out one by one, so the others are not needed for the same marks, bit for bit.
 """
 
 from __future__ import annotations
@@ -205,23 +208,50 @@ class Costmap:
     def observe(self, robot_x: float, robot_y: float, robot_yaw: float,
                 people_xy: list[tuple[float, float]] | np.ndarray, now: float) -> None:
         """One lidar sweep: mark the people in view within the marking range, clear old marks
-        in view where nobody stands any more (see the module docstring)."""
+        in view where nobody stands any more (see the module docstring).
+
+        Only the people whose visibility can change the result get a ray (see
+        :meth:`_rayed_people`); the rest are treated as unseen, which they may be.
+        """
         robot = np.array([robot_x, robot_y], dtype=np.float64)
         people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
-        visible = people[self._in_view(robot, robot_yaw, people, occluders=people)]
-        surface = np.hypot(*(visible - robot).T) - self.person_radius
-        near = surface <= self.lidar.mark_range
-        seen = visible[near]
         old = np.array([(mark.x, mark.y) for mark in self.marks]).reshape(-1, 2)
+        old_in_field = self._in_field(robot, robot_yaw, old)
+        surface = np.hypot(*(people - robot).T) - self.person_radius
+        near_people = surface <= self.lidar.mark_range
+        in_sight = self._rayed_people(robot, robot_yaw, people, surface=surface,
+                                      near=near_people, old=old[old_in_field])
+        visible, near = people[in_sight], near_people[in_sight]
+        seen = visible[near]
         keep = ~_near_any(old, seen, self.person_radius)  # a person seen there marks it anew
         standing = _near_any(old, visible[~near], self.person_radius)  # the ray ends on them
-        rayed = keep & ~standing  # only the other old marks need a ray: cleared if in view
+        # only the other old marks in the field of view need a ray: cleared if it reaches them
+        rayed = keep & ~standing & old_in_field
         if rayed.any():
-            keep[rayed] = ~self._in_view(robot, robot_yaw, old[rayed], occluders=visible)
+            keep[rayed] = ~self._in_line_of_sight(robot, old[rayed], occluders=visible)
         marks = tuple(mark for mark, kept in zip(self.marks, keep, strict=True) if kept)
         marks += tuple(PersonMark(float(x), float(y), now) for x, y in seen)
         self.visible_people = tuple((float(x), float(y)) for x, y in seen)
         self._set_marks(marks)
+
+    def _rayed_people(self, robot: np.ndarray, yaw: float, people: np.ndarray, *,
+                      surface: np.ndarray, near: np.ndarray, old: np.ndarray) -> np.ndarray:
+        """Which people the lidar sees, among those whose visibility matters; False for the rest.
+
+        A sweep needs to know whether a person is seen only when they are within the marking
+        range (they are marked), near an old mark in the field of view (the ray ends on them
+        and the mark stays) or nearer than such a mark (they may hide it). Farther people are
+        left unrayed: a person can neither stand within the person radius of a mark nor hide it
+        unless they are less than a metre farther than it (a generous margin over rounding).
+        Rays to far people behind walls were most of a sweep's cost.
+        """
+        reach = (np.hypot(*(old - robot).T).max() - self.person_radius + 1.0 if old.size
+                 else -math.inf)
+        wanted = self._in_field(robot, yaw, people) & (near | (surface < reach))
+        in_sight = np.zeros(len(people), dtype=bool)
+        if wanted.any():
+            in_sight[wanted] = self._in_line_of_sight(robot, people[wanted], occluders=people)
+        return in_sight
 
     def clear(self) -> None:
         """Forget every mark (what clear_costmaps does)."""
@@ -250,21 +280,25 @@ class Costmap:
         return costs
 
     # ------------------------------------------------------------------ the lidar
-    def _in_view(self, robot: np.ndarray, yaw: float, targets: np.ndarray, *,
-                 occluders: np.ndarray) -> np.ndarray:
-        """Which targets (person centres) the lidar at ``robot`` facing ``yaw`` would hit."""
+    def _in_field(self, robot: np.ndarray, yaw: float, targets: np.ndarray) -> np.ndarray:
+        """Which targets lie in the lidar's field of view and range (walls and people aside)."""
         offsets = targets - robot
         distance = np.hypot(offsets[:, 0], offsets[:, 1])
         surface = distance - self.person_radius
         bearing = np.arctan2(offsets[:, 1], offsets[:, 0]) - yaw
         bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
-        visible = ((np.abs(bearing) <= self.lidar.half_angle)
-                   & (surface >= self.lidar.min_range) & (surface <= self.lidar.max_range))
-        candidates = np.flatnonzero(visible)
-        if candidates.size:
-            visible[candidates] = self._wall_free(robot, targets[candidates])
-            visible[candidates] &= ~self._hidden_by_people(robot, targets[candidates], occluders)
-        return visible
+        return ((np.abs(bearing) <= self.lidar.half_angle)
+                & (surface >= self.lidar.min_range) & (surface <= self.lidar.max_range))
+
+    def _in_line_of_sight(self, robot: np.ndarray, targets: np.ndarray, *,
+                          occluders: np.ndarray) -> np.ndarray:
+        """Whether each ray to a target misses every wall and every nearer occluder; each
+        target's answer depends on it alone, so any subset of targets may be asked."""
+        clear = self._wall_free(robot, targets)
+        open_rays = np.flatnonzero(clear)  # a ray stopped by a wall needs no people test
+        if open_rays.size:
+            clear[open_rays] = ~self._hidden_by_people(robot, targets[open_rays], occluders)
+        return clear
 
     def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Whether each ray from the robot to a target's surface misses every wall cell.
