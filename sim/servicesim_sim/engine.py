@@ -414,11 +414,14 @@ class SimEngine:
         if clearance >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
             return  # nobody and nothing near: the common case, nothing to book
         distances = self._person_distances()
-        touching = np.clip(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0, None)
+        # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
+        # constant minus a distance), without np.clip's wrappers, every step someone is near
+        touching = np.maximum(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0)
         self.referee.contact(person_depth=float(touching.sum()),
                              object_depth=max(0.0, BODY_RADIUS - clearance), dt=dt)
-        approach = np.clip(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0,
-                           PERSON_APPROXIMATION_M)
+        approach = np.minimum(
+            np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
+            PERSON_APPROXIMATION_M)
         self.referee.approximation(
             person_depth=float(approach.sum()),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),

@@ -31,6 +31,7 @@ Design intent:
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from enum import IntEnum
@@ -114,10 +115,15 @@ class PolylinePath:
         self.lengths = np.hypot(segments[:, 0], segments[:, 1])
         self.arc = np.concatenate(([0.0], np.cumsum(self.lengths)))
         self.total = float(self.arc[-1])
+        # asked at every control step: what locate() needs of every segment is kept, and arc
+        # lengths are searched with bisect (numpy's call overhead was most of the cost)
+        self._arcs: list[float] = self.arc.tolist()
+        self._spans = segments
+        self._squares = np.maximum(self.lengths ** 2, 1e-12)
 
     def point_at(self, s: float) -> np.ndarray:
         s = min(max(s, 0.0), self.total)
-        index = min(int(np.searchsorted(self.arc, s, side="right")) - 1, len(self.lengths) - 1)
+        index = min(bisect.bisect_right(self._arcs, s) - 1, len(self.lengths) - 1)
         if index < 0 or self.lengths[index] == 0.0:
             return self.points[max(index, 0)].copy()
         fraction = (s - self.arc[index]) / self.lengths[index]
@@ -127,21 +133,20 @@ class PolylinePath:
         """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``."""
         # only the segments that overlap the window can hold the answer
         segments = len(self.lengths)
-        first = min(max(int(np.searchsorted(self.arc, near - 0.2, side="right")) - 1, 0),
-                    segments - 1)
-        last = min(max(int(np.searchsorted(self.arc, near + reach, side="left")), first + 1),
-                   segments)
-        start, end = self.points[first:last], self.points[first + 1:last + 1]
+        first = min(max(bisect.bisect_right(self._arcs, near - 0.2) - 1, 0), segments - 1)
+        last = min(max(bisect.bisect_left(self._arcs, near + reach), first + 1), segments)
+        start, span = self.points[first:last], self._spans[first:last]
         lengths = self.lengths[first:last]
-        span = end - start
-        fraction = np.clip(((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
-                           / np.maximum(lengths ** 2, 1e-12), 0.0, 1.0)
+        # clipped to [0, 1] by hand: np.clip's wrappers cost more than the arithmetic
+        fraction = np.minimum(np.maximum(
+            ((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
+            / self._squares[first:last], 0.0), 1.0)
         nearest = start + fraction[:, None] * span
         gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
         arcs = self.arc[first:last] + fraction * lengths
         gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
         best = int(np.argmin(gaps))
-        if not np.isfinite(gaps[best]):
+        if not math.isfinite(gaps[best]):
             return near, float(np.hypot(*(self.point_at(near) - (x, y))))
         return float(arcs[best]), float(gaps[best])
 
