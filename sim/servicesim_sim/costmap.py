@@ -216,7 +216,8 @@ class Costmap:
         robot = np.array([robot_x, robot_y], dtype=np.float64)
         people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
         old = np.array([(mark.x, mark.y) for mark in self.marks]).reshape(-1, 2)
-        old_in_field = self._in_field(robot, robot_yaw, old)
+        old_in_field = (self._in_field(robot, robot_yaw, old) if old.size
+                        else np.zeros(0, dtype=bool))
         surface = np.hypot(*(people - robot).T) - self.person_radius
         near_people = surface <= self.lidar.mark_range
         in_sight = self._rayed_people(robot, robot_yaw, people, surface=surface,
@@ -322,7 +323,9 @@ class Costmap:
         rows = np.floor((ys - self.map.origin_y) / step).astype(np.intp)
         height, width = self._ray_walls.shape
         inside = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
-        hits = self._ray_walls[np.clip(rows, 0, height - 1), np.clip(cols, 0, width - 1)] | ~inside
+        # integer clamps by np.maximum/np.minimum: np.clip's wrappers cost more than the work
+        hits = self._ray_walls[np.minimum(np.maximum(rows, 0), height - 1),
+                               np.minimum(np.maximum(cols, 0), width - 1)] | ~inside
         return np.bincount(owner, weights=hits, minlength=len(targets)) == 0
 
     def _hidden_by_people(self, robot: np.ndarray, targets: np.ndarray,

@@ -616,9 +616,9 @@ class Crowd:
         others = list(others)
         moving = [(w.person.x, w.person.y) for w in self._walkers]
         within = _within_stop_distance(moving, points=floor + others + moving)
-        for index, walker in enumerate(self._walkers):
-            by_people, by_walkers = self._stops(walker, within[index], floor=floor,
-                                                others=others, moving=moving)
+        for walker, near in zip(self._walkers, within, strict=True):
+            by_people, by_walkers = (self._stops(walker, near, floor=floor, others=others,
+                                                 moving=moving) if near else (False, False))
             if not (by_people or by_walkers):
                 walker.waited = 0.0
                 walker.advance(walker.direction * walker.speed * dt)
@@ -635,8 +635,6 @@ class Crowd:
         """Whether the robot or ``others`` (first) and another walker (second) stop
         ``walker``, as everyone stood at the step's start; ``within`` indexes the points of
         ``floor + others + moving`` nearer than the stop distance, the only ones that can."""
-        if not within:
-            return False, False
         first_walker = len(floor) + len(others)
         by_people = ((0 in within and walker.blocked(floor, below=ROBOT_BELOW_WALKER))
                      or walker.blocked([others[i - 1] for i in within if 0 < i < first_walker]))
