@@ -272,6 +272,9 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
           f"in {wall_s:5.1f} wall s  real-time factor {factor:6.1f}")
     print(f"  the run: {verdict}, task {report['sim_time_s']:.1f} sim s, whole run {wall:.1f} "
           f"wall s (start-up and shut-down included)")
+    if sim_s < 0.95 * float(report["sim_time_s"]):
+        print(f"  (measured over the last {sim_s:.1f} sim s only: this benchmark's reader "
+              "found the referee late, after the task had started)")
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
     if report.get("lockstep_stalls"):
         print(f"  lockstep: {report['lockstep_stalls']} period(s) ticked without every message")
