@@ -24,7 +24,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from servicesim_sim.cdr import ENCAPSULATION, STAMP
+from servicesim_sim.cdr import ENCAPSULATION, STAMP, CdrTemplate
 from servicesim_sim.markers import Shape, Update
 
 __all__ = ["ADD", "DELETE", "DELETEALL", "MAP_FRAME", "MarkerArrayBytes", "MarkerBytes"]
@@ -36,38 +36,11 @@ _NUMBERING = struct.Struct("<3i")  # id, type, action
 _POSITION = struct.Struct("<3d")
 _REST_OF_POSE = struct.Struct("<4d3d4f")  # orientation x y z w, scale x y z, colour r g b a
 _LIFETIME_LOCKED = struct.Struct("<iI?")  # lifetime sec, nanosec; frame_locked
+_FLAG = struct.Struct("<?")
 _NO_POSITION = (0.0, 0.0, 0.0)
 
 Look = tuple[object, ...]
 """Everything of a shape but its position; a marker's template is kept while it stays alike."""
-
-
-class _Writer:
-    """CDR bytes from a start ``phase`` (their offset modulo 8 from the encapsulation's end)."""
-
-    def __init__(self, *, phase: int) -> None:
-        self.phase = phase
-        self.body = bytearray()
-
-    def align(self, size: int) -> None:
-        self.body += bytes(-(self.phase + len(self.body)) % size)
-
-    def pack(self, layout: struct.Struct, *values: object, alignment: int) -> int:
-        """``values`` packed by ``layout``; their offset in the body."""
-        if layout.size:  # an empty array is not aligned
-            self.align(alignment)
-        offset = len(self.body)
-        self.body += layout.pack(*values)
-        return offset
-
-    def count(self, number: int) -> None:
-        """A sequence's length."""
-        self.pack(_COUNT, number, alignment=4)
-
-    def string(self, text: str) -> None:
-        encoded = text.encode() + b"\x00"
-        self.count(len(encoded))
-        self.body += encoded
 
 
 @dataclass(frozen=True)
@@ -83,7 +56,7 @@ class MarkerBytes:
              shape: Shape | None = None) -> MarkerBytes:
         """A marker as ``marker_array`` makes it: ``shape``'s for an ADD, else bare (a DELETE or
         DELETEALL: every other field at its default)."""
-        writer = _Writer(phase=phase)
+        writer = CdrTemplate(phase=phase)
         stamp = writer.pack(STAMP, 0, 0, alignment=4)
         writer.string(MAP_FRAME)
         writer.string(namespace)
@@ -94,10 +67,11 @@ class MarkerBytes:
         writer.pack(_LIFETIME_LOCKED, 0, 0, False, alignment=4)
         _points(writer, shape)
         _tail(writer, text=shape.text if shape else "")
-        return cls(data=bytes(writer.body), stamp=stamp, position=position)
+        at = len(ENCAPSULATION)  # the template's offsets count it; the element's do not
+        return cls(data=writer.body(), stamp=stamp - at, position=position - at)
 
 
-def _points(writer: _Writer, shape: Shape | None) -> None:
+def _points(writer: CdrTemplate, shape: Shape | None) -> None:
     """``points`` (in the plane, at the shape's height), then ``colors``: none."""
     points = shape.points if shape else ()
     writer.count(len(points))
@@ -106,7 +80,7 @@ def _points(writer: _Writer, shape: Shape | None) -> None:
     writer.count(0)
 
 
-def _tail(writer: _Writer, *, text: str) -> None:
+def _tail(writer: CdrTemplate, *, text: str) -> None:
     """From ``texture_resource`` to the end: all empty but ``text``."""
     writer.string("")  # texture_resource
     writer.pack(STAMP, 0, 0, alignment=4)  # texture: header stamp, frame, format, data
@@ -118,7 +92,7 @@ def _tail(writer: _Writer, *, text: str) -> None:
     writer.string("")  # mesh_resource
     writer.string("")  # mesh_file: filename, data
     writer.count(0)
-    writer.body += b"\x00"  # mesh_use_embedded_materials
+    writer.pack(_FLAG, False, alignment=1)  # mesh_use_embedded_materials
 
 
 def _look(shape: Shape) -> Look:

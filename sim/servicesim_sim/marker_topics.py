@@ -9,10 +9,8 @@ the building:
   (every 0.5 sim s); only what :class:`~servicesim_sim.markers.SceneTracker` says changed is
   deleted, the people are sent every time (they move).
 
-What is drawn and how is :mod:`servicesim_sim.markers`; this module only publishes the messages.
-Both are sent as CDR bytes serialised by hand (:mod:`servicesim_sim.marker_messages`);
-:func:`marker_array` builds the same message with rclpy, the reference those bytes are tested
-against.
+What is drawn and how is :mod:`servicesim_sim.markers`; this module only publishes the messages,
+as CDR bytes serialised by hand (:mod:`servicesim_sim.marker_messages`).
 """
 
 from __future__ import annotations
@@ -21,80 +19,14 @@ from collections.abc import Callable
 from typing import Any
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 from servicesim_sim.engine import SimEngine
-from servicesim_sim.marker_messages import MAP_FRAME, MarkerArrayBytes
-from servicesim_sim.markers import SceneTracker, Shape, Update, areas_update
+from servicesim_sim.marker_messages import MarkerArrayBytes
+from servicesim_sim.markers import SceneTracker, areas_update
 
 MARKERS_TOPIC = "/servicesim/markers"
 AREA_MARKERS_TOPIC = "/servicesim/markers/areas"
-
-
-def marker_array(update: Update, *, now: Time, built: MarkerCache | None = None) -> MarkerArray:
-    """The message for ``update``: a DELETEALL per cleared namespace, DELETEs, then ADDs;
-    ``built`` keeps the markers made before, to refill rather than make again.
-
-    The simulator sends :class:`~servicesim_sim.marker_messages.MarkerArrayBytes`' encoding
-    instead; this is the rclpy message its bytes must equal once serialised."""
-    cache = built if built is not None else MarkerCache()
-    markers = [_bare(namespace, 0, Marker.DELETEALL, now) for namespace in update.clear]
-    markers += [_bare(namespace, number, Marker.DELETE, now)
-                for namespace, number in update.delete]
-    markers += [cache.marker(shape, now) for shape in update.add]
-    return MarkerArray(markers=markers)
-
-
-def _bare(namespace: str, number: int, action: int, now: Time) -> Marker:
-    marker = Marker(ns=namespace, id=number, action=action)
-    marker.header.frame_id, marker.header.stamp = MAP_FRAME, now
-    return marker
-
-
-class MarkerCache:
-    """The marker last made for each namespace and id, refilled when only its place changed.
-
-    A person moves every update and looks the same: setting two numbers of the marker made
-    before takes a fraction of making a ``Marker`` again (rclpy checks every field it is given).
-    Publishing serialises at the call, so refilling a marker sent before changes nothing sent.
-    """
-
-    def __init__(self) -> None:
-        self._made: dict[tuple[str, int], tuple[Shape, Marker]] = {}
-
-    def marker(self, shape: Shape, now: Time) -> Marker:
-        key = (shape.namespace, shape.id)
-        made = self._made.get(key)
-        if made is not None and _looks_alike(made[0], shape):
-            marker = made[1]
-            marker.header.stamp = now
-            position = marker.pose.position
-            position.x, position.y, position.z = shape.position
-        else:
-            marker = _marker(shape, now)
-        self._made[key] = (shape, marker)
-        return marker
-
-
-def _looks_alike(old: Shape, new: Shape) -> bool:
-    """Whether ``new`` is ``old`` moved: everything but the position alike."""
-    return (old.kind == new.kind and old.scale == new.scale and old.colour == new.colour
-            and old.text == new.text and old.points == new.points and old.z == new.z)
-
-
-def _marker(shape: Shape, now: Time) -> Marker:
-    marker = _bare(shape.namespace, shape.id, Marker.ADD, now)
-    marker.type = int(shape.kind)
-    position = marker.pose.position
-    position.x, position.y, position.z = (float(value) for value in shape.position)
-    marker.pose.orientation.w = 1.0
-    marker.scale.x, marker.scale.y, marker.scale.z = (float(value) for value in shape.scale)
-    colour = marker.color
-    colour.r, colour.g, colour.b, colour.a = (float(value) for value in shape.colour)
-    marker.text = shape.text
-    marker.points = [Point(x=x, y=y, z=shape.z) for x, y in shape.points]
-    return marker
 
 
 class MarkerTopics:

@@ -25,9 +25,8 @@ BODY_RADIUS = 0.25  # m
 class WallClearance:
     """Metres from any point of the map to the nearest occupied or unknown cell.
 
-    :meth:`at` runs several times a physics step: it does the map's own cell arithmetic
-    (:meth:`OccupancyMap.world_to_cell`, :meth:`OccupancyMap.in_bounds`) inline, and reads the
-    grid through a flat memoryview, which hands out Python floats without numpy scalars.
+    :meth:`at` runs several times a physics step: it reads the grid through a flat memoryview,
+    which hands out Python floats without numpy scalars.
     """
 
     def __init__(self, occupancy_map: OccupancyMap) -> None:
@@ -35,15 +34,12 @@ class WallClearance:
         free = ~occupancy_map.blocked_mask()
         self.grid = (ndimage.distance_transform_edt(free) * occupancy_map.resolution).astype(
             np.float32)
-        self._origin_x, self._origin_y = occupancy_map.origin_x, occupancy_map.origin_y
-        self._resolution = occupancy_map.resolution
-        self._rows, self._cols = self.grid.shape
+        self._cols = self.grid.shape[1]
         self._cells = memoryview(self.grid).cast("B").cast("f")
 
     def at(self, x: float, y: float) -> float:
-        row = math.floor((y - self._origin_y) / self._resolution)
-        col = math.floor((x - self._origin_x) / self._resolution)
-        if not (0 <= row < self._rows and 0 <= col < self._cols):
+        row, col = self.map.world_to_cell(x, y)
+        if not self.map.in_bounds(row, col):
             return 0.0
         return self._cells[row * self._cols + col]
 

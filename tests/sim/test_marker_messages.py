@@ -22,7 +22,6 @@ from visualization_msgs.msg import Marker, MarkerArray
 from bt_servicesim.records.mcap import complete_definition
 from servicesim_sim.engine import SimEngine
 from servicesim_sim.marker_messages import MarkerArrayBytes
-from servicesim_sim.marker_topics import MarkerCache, marker_array
 from servicesim_sim.markers import (
     PEOPLE_NS,
     PLAN_NS,
@@ -37,6 +36,7 @@ from servicesim_sim.markers import (
 )
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.world import DEFAULT_WORLD, AreaBox, World, load_world
+from tests.sim.marker_reference import marker_array
 
 STAMPS = [(0, 0), (7, 500_000_000), (233, 960_000_001)]
 CROWD = [("human_1", "walker", 1.0, 2.0), ("human_2", "idler", -1.0, 0.5),
@@ -54,9 +54,8 @@ def zero_padded_cdr() -> Callable[[MarkerArray], bytes]:
     return serialize_dynamic(MARKER_ARRAY, complete_definition(MARKER_ARRAY))[MARKER_ARRAY]
 
 
-def rclpys(update: Update, stamp: tuple[int, int],
-           built: MarkerCache | None = None) -> MarkerArray:
-    return marker_array(update, now=Time(sec=stamp[0], nanosec=stamp[1]), built=built)
+def rclpys(update: Update, stamp: tuple[int, int]) -> MarkerArray:
+    return marker_array(update, now=Time(sec=stamp[0], nanosec=stamp[1]))
 
 
 def same(ours: bytes, message: MarkerArray) -> MarkerArray:
@@ -133,7 +132,7 @@ def test_every_marker_reads_back_as_the_shape_it_draws(name: str) -> None:
 def test_a_sequence_of_updates_is_rclpys_own_as_the_scene_changes() -> None:
     """People moving, leaving and coming; a plan appearing, changing and ending; the templates
     kept from one message serve the next, at whichever alignment a marker then falls."""
-    tracker, encoder, built = SceneTracker(full_every=4), MarkerArrayBytes(), MarkerCache()
+    tracker, encoder = SceneTracker(full_every=4), MarkerArrayBytes()
     crowd = list(CROWD)
     plans = [[], PATH, PATH, PATH[1:], PATH[1:], [], [], PATH[:2], [(0.5, 0.5)], PATH]
     for number, plan in enumerate(plans):
@@ -144,7 +143,7 @@ def test_a_sequence_of_updates_is_rclpys_own_as_the_scene_changes() -> None:
             crowd.insert(0, ("h", "walker", 2.0, 2.0))
         update = tracker.update(crowd, plan)
         stamp = (number, 500_000_000 * (number % 2))
-        same(encoder.encode(update, stamp=stamp), rclpys(update, stamp, built))
+        same(encoder.encode(update, stamp=stamp), rclpys(update, stamp))
 
 
 @cache
@@ -167,11 +166,11 @@ def engine_updates(seed: int, *, count: int) -> Iterator[Update]:
 
 @pytest.mark.parametrize("seed", [1, 2])
 def test_a_real_engines_scenes_are_rclpys_own(seed: int) -> None:
-    encoder, built = MarkerArrayBytes(), MarkerCache()
+    encoder = MarkerArrayBytes()
     plans = 0
     for number, update in enumerate(engine_updates(seed, count=24)):
         stamp = (number // 2, 500_000_000 * (number % 2))
-        read = same(encoder.encode(update, stamp=stamp), rclpys(update, stamp, built))
+        read = same(encoder.encode(update, stamp=stamp), rclpys(update, stamp))
         plans += any(marker.ns == PLAN_NS for marker in read.markers)
     assert plans, "the robot's plan was drawn"
 

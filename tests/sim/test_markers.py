@@ -6,7 +6,6 @@ from __future__ import annotations
 from builtin_interfaces.msg import Time
 from visualization_msgs.msg import Marker
 
-from servicesim_sim.marker_topics import MarkerCache, marker_array
 from servicesim_sim.markers import (
     AREA_NAMES_NS,
     AREAS_NS,
@@ -21,9 +20,9 @@ from servicesim_sim.markers import (
     Shape,
     Update,
     areas_update,
-    person_shape,
 )
 from servicesim_sim.world import AreaBox
+from tests.sim.marker_reference import marker_array
 
 AREAS = {"Cafe": AreaBox(0.0, 0.0, 4.0, 2.0), "Lobby": AreaBox(5.0, 1.0, 6.0, 3.0),
          "Kitchen": AreaBox(-3.0, -3.0, -1.0, -1.0)}
@@ -132,16 +131,3 @@ def test_a_plan_line_carries_its_points_and_width() -> None:
                 and marker.action == Marker.ADD)
     assert [(point.x, point.y) for point in line.points] == [(0.0, 0.0), (1.0, 1.0)]
     assert line.scale.x > 0.0
-
-
-def test_a_marker_made_before_is_refilled_when_only_its_place_changed() -> None:
-    cache = MarkerCache()
-    walker = person_shape(4, role="walker", x=1.0, y=2.0)
-    first = marker_array(Update(add=[walker]), now=Time(sec=1), built=cache).markers[0]
-    moved = marker_array(Update(add=[person_shape(4, role="walker", x=3.0, y=2.5)]),
-                         now=Time(sec=2), built=cache).markers[0]
-    assert moved is first
-    assert (moved.pose.position.x, moved.pose.position.y, moved.header.stamp.sec) == (3.0, 2.5, 2)
-    idler = marker_array(Update(add=[person_shape(4, role="idler", x=3.0, y=2.5)]),
-                         now=Time(sec=3), built=cache).markers[0]
-    assert idler is not first and idler.color.r != first.color.r
