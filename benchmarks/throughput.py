@@ -1,7 +1,8 @@
 """Episodes per hour: warm pairs against a process pair per episode, on the same seeds.
 
 ``python benchmarks/throughput.py [--episodes N] [--jobs J] [--scenario random] [--speed S]
-[--time-limit T] [--executive bt|baseline] [--first-seed F] [--out DIR]`` plays the same ``N``
+[--time-limit T] [--executive bt|baseline] [--first-seed F] [--out DIR] [--json FILE]`` plays
+the same ``N``
 episodes of one scenario set twice with the evaluation's own machinery
 (:func:`~bt_servicesim.evaluation.episodes.run_episodes`), ``J`` at once: cold (each episode a
 ``python -m bt_servicesim.run`` process with its own simulator) and warm (``J`` warm pairs
@@ -9,7 +10,8 @@ kept alive between episodes, issue 16). It prints, for each, the wall time, epis
 and the share completed, how the episodes' sim time is spread (the longest episode's share: a
 mission failing only at the time limit costs many others' worth), then the ratio warm/cold and
 how many episodes' reports agree between the two on what lockstep makes replayable (completed,
-checkpoint times, penalties, score).
+checkpoint times, penalties, score). ``--json FILE`` also writes the figures there, whole or
+not at all (``evaluate --throughput FILE`` states them in ``results.md``).
 
 The default speed is 0 (flat out): in lockstep the simulator still waits for its executive, so
 the missions are the same as at any speed and the figure measures what an episode costs the
@@ -19,8 +21,11 @@ else ran); nothing here is asserted. Bad arguments give one line and exit status
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import shlex
+import subprocess
 import sys
 import tempfile
 import time
@@ -51,6 +56,8 @@ def build_parser() -> OneLineArgumentParser:
     parser.add_argument("--first-seed", type=int, default=0, help="seeds F, F+1, ... (0)")
     parser.add_argument("--out", type=Path, help="keep the episodes here (default: a "
                         "temporary directory, removed afterwards)")
+    parser.add_argument("--json", type=Path, metavar="FILE",
+                        help="also write the figures to FILE (for evaluate --throughput)")
     return parser
 
 
@@ -91,19 +98,62 @@ def sim_time_line(rows: list[dict[str, Any]]) -> str:
             f"the longest, seed {seed}, {longest:.0f} s ({share:.0%} of it)")
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    parser = build_parser()
+def figures(args: Any, argv: Sequence[str], *, load_start: float,
+            modes: dict[str, tuple[list[dict[str, Any]], float]]) -> dict[str, Any]:
+    """What ``--json`` writes (read back by ``bt_servicesim.evaluation.throughput``)."""
+    cold, warm = modes["cold"][0], modes["warm"][0]
+    return {
+        "command": shlex.join(["python", PROG, *argv]), "commit": _commit(),
+        "scenario": args.scenario, "executive": args.executive, "jobs": args.jobs,
+        "cores": os.cpu_count(), "speed": args.speed,
+        "load_average": [round(load_start, 2), round(os.getloadavg()[0], 2)],
+        **{name: {"episodes": len(rows), "wall_s": round(wall_s, 1),
+                  "completed": sum(1 for row in rows if row["completed"])}
+           for name, (rows, wall_s) in modes.items()},
+        "agreeing": sum(1 for a, b in zip(cold, warm, strict=True) if judged(a) == judged(b)),
+    }
+
+
+def write_json(path: Path, document: dict[str, Any]) -> None:
+    """Written whole: a temporary file renamed over ``path``."""
+    partial = path.with_name(path.name + ".partial")
+    partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    partial.replace(path)
+
+
+def _commit() -> str | None:
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, check=True, cwd=Path(__file__).resolve().parent)
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return out.stdout.strip() or None
+
+
+def check(args: Any, parser: OneLineArgumentParser) -> None:
+    """Refuse bad arguments in one line before any episode starts."""
     if args.episodes < 1 or not 1 <= args.jobs <= 16:
         parser.error("--episodes must be 1 or more and --jobs within 1..16")
     if not (math.isfinite(args.speed) and args.speed >= 0.0) or args.first_seed < 0:
         parser.error("--speed must be a finite number, 0 or more; --first-seed 0 or more")
+    if args.json is not None and not args.json.resolve().parent.is_dir():
+        parser.error(f"--json {args.json}: its directory does not exist")
+    if args.json is not None and args.json.is_dir():
+        parser.error(f"--json {args.json}: is a directory")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    check(args, parser)
     apply_localhost_defaults()
+    load_start = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="throughput-") as scratch:
         out = args.out or Path(scratch)
         print(f"{args.episodes} {args.scenario} episodes ({args.executive}), --jobs "
               f"{args.jobs}, speed {args.speed:g}, time limit {args.time_limit:g} s; "
-              f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start",
+              f"{os.cpu_count()} cores, load average {load_start:.2f} at the start",
               flush=True)
         cold, cold_s = timed(settings_for(args, out / "cold"), warm=False)
         print(line("cold", cold, cold_s), flush=True)
@@ -117,6 +167,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if judged(a) != judged(b):
             print(f"  seed {a['episode_seed']}: cold {judged(a)} / warm {judged(b)} "
                   f"(warm failure: {b.get('failure')})")
+    if args.json is not None:
+        write_json(args.json, figures(args, argv, load_start=load_start,
+                                      modes={"cold": (cold, cold_s), "warm": (warm, warm_s)}))
+        print(f"figures written to {args.json}")
     return EXIT_OK
 
 

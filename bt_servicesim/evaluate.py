@@ -40,9 +40,9 @@ import shlex
 import signal
 import sys
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO, TypeVar
 
 from bt_servicesim.cli import (
     EXIT_FAILED,
@@ -70,6 +70,7 @@ from bt_servicesim.evaluation.settings import (
     EvaluationSettings,
     load_warning,
 )
+from bt_servicesim.evaluation.throughput import load_throughput
 from bt_servicesim.mission.settings import EXECUTIVES
 from bt_servicesim.mission.stopping import StopSignals, Terminated, signal_of
 from bt_servicesim.ros.environment import apply_localhost_defaults
@@ -77,6 +78,8 @@ from bt_servicesim.tree.files import DEFAULT_TREE
 
 if TYPE_CHECKING:  # the local pool imports no distributed engine
     from distributed import Client
+
+Figures = TypeVar("Figures")
 
 PROG = "python -m bt_servicesim.evaluate"
 
@@ -117,6 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--reproducibility", type=Path, metavar="FILE",
                         help="state in results.md the share of seeds that replay, from the "
                              "figures of benchmarks/reproducibility.py --json FILE")
+    parser.add_argument("--throughput", type=Path, metavar="FILE",
+                        help="state in results.md the episodes per hour, warm and cold, from "
+                             "the figures of benchmarks/throughput.py --json FILE")
     parser.add_argument("--cluster", metavar="ADDRESS",
                         help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
                              "worker as many at once as it has threads (needs the 'cluster' "
@@ -145,19 +151,26 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         _check(path is None or not path.exists() or path.is_dir(),
                f"{flag} {path}: exists and is not a directory")
     tree = _tree(args.tree, executives)
-    reproducibility = None
-    if args.reproducibility is not None:
-        try:
-            reproducibility = load_reproducibility(args.reproducibility)
-        except ValueError as error:
-            raise UsageError(f"--reproducibility {error}") from error
+    reproducibility = _figures("--reproducibility", args.reproducibility, load_reproducibility)
+    throughput = _figures("--throughput", args.throughput, load_throughput)
     return EvaluationSettings(
         episodes=args.episodes, scenarios=scenarios, executives=executives, jobs=args.jobs,
         seed=args.seed, out=args.out, speed=args.speed, episode_timeout_s=args.episode_timeout,
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
-        resume=args.resume, cold=args.cold, reproducibility=reproducibility, tree=tree,
+        resume=args.resume, cold=args.cold, reproducibility=reproducibility,
+        throughput=throughput, tree=tree,
     )
+
+
+def _figures(flag: str, path: Path | None, load: Callable[[Path], Figures]) -> Figures | None:
+    """A benchmark's figures for results.md, read before anything starts."""
+    if path is None:
+        return None
+    try:
+        return load(path)
+    except ValueError as error:
+        raise UsageError(f"{flag} {error}") from error
 
 
 def _tree(path: Path | None, executives: tuple[str, ...]) -> Path:

@@ -31,6 +31,7 @@ from bt_servicesim.evaluation.summary import (
     time_over_bound,
     unplayed,
 )
+from bt_servicesim.evaluation.throughput import throughput_section
 from bt_servicesim.mission.settings import EXECUTIVES
 
 
@@ -70,6 +71,7 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
               *bound_table(settings, rows, problem=bound_problem), ""]
     lines += ["## Reproducibility", "",
               *reproducibility_section(rows, settings.reproducibility), ""]
+    lines += ["## Episodes per hour", "", *throughput_section(settings.throughput), ""]
     tree = settings.tree if settings.own_tree else None
     lines += ["## Why episodes failed", "", *failure_table(rows, tree=tree), "", "## Plots", ""]
     lines += [f"![{title}]({image_dir}/results_{name}.png)" for name, title in PLOTS]

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bt_servicesim.evaluation.reproducibility import Reproducibility
+from bt_servicesim.evaluation.throughput import Throughput
 from bt_servicesim.ros.domain import DOMAINS
 from bt_servicesim.tree.files import DEFAULT_TREE
 
@@ -74,6 +75,8 @@ class EvaluationSettings:
     """Every episode a ``run`` process of its own, as before warm pairs (for comparisons)."""
     reproducibility: Reproducibility | None = None
     """The figures of ``benchmarks/reproducibility.py --json`` that results.md states."""
+    throughput: Throughput | None = None
+    """The figures of ``benchmarks/throughput.py --json`` that results.md states."""
     tree: Path = DEFAULT_TREE
     """The mission tree the ``bt`` executive plays (an absolute path, checked to load)."""
 
