@@ -11,7 +11,11 @@ prints
   ``X`` (default 50, the target; 0 asks for as fast as the pair can go), ``N`` times one after
   another (then the median, least and greatest factor too), measured from the referee's own
   stamps between the task's start and its end, which is the part of a run an evaluation pays
-  for; the run's report (completed, sim and wall time); and how often the tree ticked per sim
+  for: the run's report says when it took the task's first and latest referee state
+  (``task_timing``: task sim time and ``time.monotonic()``); a checkout whose report does not
+  say (``--free-running-code`` from before it did) is measured by this script's own reader of
+  the referee, which can join after the task started; the run's report (completed, sim and
+  wall time); and how often the tree ticked per sim
   second over the task, from its tree log: 10 when the executive keeps up with the simulator,
   fewer when it falls behind (it ticks at most once per /clock message it gets to). A factor
   of 50 with the tree ticking 10 times a sim second is the target met; flat out the pair goes
@@ -173,12 +177,19 @@ class ProcessCpu:
         self.pid = pid
         self.latest: dict[int, float] = {}  # pid to CPU seconds, at the last sample
         self.marks: list[dict[int, float]] = []
+        self.timeline: list[tuple[float, dict[int, float]]] = []  # (monotonic, totals)
 
     def sample(self) -> None:
         for pid in (self.pid, *self._children()):
             seconds = self._cpu_of(pid)
             if seconds is not None:
                 self.latest[pid] = seconds
+        self.timeline.append((time.monotonic(), dict(self.latest)))
+
+    def mark_at(self, moments: Sequence[float]) -> None:
+        """Take as the marks the samples nearest each of ``moments`` (``time.monotonic()``)."""
+        self.marks = [min(self.timeline, key=lambda sample: abs(sample[0] - moment))[1]
+                      for moment in moments]
 
     def mark(self) -> None:
         """Remember the totals now (the task's start and its end)."""
@@ -258,6 +269,12 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
         warnings = [line for line in said.splitlines()
                     if "lockstep: dropped" in line or "ticked without" in line
                     or "Traceback" in line]
+    timing_seen = report.get("task_timing")
+    if timing_seen:  # the run's own account of when it saw the task: never late
+        task = Stamps()
+        for end in (timing_seen["first"], timing_seen["last"]):
+            task.pairs.append((end["monotonic_s"], end["task_sim_time_s"]))
+        cpu.mark_at([wall for wall, _ in task.pairs])
     if len(task.pairs) < 2:
         raise SystemExit(f"the referee reported no running task ({report.get('failure')})")
     sim_s, wall_s, factor = task.factor()

@@ -9,6 +9,7 @@ sensors and the competition's services only.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -31,6 +32,12 @@ class RefereeMonitor:
     def __init__(self, node: Node) -> None:
         self.latest: RefereeState | None = None
         self.frozen = False
+        self.task_first: tuple[float, float] | None = None
+        """(task sim time, ``time.monotonic()``) of the first state taken while the task ran
+        or once it was completed: when the run saw the task start, for benchmarks that measure
+        a mission's real-time factor (never read by the mission)."""
+        self.task_latest: tuple[float, float] | None = None
+        """The same of the latest such state taken."""
         self._ended: Callable[[], bool] = lambda: False
         self._reader = shared_subscription(node, RefereeState, REFEREE_TOPIC, self._on_state,
                                            LATCHED)
@@ -38,6 +45,10 @@ class RefereeMonitor:
     def _on_state(self, message: RefereeState) -> None:
         if not self.frozen and not self._ended():
             self.latest = message
+            if message.task_running or message.completed:
+                self.task_latest = (float(message.task_sim_time), time.monotonic())
+                if self.task_first is None:
+                    self.task_first = self.task_latest
 
     def freeze_when(self, ended: Callable[[], bool]) -> None:
         """Take no state once ``ended()`` holds: the books stay as the tick that ended the
@@ -73,6 +84,16 @@ class RefereeMonitor:
             return ""
         return (f"no referee state came on {REFEREE_TOPIC} (this simulator's extension): "
                 "what the referee counted is unknown")
+
+    def task_timing(self) -> dict[str, Any] | None:
+        """The report's ``task_timing``: the task sim time and this machine's monotonic clock
+        (``CLOCK_MONOTONIC``, seconds, as ``time.monotonic()`` reads it in any process) when the
+        run took the task's first and its latest referee state; ``None`` if it saw no task."""
+        first, last = self.task_first, self.task_latest
+        if first is None or last is None:
+            return None
+        return {"first": {"task_sim_time_s": first[0], "monotonic_s": round(first[1], 4)},
+                "last": {"task_sim_time_s": last[0], "monotonic_s": round(last[1], 4)}}
 
     def report_fields(self) -> dict[str, Any]:
         """``completed``, ``score``, ``sim_time_s``, ``checkpoints``, ``penalties`` and

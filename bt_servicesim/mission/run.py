@@ -413,6 +413,7 @@ class MissionRun:
             **self._header(status),
             **fields,
             "wall_time_s": round(time.monotonic() - self.started_wall, 3),
+            "task_timing": monitor.task_timing(),
             "exit_code": code,
             "failure": self.failure,
             # where a failed run stood: the phase and the running behaviour with its feedback

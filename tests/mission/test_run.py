@@ -87,6 +87,30 @@ def test_a_backend_without_referee_state_leaves_the_referees_books_unknown(
         node.destroy_node()
 
 
+def test_the_report_says_when_the_run_saw_the_task_start_and_end(ros_context: Any) -> None:
+    """``task_timing``, for benchmarks: the first and the latest state of the task the monitor
+    took, with the monotonic clock; nothing before the task, nothing once frozen."""
+    node = Node("task_timing", context=ros_context)
+    try:
+        monitor = RefereeMonitor(node)
+        monitor._on_state(RefereeState(task_running=False))
+        assert monitor.task_timing() is None
+        before = time.monotonic()
+        monitor._on_state(RefereeState(task_running=True, task_sim_time=0.5))
+        monitor._on_state(RefereeState(task_running=True, task_sim_time=40.0))
+        monitor._on_state(RefereeState(task_running=False, completed=True, task_sim_time=80.0))
+        after = time.monotonic()
+        monitor.freeze()
+        monitor._on_state(RefereeState(completed=True, task_sim_time=99.0))
+        timing = monitor.task_timing()
+        assert timing is not None
+        assert [timing[end]["task_sim_time_s"] for end in ("first", "last")] == [0.5, 80.0]
+        first, last = timing["first"]["monotonic_s"], timing["last"]["monotonic_s"]
+        assert before - 1e-3 <= first <= last <= after + 1e-3
+    finally:
+        node.destroy_node()
+
+
 @pytest.mark.parametrize(("attach", "free_running", "reliable"), [
     (False, False, True), (False, True, False), (True, False, False)],
     ids=["own simulator", "free running", "attached"])
