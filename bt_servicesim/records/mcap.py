@@ -357,17 +357,20 @@ class TreeTopic:
             String, TREE_TOPIC, RecordedTopic(TREE_TOPIC, String).qos)
         self.recorder = recorder
         self.period_s = period_s
-        self._state = TreeState()
-        self._sent: TreeState | None = None
+        self._state = TreeState()  # the latest, advanced in place by each record
+        self._sent_at: float | None = None  # the sim time of the last snapshot sent
+        self._unsent = False  # whether the latest state is not sent yet
 
     def publish(self, record: TickRecord) -> None:
-        previous, self._state = self._state, self._state.apply(record)
-        if (self._sent is None or (record.tip, record.root) != (previous.tip, previous.root)
-                or record.sim_time_s >= self._sent.sim_time_s + self.period_s):
+        moved = (record.tip, record.root) != (self._state.tip, self._state.root)
+        self._state.advance(record)
+        self._unsent = True
+        if (self._sent_at is None or moved
+                or record.sim_time_s >= self._sent_at + self.period_s):
             self._send()
 
     def flush(self) -> None:
-        if self._state.tick and self._sent is not self._state:
+        if self._unsent:
             self._send()
 
     def _send(self) -> None:
@@ -378,7 +381,7 @@ class TreeTopic:
         self.publisher.publish(message)
         if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
             self.recorder.record(TREE_TOPIC, message)
-        self._sent = self._state
+        self._sent_at, self._unsent = self._state.sim_time_s, False
 
 
 def snapshot_json(state: TreeState) -> dict[str, Any]:

@@ -210,15 +210,22 @@ class TreeState:
 
     def apply(self, record: TickRecord) -> TreeState:
         """The state after ``record`` (a new object; this one is unchanged)."""
-        blackboard = dict(self.blackboard)
+        state = TreeState(tick=self.tick, sim_time_s=self.sim_time_s, root=self.root,
+                          tip=self.tip, nodes=dict(self.nodes), blackboard=dict(self.blackboard))
+        state.advance(record)
+        return state
+
+    def advance(self, record: TickRecord) -> None:
+        """Become the state after ``record``, in place: for a reader that keeps only the latest
+        state, a copy of the whole tree at every tick is work for nothing."""
+        self.tick, self.sim_time_s, self.root, self.tip = (
+            record.tick, record.sim_time_s, record.root, record.tip)
+        self.nodes.update(record.nodes)
         for key, text in record.blackboard.items():
             if text is None:
-                blackboard.pop(key, None)
+                self.blackboard.pop(key, None)
             else:
-                blackboard[key] = text
-        return TreeState(tick=record.tick, sim_time_s=record.sim_time_s, root=record.root,
-                         tip=record.tip, nodes={**self.nodes, **record.nodes},
-                         blackboard=blackboard)
+                self.blackboard[key] = text
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,13 @@ import py_trees
 import pytest
 
 from bt_servicesim.records.drawing import tree_text
-from bt_servicesim.records.tree_log import TreeLog, TreeLogError, read_tree_log
+from bt_servicesim.records.tree_log import (
+    TickRecord,
+    TreeLog,
+    TreeLogError,
+    TreeState,
+    read_tree_log,
+)
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
 from tests.fakes import RecordedRun, errand_tree
 
@@ -141,3 +147,26 @@ def test_blackboard_changes_are_new_objects_with_new_reprs_and_keys_that_went(
     assert log.capture(tick=4).blackboard == {"/right": None}
     assert log.capture(tick=5) is None
     log.close()
+
+
+def test_advancing_in_place_gives_the_state_that_applying_gives(tmp_path: Path) -> None:
+    """``apply`` leaves its state as it was; ``advance`` (the tree topic's way) changes it to
+    the same state a new object from ``apply`` holds."""
+    run = RecordedRun(tmp_path)
+    history = read_tree_log(run.path)
+    lines = [json.loads(line) for line in run.path.read_text().splitlines()[1:]]
+    latest = TreeState()
+    for expected, line in zip(history.states, lines, strict=True):
+        before = TreeState(tick=latest.tick, sim_time_s=latest.sim_time_s, root=latest.root,
+                           tip=latest.tip, nodes=dict(latest.nodes),
+                           blackboard=dict(latest.blackboard))
+        record = TickRecord.from_json(line)
+        applied = latest.apply(record)
+        assert latest == before  # apply made a new state
+        latest.advance(record)
+        assert latest == applied == expected
+        assert list(latest.nodes) == list(expected.nodes)  # in the same order, too
+    gone = TickRecord(tick=latest.tick + 1, sim_time_s=latest.sim_time_s, root=latest.root,
+                      tip=latest.tip, nodes={}, blackboard=dict.fromkeys(latest.blackboard))
+    latest.advance(gone)
+    assert latest.blackboard == {} and latest.tick == gone.tick
