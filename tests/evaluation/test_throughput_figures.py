@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from bt_servicesim.evaluation.report import markdown_report
+from bt_servicesim.evaluation.report import markdown_report, revision_note
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.evaluation.throughput import load_throughput, throughput_section
 from tests.evaluation.test_evaluate import evaluate_command
@@ -153,3 +153,18 @@ def test_the_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and named in lines[0], lines
+
+
+
+def test_results_md_names_the_checkout_the_episodes_were_played_on() -> None:
+    """The report is written at the end; a checkout changed meanwhile is not the one that played
+    the episodes, and results.md says which did."""
+    rows = [{"executive": "bt", "revision": "commit `aaa`"},
+            {"executive": "baseline", "revision": "commit `aaa`"}]
+    assert revision_note(rows, "commit `bbb`") == (
+        " (the episodes were played on another checkout: baseline episodes on commit `aaa`: 1, "
+        "bt episodes on commit `aaa`: 1)")
+    assert revision_note(rows, "commit `aaa`") == ""
+    resumed = [{**rows[0], "resumed": True}, {**rows[1], "revision": "commit `bbb`"}]
+    assert revision_note(resumed, "commit `bbb`").startswith(
+        " (1 episodes kept from an earlier run with --resume; baseline episodes on commit `bbb`")
