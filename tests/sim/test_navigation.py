@@ -190,6 +190,42 @@ def test_a_partition_one_cell_thick_hides_people_from_slanted_rays() -> None:
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(9.0, 2.9)]
 
 
+def wall_free_reference(costmap: Costmap, robot: np.ndarray, targets: np.ndarray) -> list[bool]:
+    """Costmap._wall_free sample by sample: sample k of a ray lies min_range + k * cell along
+    it, up to the target's surface; a ray is free when no sample's cell is a wall or off the
+    grid."""
+    grid, lidar = costmap._ray_grid, costmap.lidar
+    rows, cols = grid.walls.shape
+    free = []
+    for target in targets:
+        distance = max(float(np.hypot(*(target - robot))), 1e-9)
+        across, up = (target[0] - robot[0]) / distance, (target[1] - robot[1]) / distance
+        samples = math.floor(max(distance - costmap.person_radius - lidar.min_range, 0.0)
+                             / grid.cell) + 1
+        hit = False
+        for k in range(samples):
+            along = lidar.min_range + k * grid.cell
+            col = math.floor((robot[0] + across * along - grid.origin_x) / grid.cell)
+            row = math.floor((robot[1] + up * along - grid.origin_y) / grid.cell)
+            hit = hit or not (0 <= row < rows and 0 <= col < cols) or bool(grid.walls[row, col])
+        free.append(not hit)
+    return free
+
+
+def test_rays_to_walls_match_a_sample_by_sample_reference() -> None:
+    rng = np.random.default_rng(11)
+    grid = room(16.0, 12.0)
+    for _ in range(25):  # wall stubs of every thickness and slant of approach
+        x, y = rng.uniform(0.0, 15.0), rng.uniform(0.0, 11.0)
+        wall(grid, x, y, x + rng.uniform(0.05, 1.5), y + rng.uniform(0.05, 1.5))
+    costmap = Costmap(occupancy(grid), lidar=MARK_AT_ANY_RANGE)
+    for _ in range(400):  # robots and targets inside and outside the grid, near and far
+        robot = rng.uniform(-2.0, 18.0, size=2)
+        targets = rng.uniform(-2.0, 18.0, size=(int(rng.integers(1, 12)), 2))
+        free = costmap._wall_free(robot, targets)
+        assert free.tolist() == wall_free_reference(costmap, robot, targets)
+
+
 def test_people_beyond_the_lidar_range_are_not_seen() -> None:
     grid = np.zeros((40, 700), dtype=np.int8)  # 35 x 2 m at 0.05 m
     grid[:2, :] = grid[-2:, :] = 100
