@@ -440,6 +440,13 @@ def route_meets(route: np.ndarray, standing: np.ndarray) -> bool:
 
 
 # ----------------------------------------------------------------------------------- walkers
+def facing(heading: float, *, forwards: bool) -> tuple[float, float, float]:
+    """(yaw, cos yaw, sin yaw) of a walker on a leg of the given heading, walking it forwards
+    or backwards (the reverse heading as atan2 gives it)."""
+    yaw = heading if forwards else math.atan2(-math.sin(heading), -math.cos(heading))
+    return yaw, math.cos(yaw), math.sin(yaw)
+
+
 @dataclass
 class Walker:
     """A person walking a closed polyline at a constant speed."""
@@ -458,8 +465,12 @@ class Walker:
         self._xs = [float(x) for x in self.route[:, 0]]
         self._ys = [float(y) for y in self.route[:, 1]]
         self._along = [float(a) for a in self.along]
-        self._headings = [math.atan2(y1 - y0, x1 - x0) for x0, y0, x1, y1 in zip(
+        headings = [math.atan2(y1 - y0, x1 - x0) for x0, y0, x1, y1 in zip(
             self._xs, self._ys, self._xs[1:], self._ys[1:], strict=False)]
+        # (yaw, cos, sin) per leg, walking forwards and backwards: worked out once, not per step
+        self._facings = {forwards: [facing(heading, forwards=forwards) for heading in headings]
+                         for forwards in (True, False)}
+        self._leg = 0  # the leg it is on, where advance() looks first
         self._cos, self._sin = 1.0, 0.0  # of the way it faces; advance() keeps them
 
     @classmethod
@@ -473,17 +484,17 @@ class Walker:
         return walker
 
     def advance(self, metres: float) -> None:
+        """Walk ``metres`` along the route (back along it when negative), looping round."""
         along = self._along
-        self.travelled = (self.travelled + metres) % along[-1]
-        leg = min(bisect.bisect_right(along, self.travelled) - 1, len(along) - 2)
-        t = (self.travelled - along[leg]) / (along[leg + 1] - along[leg])
+        travelled = self.travelled = (self.travelled + metres) % along[-1]
+        leg = self._leg
+        if not along[leg] <= travelled < along[leg + 1]:  # else still the leg bisect would find
+            leg = self._leg = min(bisect.bisect_right(along, travelled) - 1, len(along) - 2)
+        t = (travelled - along[leg]) / (along[leg + 1] - along[leg])
         xs, ys = self._xs, self._ys
         self.person.x = xs[leg] + t * (xs[leg + 1] - xs[leg])
         self.person.y = ys[leg] + t * (ys[leg + 1] - ys[leg])
-        heading = self._headings[leg]
-        self.person.yaw = heading if self.direction > 0 else math.atan2(
-            -math.sin(heading), -math.cos(heading))
-        self._cos, self._sin = math.cos(self.person.yaw), math.sin(self.person.yaw)
+        self.person.yaw, self._cos, self._sin = self._facings[self.direction > 0][leg]
 
     def turn_back(self) -> None:
         """Walk the route the other way from here (blocked for longer than its patience)."""
