@@ -416,11 +416,22 @@ class Navigator:
         return 0.0, turn_towards(error, self.limits, self.tuning)
 
     def _person_ahead(self) -> bool:
+        """Whether a visible person is within ``person_across`` of the path's next metre or so
+        (from the robot's front to a person's body at ``person_gap``).
+
+        Every point of that stretch lies within its length of where it starts, so people
+        farther than that plus ``person_across`` (and a centimetre) from its start cannot be
+        near it: when nobody is nearer, the stretch is not sampled at all.
+        """
         people = self.costmap.visible_people
         if not people or self._track is None:
             return False
         tuning = self.tuning
         reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
+        start_x, start_y = self._track.point_at(self._s).tolist()
+        bound = (reach + tuning.person_across + 0.01) ** 2
+        if all((x - start_x) ** 2 + (y - start_y) ** 2 >= bound for x, y in people):
+            return False
         samples = self._track.samples(self._s, reach)
         spots = np.asarray(people, dtype=np.float64)
         gaps = np.hypot(spots[:, None, 0] - samples[None, :, 0],

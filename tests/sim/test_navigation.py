@@ -716,3 +716,34 @@ def test_on_the_shortest_way_no_periodic_replan_is_spent() -> None:
     assert nav.status == "succeeded" and ended > 20.0
     assert nav.costmap.version > 10  # the marks kept changing ...
     assert plans.times == [0.0]  # ... but the way was planned once
+
+
+def person_ahead_reference(navigator: Navigator) -> bool:
+    """Navigator._person_ahead without its shortcut: every visible person against every
+    sample of the path's stretch ahead."""
+    people, tuning = navigator.costmap.visible_people, navigator.tuning
+    if not people or navigator._track is None:
+        return False
+    reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
+    samples = navigator._track.samples(navigator._s, reach)
+    spots = np.asarray(people, dtype=np.float64)
+    gaps = np.hypot(spots[:, None, 0] - samples[None, :, 0],
+                    spots[:, None, 1] - samples[None, :, 1])
+    return bool(np.any(gaps.min(axis=1) < tuning.person_across))
+
+
+def test_a_person_ahead_is_found_as_by_sampling_the_whole_stretch() -> None:
+    rng = np.random.default_rng(8)
+    navigator = Navigator(corridor_map(3.0), rng=np.random.default_rng(7))
+    answers = []
+    for _ in range(3000):
+        corners = np.cumsum(rng.uniform(-0.6, 0.6, size=(int(rng.integers(2, 6)), 2)), axis=0)
+        navigator._track = PolylinePath([tuple(point) for point in corners])
+        navigator._s = float(rng.uniform(-0.2, navigator._track.total + 0.2))
+        start = navigator._track.point_at(navigator._s)
+        # people around where the stretch starts, many near the shortcut's 1.76 m bound
+        spots = start + rng.uniform(-2.0, 2.0, size=(int(rng.integers(0, 4)), 2))
+        navigator.costmap.visible_people = tuple(map(tuple, spots.tolist()))
+        answers.append(navigator._person_ahead())
+        assert answers[-1] == person_ahead_reference(navigator)
+    assert 0.1 < np.mean(answers) < 0.9
