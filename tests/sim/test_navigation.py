@@ -747,3 +747,38 @@ def test_a_person_ahead_is_found_as_by_sampling_the_whole_stretch() -> None:
         answers.append(navigator._person_ahead())
         assert answers[-1] == person_ahead_reference(navigator)
     assert 0.1 < np.mean(answers) < 0.9
+
+
+def locate_reference(path: PolylinePath, x: float, y: float, *, near: float,
+                     reach: float = 1.5) -> tuple[float, float]:
+    """PolylinePath.locate element-wise in numpy over every segment: the nearest point of each
+    segment, those outside [near - 0.2, near + reach] along the path left out, the first
+    nearest taken."""
+    start, span = path.points[:-1], np.diff(path.points, axis=0)
+    fraction = np.minimum(np.maximum(
+        ((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
+        / np.maximum(path.lengths ** 2, 1e-12), 0.0), 1.0)
+    nearest = start + fraction[:, None] * span
+    gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
+    arcs = path.arc[:-1] + fraction * path.lengths
+    gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
+    best = int(np.argmin(gaps))
+    if not math.isfinite(gaps[best]):
+        return near, float(np.hypot(*(path.point_at(near) - (x, y))))
+    return float(arcs[best]), float(gaps[best])
+
+
+def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:
+    rng = np.random.default_rng(9)
+    for _ in range(2000):
+        corners = np.cumsum(rng.choice([0.0, 0.1, -0.3, 0.7, -1.9], size=(12, 2))
+                            * rng.uniform(0.5, 1.0, size=(12, 2)), axis=0)
+        path = PolylinePath([tuple(point) for point in corners[:int(rng.integers(2, 12))]])
+        for _ in range(10):
+            if rng.uniform() < 0.3:  # exactly on a corner, as a fresh plan starts
+                x, y = path.points[int(rng.integers(len(path.points)))].tolist()
+            else:
+                x, y = (path.point_at(float(rng.uniform(0.0, path.total)))
+                        + rng.normal(0.0, 0.3, size=2)).tolist()
+            near = float(rng.uniform(-0.5, path.total + 0.5))
+            assert path.locate(x, y, near=near) == locate_reference(path, x, y, near=near)
