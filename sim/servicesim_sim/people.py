@@ -62,6 +62,8 @@ ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of stan
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
+NEAR_POINTS_SLACK = 0.5  # metres: who may stop a walker is drawn up this far beyond the stop
+# distance, and drawn up again once the points may have closed that gap (NearPoints)
 LINES_AT_ONCE = 16  # a route's corners checked for a clear straight line together
 IDLER_SPACING = 1.0
 IDLER_YAW_SPREAD = 0.5  # radians either side of an idling area's yaw
@@ -519,10 +521,11 @@ class Walker:
 
 # ------------------------------------------------------------------------------------ crowd
 def _within_stop_distance(walkers: list[tuple[float, float]], *,
-                          points: list[tuple[float, float]]) -> list[list[int]]:
-    """For each walker, the indices of the points nearer than :data:`WALKER_STOP_DISTANCE`
-    (in the plane; a walker's own place left out): the only points that can block it.
-    ``walkers`` are the last points, in the same order.
+                          points: list[tuple[float, float]],
+                          reach: float = WALKER_STOP_DISTANCE) -> list[list[int]]:
+    """For each walker, the indices of the points nearer than ``reach`` (in the plane; a
+    walker's own place left out): with :data:`WALKER_STOP_DISTANCE`, the only points that can
+    block it. ``walkers`` are the last points, in the same order.
 
     The squared distances are the ones :meth:`Walker.blocked` compares (the same subtractions,
     products and sum, each rounded alike by numpy and by Python), with the largest reach it
@@ -540,12 +543,46 @@ def _within_stop_distance(walkers: list[tuple[float, float]], *,
     squared *= squared
     across *= across
     squared += across
-    rows, cols = (squared < WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE).nonzero()
+    rows, cols = (squared < reach * reach).nonzero()
     within: list[list[int]] = [[] for _ in walkers]
     for walker, point in zip(rows.tolist(), cols.tolist(), strict=True):
         if point != first + walker:  # a walker is never ahead of itself
             within[walker].append(point)
     return within
+
+
+class NearPoints:
+    """Who may be within the stop distance of each walker, worked out now and then.
+
+    The lists hold every point within :data:`WALKER_STOP_DISTANCE` plus
+    :data:`NEAR_POINTS_SLACK` of a walker where everyone stood when they were drawn up, so
+    they still hold every point within the stop distance until two points have moved that
+    slack between them (less a micrometre for rounding). They may hold more: the lane test
+    (:meth:`Walker.blocked`) looks at each point itself and ignores the farther ones.
+    """
+
+    def __init__(self) -> None:
+        self._drawn_at: list[tuple[float, float]] = []
+        self._walkers = 0
+        self._within: list[list[int]] = []
+
+    def within(self, points: list[tuple[float, float]], *, walkers: int) -> list[list[int]]:
+        """For each walker (the last ``walkers`` points), indices of points that may be
+        within the stop distance of it, a walker's own place left out."""
+        if walkers != self._walkers or not self._still_hold(points):
+            self._drawn_at, self._walkers = points, walkers
+            self._within = _within_stop_distance(
+                points[len(points) - walkers:], points=points,
+                reach=WALKER_STOP_DISTANCE + NEAR_POINTS_SLACK)
+        return self._within
+
+    def _still_hold(self, points: list[tuple[float, float]]) -> bool:
+        if len(points) != len(self._drawn_at):
+            return False
+        moved = [math.hypot(x - x0, y - y0)
+                 for (x, y), (x0, y0) in zip(points, self._drawn_at, strict=True)]
+        walkers_moved = max(moved[len(moved) - self._walkers:], default=0.0)
+        return walkers_moved + max(moved) <= NEAR_POINTS_SLACK - 1e-6
 
 
 def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:
@@ -595,6 +632,7 @@ class Crowd:
             self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
                              for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
+        self._near = NearPoints()
 
     @staticmethod
     def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
@@ -626,7 +664,7 @@ class Crowd:
         floor = [(robot[0], robot[1])]
         others = list(others)
         moving = [(w.person.x, w.person.y) for w in self._walkers]
-        within = _within_stop_distance(moving, points=floor + others + moving)
+        within = self._near.within(floor + others + moving, walkers=len(moving))
         for walker, near in zip(self._walkers, within, strict=True):
             by_people, by_walkers = (self._stops(walker, near, floor=floor, others=others,
                                                  moving=moving) if near else (False, False))

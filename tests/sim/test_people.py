@@ -15,7 +15,16 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.people import IDLER, WALKER, Crowd, CrowdError, Person, Walker
+from servicesim_sim.people import (
+    IDLER,
+    WALKER,
+    WALKER_STOP_DISTANCE,
+    Crowd,
+    CrowdError,
+    NearPoints,
+    Person,
+    Walker,
+)
 from servicesim_sim.world import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
 
 RESOLUTION = 0.05
@@ -489,3 +498,21 @@ def test_walkers_stand_where_their_route_puts_them_bit_for_bit() -> None:
             yaw = person.yaw
             assert (person.x, person.y, yaw) == walker_place_reference(walker)
             assert (walker._cos, walker._sin) == (math.cos(yaw), math.sin(yaw))
+
+
+def test_the_near_points_kept_between_draws_hold_everyone_within_the_stop_distance() -> None:
+    rng = np.random.default_rng(6)
+    for _ in range(40):
+        count, walkers = int(rng.integers(2, 14)), int(rng.integers(1, 10))
+        points = rng.uniform(0.0, 6.0, size=(count + walkers, 2))
+        near = NearPoints()
+        for _ in range(200):
+            # small steps mostly (walkers, the robot), now and then a jump
+            points += rng.normal(0.0, float(rng.choice([0.01, 0.05, 0.3])), size=points.shape)
+            kept = near.within([tuple(point) for point in points.tolist()], walkers=walkers)
+            for walker, indices in enumerate(kept):
+                here = points[count + walker]
+                gaps = np.hypot(*(points - here).T)
+                wanted = {int(i) for i in np.flatnonzero(gaps < WALKER_STOP_DISTANCE)}
+                assert wanted - {count + walker} <= set(indices)
+                assert count + walker not in indices
