@@ -328,7 +328,7 @@ class Costmap:
         first = grid.samples_along(min(RAY_FIRST_SAMPLES, int(counts.max())))
         hits = grid.walls_at(robot[0] + across[:, None] * first, robot[1] + up[:, None] * first)
         hits &= np.arange(first.size) < counts[:, None]  # samples past a short ray's end
-        free = ~hits.any(axis=1)
+        free = ~np.logical_or.reduce(hits, axis=1)
         longer = np.flatnonzero(free & (counts > first.size))
         if longer.size:
             rest = counts[longer] - first.size
@@ -352,7 +352,8 @@ class Costmap:
         along = np.einsum("tod,td->to", relative, unit)
         across = np.abs(relative[:, :, 0] * unit[:, None, 1] - relative[:, :, 1] * unit[:, None, 0])
         in_front = (along > 0.0) & (along < distance[:, None] - self.person_radius)
-        return np.any(in_front & (across < self.person_radius), axis=1)
+        # np.logical_or.reduce is np.any without its wrappers (a sweep's fixed costs)
+        return np.logical_or.reduce(in_front & (across < self.person_radius), axis=1)
 
 
 class RayGrid:
@@ -407,7 +408,7 @@ def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarr
         return np.zeros(len(points), dtype=bool)
     gaps = np.hypot(points[:, None, 0] - others[None, :, 0],
                     points[:, None, 1] - others[None, :, 1])
-    return np.any(gaps <= radius, axis=1)
+    return np.logical_or.reduce(gaps <= radius, axis=1)
 
 
 _WALL_DISTANCES: weakref.WeakKeyDictionary[
