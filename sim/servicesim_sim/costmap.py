@@ -105,6 +105,7 @@ class Inflation:
 
 
 RAY_CELL = 0.1  # metres: the lidar's rays are traced on walls pooled to about this size
+RAY_FIRST_SAMPLES = 96  # a ray's samples looked at together, before the rest of the clear rays
 
 
 @dataclass(frozen=True)
@@ -155,7 +156,10 @@ class Costmap:
         self.person_radius = person_radius
         self.lidar = lidar or Lidar()
         self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
-        self._ray_walls, self._ray_cell = _ray_grid(self._walls, occupancy_map.resolution)
+        self._ray_grid = RayGrid(self._walls, origin=(occupancy_map.origin_x,
+                                                      occupancy_map.origin_y),
+                                 resolution=occupancy_map.resolution,
+                                 min_range=self.lidar.min_range, max_range=self.lidar.max_range)
         self.frame, wall_distance = _kept_wall_distance(
             occupancy_map, self._walls, resolution=resolution, margin=crop_margin)
         self.static = self.inflation.costs(wall_distance)
@@ -192,7 +196,9 @@ class Costmap:
         rows = np.floor((np.asarray(ys) - frame.origin_y) / frame.resolution).astype(np.intp)
         cols = np.floor((np.asarray(xs) - frame.origin_x) / frame.resolution).astype(np.intp)
         inside = (rows >= 0) & (rows < frame.rows) & (cols >= 0) & (cols < frame.cols)
-        rows, cols = np.clip(rows, 0, frame.rows - 1), np.clip(cols, 0, frame.cols - 1)
+        # integer clamps by np.maximum/np.minimum: np.clip's wrappers cost more than the work
+        rows = np.minimum(np.maximum(rows, 0), frame.rows - 1)
+        cols = np.minimum(np.maximum(cols, 0), frame.cols - 1)
         if self._costs_version == self.version or not self.marks:
             costs = self.costs()[rows, cols]
         else:
@@ -304,29 +310,37 @@ class Costmap:
     def _wall_free(self, robot: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Whether each ray from the robot to a target's surface misses every wall cell.
 
-        Rays are sampled every cell of the ray grid (:func:`_ray_grid`), all rays in one flat
-        array (no padding). Samples one cell apart cannot step over a straight wall one cell
-        thick, only clip its corners.
+        Rays are sampled every cell of the ray grid (:class:`RayGrid`): sample ``k`` lies
+        ``min_range + k * cell`` along the ray. Samples one cell apart cannot step over a
+        straight wall one cell thick, only clip its corners. The first
+        :data:`RAY_FIRST_SAMPLES` samples of every ray are looked at in one rectangular array
+        (cheaper to build than a flat one); only the longer rays still clear go on to the rest
+        of their samples, in one flat array. The same samples, the same arithmetic: a ray is
+        free when none of its samples is a wall (most rays meet one within a few metres).
         """
+        if len(targets) == 0:
+            return np.zeros(0, dtype=bool)
         offsets = targets - robot
         distance = np.maximum(np.hypot(offsets[:, 0], offsets[:, 1]), 1e-9)
         lengths = distance - self.person_radius
-        step = self._ray_cell
-        counts = np.floor(np.maximum(lengths - self.lidar.min_range, 0.0) / step).astype(
-            np.intp) + 1
-        owner = np.repeat(np.arange(len(targets)), counts)
-        index = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
-        along = self.lidar.min_range + index * step
-        xs = robot[0] + offsets[owner, 0] / distance[owner] * along
-        ys = robot[1] + offsets[owner, 1] / distance[owner] * along
-        cols = np.floor((xs - self.map.origin_x) / step).astype(np.intp)
-        rows = np.floor((ys - self.map.origin_y) / step).astype(np.intp)
-        height, width = self._ray_walls.shape
-        inside = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
-        # integer clamps by np.maximum/np.minimum: np.clip's wrappers cost more than the work
-        hits = self._ray_walls[np.minimum(np.maximum(rows, 0), height - 1),
-                               np.minimum(np.maximum(cols, 0), width - 1)] | ~inside
-        return np.bincount(owner, weights=hits, minlength=len(targets)) == 0
+        grid = self._ray_grid
+        counts = np.floor(np.maximum(lengths - self.lidar.min_range, 0.0)
+                          / grid.cell).astype(np.intp) + 1
+        across, up = offsets[:, 0] / distance, offsets[:, 1] / distance
+        first = grid.samples_along(min(RAY_FIRST_SAMPLES, int(counts.max())))
+        hits = grid.walls_at(robot[0] + across[:, None] * first, robot[1] + up[:, None] * first)
+        hits &= np.arange(first.size) < counts[:, None]  # samples past a short ray's end
+        free = ~np.logical_or.reduce(hits, axis=1)
+        longer = np.flatnonzero(free & (counts > first.size))
+        if longer.size:
+            rest = counts[longer] - first.size
+            starts = np.cumsum(rest) - rest
+            along = grid.samples_along(int(counts.max()))[
+                np.arange(int(rest.sum())) - np.repeat(starts, rest) + first.size]
+            hits = grid.walls_at(robot[0] + np.repeat(across[longer], rest) * along,
+                                 robot[1] + np.repeat(up[longer], rest) * along)
+            free[longer] = ~np.logical_or.reduceat(hits, starts)
+        return free
 
     def _hidden_by_people(self, robot: np.ndarray, targets: np.ndarray,
                           occluders: np.ndarray) -> np.ndarray:
@@ -340,24 +354,54 @@ class Costmap:
         along = np.einsum("tod,td->to", relative, unit)
         across = np.abs(relative[:, :, 0] * unit[:, None, 1] - relative[:, :, 1] * unit[:, None, 0])
         in_front = (along > 0.0) & (along < distance[:, None] - self.person_radius)
-        return np.any(in_front & (across < self.person_radius), axis=1)
+        # np.logical_or.reduce is np.any without its wrappers (a sweep's fixed costs)
+        return np.logical_or.reduce(in_front & (across < self.person_radius), axis=1)
 
 
-def _ray_grid(walls: np.ndarray, resolution: float,
-              cell: float = RAY_CELL) -> tuple[np.ndarray, float]:
-    """The wall grid the lidar's rays are traced on, and its cell size.
+class RayGrid:
+    """The wall grid the lidar's rays are traced on.
 
     A map finer than ``cell`` is pooled into blocks of about that size, a block being a wall
     where any of its cells is: walls grow by less than a block, and a ray needs a half or a
-    quarter of the samples it would need on the map itself.
+    quarter of the samples it would need on the map itself. The grid is kept framed by one
+    row and column of wall on every side, so a sample off the grid reads as a wall without
+    a test of its own; ``along`` holds the distances of the samples along a ray.
     """
-    factor = max(1, round(cell / resolution))
-    if factor == 1:
-        return walls, resolution
-    height, width = walls.shape
-    padded = np.pad(walls, ((0, -height % factor), (0, -width % factor)))
-    blocks = padded.reshape(padded.shape[0] // factor, factor, padded.shape[1] // factor, factor)
-    return blocks.any(axis=(1, 3)), resolution * factor
+
+    def __init__(self, walls: np.ndarray, *, origin: tuple[float, float], resolution: float,
+                 min_range: float, max_range: float, cell: float = RAY_CELL) -> None:
+        factor = max(1, round(cell / resolution))
+        height, width = walls.shape
+        padded = np.pad(walls, ((0, -height % factor), (0, -width % factor)))
+        self.walls = padded.reshape(padded.shape[0] // factor, factor,
+                                    padded.shape[1] // factor, factor).any(axis=(1, 3))
+        self.cell = resolution * factor
+        self.origin_x, self.origin_y = origin
+        self._framed = np.pad(self.walls, 1, constant_values=True).ravel()
+        self._rows, self._cols = self.walls.shape
+        self.min_range = min_range
+        count = math.floor(max(max_range - min_range, 0.0) / self.cell) + 2
+        self.along = min_range + np.arange(max(count, RAY_FIRST_SAMPLES)) * self.cell
+
+    def samples_along(self, count: int) -> np.ndarray:
+        """The distances along a ray of its first ``count`` samples (``along`` when it has
+        them all)."""
+        if count <= self.along.size:
+            return self.along[:count]
+        return self.min_range + np.arange(count) * self.cell
+
+    def walls_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Whether the cells under the points are walls; True off the grid."""
+        cols = np.floor((xs - self.origin_x) / self.cell).astype(np.intp)
+        rows = np.floor((ys - self.origin_y) / self.cell).astype(np.intp)
+        # off the grid is clamped onto the frame; np.maximum/np.minimum, not np.clip's wrappers
+        np.minimum(np.maximum(cols, -1, out=cols), self._cols, out=cols)
+        np.minimum(np.maximum(rows, -1, out=rows), self._rows, out=rows)
+        rows += 1
+        rows *= self._cols + 2
+        rows += cols
+        rows += 1
+        return self._framed[rows]
 
 
 def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarray:
@@ -366,7 +410,7 @@ def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarr
         return np.zeros(len(points), dtype=bool)
     gaps = np.hypot(points[:, None, 0] - others[None, :, 0],
                     points[:, None, 1] - others[None, :, 1])
-    return np.any(gaps <= radius, axis=1)
+    return np.logical_or.reduce(gaps <= radius, axis=1)
 
 
 _WALL_DISTANCES: weakref.WeakKeyDictionary[

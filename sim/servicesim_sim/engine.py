@@ -415,15 +415,16 @@ class SimEngine:
             return  # nobody and nothing near: the common case, nothing to book
         distances = self._person_distances()
         # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
-        # constant minus a distance), without np.clip's wrappers, every step someone is near
+        # constant minus a distance), without np.clip's wrappers, every step someone is near;
+        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
         touching = np.maximum(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0)
-        self.referee.contact(person_depth=float(touching.sum()),
+        self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
                              object_depth=max(0.0, BODY_RADIUS - clearance), dt=dt)
         approach = np.minimum(
             np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
             PERSON_APPROXIMATION_M)
         self.referee.approximation(
-            person_depth=float(approach.sum()),
+            person_depth=float(np.add.reduce(approach, axis=None)),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
             dt=dt)
 

@@ -115,11 +115,14 @@ class PolylinePath:
         self.lengths = np.hypot(segments[:, 0], segments[:, 1])
         self.arc = np.concatenate(([0.0], np.cumsum(self.lengths)))
         self.total = float(self.arc[-1])
-        # asked at every control step: what locate() needs of every segment is kept, and arc
-        # lengths are searched with bisect (numpy's call overhead was most of the cost)
+        # asked at every control step: what locate() needs of every segment is kept as plain
+        # floats, and arc lengths are searched with bisect (numpy's call overhead on the one or
+        # two segments near the robot was most of the cost)
         self._arcs: list[float] = self.arc.tolist()
-        self._spans = segments
-        self._squares = np.maximum(self.lengths ** 2, 1e-12)
+        self._segments: list[tuple[float, ...]] = list(zip(
+            *self.points[:-1].T.tolist(), *segments.T.tolist(),
+            np.maximum(self.lengths ** 2, 1e-12).tolist(), self.lengths.tolist(),
+            self._arcs[:-1], strict=True))
 
     def point_at(self, s: float) -> np.ndarray:
         s = min(max(s, 0.0), self.total)
@@ -130,25 +133,31 @@ class PolylinePath:
         return self.points[index] + fraction * (self.points[index + 1] - self.points[index])
 
     def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
-        """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``."""
+        """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``.
+
+        Each segment's nearest point is worked out with the arithmetic numpy's element-wise
+        version used (clamps as ``np.maximum``/``np.minimum`` make them, the distance by
+        ``np.hypot``); the first nearest wins, as ``np.argmin`` picks it.
+        """
         # only the segments that overlap the window can hold the answer
-        segments = len(self.lengths)
-        first = min(max(bisect.bisect_right(self._arcs, near - 0.2) - 1, 0), segments - 1)
-        last = min(max(bisect.bisect_left(self._arcs, near + reach), first + 1), segments)
-        start, span = self.points[first:last], self._spans[first:last]
-        lengths = self.lengths[first:last]
-        # clipped to [0, 1] by hand: np.clip's wrappers cost more than the arithmetic
-        fraction = np.minimum(np.maximum(
-            ((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
-            / self._squares[first:last], 0.0), 1.0)
-        nearest = start + fraction[:, None] * span
-        gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
-        arcs = self.arc[first:last] + fraction * lengths
-        gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
-        best = int(np.argmin(gaps))
-        if not math.isfinite(gaps[best]):
+        segments = len(self._segments)
+        low, high = near - 0.2, near + reach
+        first = min(max(bisect.bisect_right(self._arcs, low) - 1, 0), segments - 1)
+        last = min(max(bisect.bisect_left(self._arcs, high), first + 1), segments)
+        best_arc, best_gap = near, math.inf
+        for start_x, start_y, span_x, span_y, square, length, arc in self._segments[first:last]:
+            fraction = ((x - start_x) * span_x + (y - start_y) * span_y) / square
+            fraction = fraction if fraction >= 0.0 else 0.0
+            fraction = fraction if fraction <= 1.0 else 1.0
+            along = arc + fraction * length
+            if low <= along <= high:
+                gap = float(np.hypot(start_x + fraction * span_x - x,
+                                     start_y + fraction * span_y - y))
+                if gap < best_gap:
+                    best_arc, best_gap = along, gap
+        if not math.isfinite(best_gap):
             return near, float(np.hypot(*(self.point_at(near) - (x, y))))
-        return float(arcs[best]), float(gaps[best])
+        return best_arc, best_gap
 
     def samples(self, s: float, length: float, *, step: float = 0.1) -> np.ndarray:
         """Points every ``step`` (or closer) along the path from ``s`` for ``length`` metres."""
@@ -416,11 +425,22 @@ class Navigator:
         return 0.0, turn_towards(error, self.limits, self.tuning)
 
     def _person_ahead(self) -> bool:
+        """Whether a visible person is within ``person_across`` of the path's next metre or so
+        (from the robot's front to a person's body at ``person_gap``).
+
+        Every point of that stretch lies within its length of where it starts, so people
+        farther than that plus ``person_across`` (and a centimetre) from its start cannot be
+        near it: when nobody is nearer, the stretch is not sampled at all.
+        """
         people = self.costmap.visible_people
         if not people or self._track is None:
             return False
         tuning = self.tuning
         reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
+        start_x, start_y = self._track.point_at(self._s).tolist()
+        bound = (reach + tuning.person_across + 0.01) ** 2
+        if all((x - start_x) ** 2 + (y - start_y) ** 2 >= bound for x, y in people):
+            return False
         samples = self._track.samples(self._s, reach)
         spots = np.asarray(people, dtype=np.float64)
         gaps = np.hypot(spots[:, None, 0] - samples[None, :, 0],

@@ -62,6 +62,8 @@ ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of stan
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
+NEAR_POINTS_SLACK = 0.5  # metres: who may stop a walker is drawn up this far beyond the stop
+# distance, and drawn up again once the points may have closed that gap (NearPoints)
 LINES_AT_ONCE = 16  # a route's corners checked for a clear straight line together
 IDLER_SPACING = 1.0
 IDLER_YAW_SPREAD = 0.5  # radians either side of an idling area's yaw
@@ -440,6 +442,13 @@ def route_meets(route: np.ndarray, standing: np.ndarray) -> bool:
 
 
 # ----------------------------------------------------------------------------------- walkers
+def facing(heading: float, *, forwards: bool) -> tuple[float, float, float]:
+    """(yaw, cos yaw, sin yaw) of a walker on a leg of the given heading, walking it forwards
+    or backwards (the reverse heading as atan2 gives it)."""
+    yaw = heading if forwards else math.atan2(-math.sin(heading), -math.cos(heading))
+    return yaw, math.cos(yaw), math.sin(yaw)
+
+
 @dataclass
 class Walker:
     """A person walking a closed polyline at a constant speed."""
@@ -458,8 +467,12 @@ class Walker:
         self._xs = [float(x) for x in self.route[:, 0]]
         self._ys = [float(y) for y in self.route[:, 1]]
         self._along = [float(a) for a in self.along]
-        self._headings = [math.atan2(y1 - y0, x1 - x0) for x0, y0, x1, y1 in zip(
+        headings = [math.atan2(y1 - y0, x1 - x0) for x0, y0, x1, y1 in zip(
             self._xs, self._ys, self._xs[1:], self._ys[1:], strict=False)]
+        # (yaw, cos, sin) per leg, walking forwards and backwards: worked out once, not per step
+        self._facings = {forwards: [facing(heading, forwards=forwards) for heading in headings]
+                         for forwards in (True, False)}
+        self._leg = 0  # the leg it is on, where advance() looks first
         self._cos, self._sin = 1.0, 0.0  # of the way it faces; advance() keeps them
 
     @classmethod
@@ -473,17 +486,17 @@ class Walker:
         return walker
 
     def advance(self, metres: float) -> None:
+        """Walk ``metres`` along the route (back along it when negative), looping round."""
         along = self._along
-        self.travelled = (self.travelled + metres) % along[-1]
-        leg = min(bisect.bisect_right(along, self.travelled) - 1, len(along) - 2)
-        t = (self.travelled - along[leg]) / (along[leg + 1] - along[leg])
+        travelled = self.travelled = (self.travelled + metres) % along[-1]
+        leg = self._leg
+        if not along[leg] <= travelled < along[leg + 1]:  # else still the leg bisect would find
+            leg = self._leg = min(bisect.bisect_right(along, travelled) - 1, len(along) - 2)
+        t = (travelled - along[leg]) / (along[leg + 1] - along[leg])
         xs, ys = self._xs, self._ys
         self.person.x = xs[leg] + t * (xs[leg + 1] - xs[leg])
         self.person.y = ys[leg] + t * (ys[leg + 1] - ys[leg])
-        heading = self._headings[leg]
-        self.person.yaw = heading if self.direction > 0 else math.atan2(
-            -math.sin(heading), -math.cos(heading))
-        self._cos, self._sin = math.cos(self.person.yaw), math.sin(self.person.yaw)
+        self.person.yaw, self._cos, self._sin = self._facings[self.direction > 0][leg]
 
     def turn_back(self) -> None:
         """Walk the route the other way from here (blocked for longer than its patience)."""
@@ -508,10 +521,11 @@ class Walker:
 
 # ------------------------------------------------------------------------------------ crowd
 def _within_stop_distance(walkers: list[tuple[float, float]], *,
-                          points: list[tuple[float, float]]) -> list[list[int]]:
-    """For each walker, the indices of the points nearer than :data:`WALKER_STOP_DISTANCE`
-    (in the plane; a walker's own place left out): the only points that can block it.
-    ``walkers`` are the last points, in the same order.
+                          points: list[tuple[float, float]],
+                          reach: float = WALKER_STOP_DISTANCE) -> list[list[int]]:
+    """For each walker, the indices of the points nearer than ``reach`` (in the plane; a
+    walker's own place left out): with :data:`WALKER_STOP_DISTANCE`, the only points that can
+    block it. ``walkers`` are the last points, in the same order.
 
     The squared distances are the ones :meth:`Walker.blocked` compares (the same subtractions,
     products and sum, each rounded alike by numpy and by Python), with the largest reach it
@@ -529,12 +543,46 @@ def _within_stop_distance(walkers: list[tuple[float, float]], *,
     squared *= squared
     across *= across
     squared += across
-    rows, cols = (squared < WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE).nonzero()
+    rows, cols = (squared < reach * reach).nonzero()
     within: list[list[int]] = [[] for _ in walkers]
     for walker, point in zip(rows.tolist(), cols.tolist(), strict=True):
         if point != first + walker:  # a walker is never ahead of itself
             within[walker].append(point)
     return within
+
+
+class NearPoints:
+    """Who may be within the stop distance of each walker, worked out now and then.
+
+    The lists hold every point within :data:`WALKER_STOP_DISTANCE` plus
+    :data:`NEAR_POINTS_SLACK` of a walker where everyone stood when they were drawn up, so
+    they still hold every point within the stop distance until two points have moved that
+    slack between them (less a micrometre for rounding). They may hold more: the lane test
+    (:meth:`Walker.blocked`) looks at each point itself and ignores the farther ones.
+    """
+
+    def __init__(self) -> None:
+        self._drawn_at: list[tuple[float, float]] = []
+        self._walkers = 0
+        self._within: list[list[int]] = []
+
+    def within(self, points: list[tuple[float, float]], *, walkers: int) -> list[list[int]]:
+        """For each walker (the last ``walkers`` points), indices of points that may be
+        within the stop distance of it, a walker's own place left out."""
+        if walkers != self._walkers or not self._still_hold(points):
+            self._drawn_at, self._walkers = points, walkers
+            self._within = _within_stop_distance(
+                points[len(points) - walkers:], points=points,
+                reach=WALKER_STOP_DISTANCE + NEAR_POINTS_SLACK)
+        return self._within
+
+    def _still_hold(self, points: list[tuple[float, float]]) -> bool:
+        if len(points) != len(self._drawn_at):
+            return False
+        moved = [math.hypot(x - x0, y - y0)
+                 for (x, y), (x0, y0) in zip(points, self._drawn_at, strict=True)]
+        walkers_moved = max(moved[len(moved) - self._walkers:], default=0.0)
+        return walkers_moved + max(moved) <= NEAR_POINTS_SLACK - 1e-6
 
 
 def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:
@@ -584,6 +632,7 @@ class Crowd:
             self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
                              for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
+        self._near = NearPoints()
 
     @staticmethod
     def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
@@ -615,7 +664,7 @@ class Crowd:
         floor = [(robot[0], robot[1])]
         others = list(others)
         moving = [(w.person.x, w.person.y) for w in self._walkers]
-        within = _within_stop_distance(moving, points=floor + others + moving)
+        within = self._near.within(floor + others + moving, walkers=len(moving))
         for walker, near in zip(self._walkers, within, strict=True):
             by_people, by_walkers = (self._stops(walker, near, floor=floor, others=others,
                                                  moving=moving) if near else (False, False))

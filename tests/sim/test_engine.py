@@ -455,3 +455,13 @@ def test_navigation_is_shown_the_guest_following_or_not() -> None:
     assert sim.pickup(sim.guest.name, "servicebot")[0]
     assert sim.guest_state() == "following"
     assert (sim.guest.x, sim.guest.y) in sim._obstacles()
+
+
+def test_the_depth_sums_are_what_ndarray_sum_gives_bit_for_bit() -> None:
+    """_book_contacts sums depths with np.add.reduce (ndarray.sum without its wrapper): the
+    same pairwise summation, whatever the number of people and where the zeros fall."""
+    rng = np.random.default_rng(12)
+    for _ in range(2000):
+        distances = rng.uniform(0.0, 3.0, size=int(rng.integers(0, 80)))
+        depths = np.maximum(1.0 - distances, 0.0)
+        assert float(np.add.reduce(depths, axis=None)).hex() == float(depths.sum()).hex()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import random
+
 from servicesim_sim.lockstep_gate import Admission, LockstepGate
 
 ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
@@ -157,3 +159,26 @@ def test_a_silent_client_of_a_pipelined_gate_is_dropped_naming_the_period_awaite
     assert gate.missing() == ["done 2 from executive"]
     gate.drop_silent(0.0)
     assert gate.drop_silent(10.0) == ["executive"] and gate.is_open()
+
+
+def test_the_gate_is_open_exactly_when_nothing_is_missing() -> None:
+    """is_open() answers without wording what is missing; it must agree with missing()."""
+    rng = random.Random(3)
+    for _ in range(200):
+        gate = LockstepGate(drop_after_s=10.0, lag=rng.choice([0, 0, 1]))
+        gate.endpoints.update((ROOM, PICKUP))
+        clients: list[int] = []
+        for period in range(1, 30):
+            gate.announced(period)
+            for _ in range(rng.randrange(4)):
+                action = rng.randrange(5)
+                if action == 0 or not clients:
+                    clients.append(gate.join(rng.choice(["executive", "viewer", ""])))
+                elif action == 1:
+                    gate.done(rng.choice(clients), period - rng.randrange(2),
+                              {rng.choice([ROOM, PICKUP, CMD_VEL]): rng.randrange(3)})
+                elif action == 2:
+                    gate.take(rng.choice([ROOM, PICKUP]))
+                elif action == 3:
+                    gate.leave(rng.choice(clients))
+                assert gate.is_open() == (not gate.missing())

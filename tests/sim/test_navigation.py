@@ -190,6 +190,42 @@ def test_a_partition_one_cell_thick_hides_people_from_slanted_rays() -> None:
     assert [(mark.x, mark.y) for mark in costmap.marks] == [(9.0, 2.9)]
 
 
+def wall_free_reference(costmap: Costmap, robot: np.ndarray, targets: np.ndarray) -> list[bool]:
+    """Costmap._wall_free sample by sample: sample k of a ray lies min_range + k * cell along
+    it, up to the target's surface; a ray is free when no sample's cell is a wall or off the
+    grid."""
+    grid, lidar = costmap._ray_grid, costmap.lidar
+    rows, cols = grid.walls.shape
+    free = []
+    for target in targets:
+        distance = max(float(np.hypot(*(target - robot))), 1e-9)
+        across, up = (target[0] - robot[0]) / distance, (target[1] - robot[1]) / distance
+        samples = math.floor(max(distance - costmap.person_radius - lidar.min_range, 0.0)
+                             / grid.cell) + 1
+        hit = False
+        for k in range(samples):
+            along = lidar.min_range + k * grid.cell
+            col = math.floor((robot[0] + across * along - grid.origin_x) / grid.cell)
+            row = math.floor((robot[1] + up * along - grid.origin_y) / grid.cell)
+            hit = hit or not (0 <= row < rows and 0 <= col < cols) or bool(grid.walls[row, col])
+        free.append(not hit)
+    return free
+
+
+def test_rays_to_walls_match_a_sample_by_sample_reference() -> None:
+    rng = np.random.default_rng(11)
+    grid = room(16.0, 12.0)
+    for _ in range(25):  # wall stubs of every thickness and slant of approach
+        x, y = rng.uniform(0.0, 15.0), rng.uniform(0.0, 11.0)
+        wall(grid, x, y, x + rng.uniform(0.05, 1.5), y + rng.uniform(0.05, 1.5))
+    costmap = Costmap(occupancy(grid), lidar=MARK_AT_ANY_RANGE)
+    for _ in range(400):  # robots and targets inside and outside the grid, near and far
+        robot = rng.uniform(-2.0, 18.0, size=2)
+        targets = rng.uniform(-2.0, 18.0, size=(int(rng.integers(1, 12)), 2))
+        free = costmap._wall_free(robot, targets)
+        assert free.tolist() == wall_free_reference(costmap, robot, targets)
+
+
 def test_people_beyond_the_lidar_range_are_not_seen() -> None:
     grid = np.zeros((40, 700), dtype=np.int8)  # 35 x 2 m at 0.05 m
     grid[:2, :] = grid[-2:, :] = 100
@@ -680,3 +716,69 @@ def test_on_the_shortest_way_no_periodic_replan_is_spent() -> None:
     assert nav.status == "succeeded" and ended > 20.0
     assert nav.costmap.version > 10  # the marks kept changing ...
     assert plans.times == [0.0]  # ... but the way was planned once
+
+
+def person_ahead_reference(navigator: Navigator) -> bool:
+    """Navigator._person_ahead without its shortcut: every visible person against every
+    sample of the path's stretch ahead."""
+    people, tuning = navigator.costmap.visible_people, navigator.tuning
+    if not people or navigator._track is None:
+        return False
+    reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
+    samples = navigator._track.samples(navigator._s, reach)
+    spots = np.asarray(people, dtype=np.float64)
+    gaps = np.hypot(spots[:, None, 0] - samples[None, :, 0],
+                    spots[:, None, 1] - samples[None, :, 1])
+    return bool(np.any(gaps.min(axis=1) < tuning.person_across))
+
+
+def test_a_person_ahead_is_found_as_by_sampling_the_whole_stretch() -> None:
+    rng = np.random.default_rng(8)
+    navigator = Navigator(corridor_map(3.0), rng=np.random.default_rng(7))
+    answers = []
+    for _ in range(3000):
+        corners = np.cumsum(rng.uniform(-0.6, 0.6, size=(int(rng.integers(2, 6)), 2)), axis=0)
+        navigator._track = PolylinePath([tuple(point) for point in corners])
+        navigator._s = float(rng.uniform(-0.2, navigator._track.total + 0.2))
+        start = navigator._track.point_at(navigator._s)
+        # people around where the stretch starts, many near the shortcut's 1.76 m bound
+        spots = start + rng.uniform(-2.0, 2.0, size=(int(rng.integers(0, 4)), 2))
+        navigator.costmap.visible_people = tuple(map(tuple, spots.tolist()))
+        answers.append(navigator._person_ahead())
+        assert answers[-1] == person_ahead_reference(navigator)
+    assert 0.1 < np.mean(answers) < 0.9
+
+
+def locate_reference(path: PolylinePath, x: float, y: float, *, near: float,
+                     reach: float = 1.5) -> tuple[float, float]:
+    """PolylinePath.locate element-wise in numpy over every segment: the nearest point of each
+    segment, those outside [near - 0.2, near + reach] along the path left out, the first
+    nearest taken."""
+    start, span = path.points[:-1], np.diff(path.points, axis=0)
+    fraction = np.minimum(np.maximum(
+        ((x - start[:, 0]) * span[:, 0] + (y - start[:, 1]) * span[:, 1])
+        / np.maximum(path.lengths ** 2, 1e-12), 0.0), 1.0)
+    nearest = start + fraction[:, None] * span
+    gaps = np.hypot(nearest[:, 0] - x, nearest[:, 1] - y)
+    arcs = path.arc[:-1] + fraction * path.lengths
+    gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
+    best = int(np.argmin(gaps))
+    if not math.isfinite(gaps[best]):
+        return near, float(np.hypot(*(path.point_at(near) - (x, y))))
+    return float(arcs[best]), float(gaps[best])
+
+
+def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:
+    rng = np.random.default_rng(9)
+    for _ in range(2000):
+        corners = np.cumsum(rng.choice([0.0, 0.1, -0.3, 0.7, -1.9], size=(12, 2))
+                            * rng.uniform(0.5, 1.0, size=(12, 2)), axis=0)
+        path = PolylinePath([tuple(point) for point in corners[:int(rng.integers(2, 12))]])
+        for _ in range(10):
+            if rng.uniform() < 0.3:  # exactly on a corner, as a fresh plan starts
+                x, y = path.points[int(rng.integers(len(path.points)))].tolist()
+            else:
+                x, y = (path.point_at(float(rng.uniform(0.0, path.total)))
+                        + rng.normal(0.0, 0.3, size=2)).tolist()
+            near = float(rng.uniform(-0.5, path.total + 0.5))
+            assert path.locate(x, y, near=near) == locate_reference(path, x, y, near=near)

@@ -6,6 +6,7 @@ and unknown space outside.
 
 from __future__ import annotations
 
+import bisect
 import math
 import re
 from collections.abc import Callable
@@ -14,7 +15,16 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.people import IDLER, WALKER, Crowd, CrowdError, Person
+from servicesim_sim.people import (
+    IDLER,
+    WALKER,
+    WALKER_STOP_DISTANCE,
+    Crowd,
+    CrowdError,
+    NearPoints,
+    Person,
+    Walker,
+)
 from servicesim_sim.world import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
 
 RESOLUTION = 0.05
@@ -459,3 +469,50 @@ def test_a_map_measures_its_clearance_once_and_no_episode_can_change_it() -> Non
     assert Clearance.of(office_map()) is not first  # another map object: its own
     with pytest.raises(ValueError):
         first.metres[0, 0] = 1.0
+
+
+def walker_place_reference(walker: Walker) -> tuple[float, float, float]:
+    """(x, y, yaw) of a walker as its route and ``travelled`` give them, worked out afresh:
+    the leg found by bisection, the reverse heading by atan2."""
+    xs, ys = walker.route[:, 0].tolist(), walker.route[:, 1].tolist()
+    along = walker.along.tolist()
+    leg = min(bisect.bisect_right(along, walker.travelled) - 1, len(along) - 2)
+    t = (walker.travelled - along[leg]) / (along[leg + 1] - along[leg])
+    heading = math.atan2(ys[leg + 1] - ys[leg], xs[leg + 1] - xs[leg])
+    yaw = heading if walker.direction > 0 else math.atan2(-math.sin(heading), -math.cos(heading))
+    return xs[leg] + t * (xs[leg + 1] - xs[leg]), ys[leg] + t * (ys[leg + 1] - ys[leg]), yaw
+
+
+def test_walkers_stand_where_their_route_puts_them_bit_for_bit() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(60):
+        points = rng.uniform(-10.0, 10.0, size=(int(rng.integers(2, 8)), 2))
+        route = np.vstack([points, points[:1]])
+        person = Person(name="human_00001", role=WALKER, x=0.0, y=0.0, yaw=0.0)
+        walker = Walker.on(person, route, speed=1.0, start=float(rng.uniform()))
+        for _ in range(300):
+            if rng.uniform() < 0.02:
+                walker.turn_back()
+            else:
+                walker.advance(walker.direction * float(rng.choice([0.036, 0.048, 0.0, 3.7])))
+            yaw = person.yaw
+            assert (person.x, person.y, yaw) == walker_place_reference(walker)
+            assert (walker._cos, walker._sin) == (math.cos(yaw), math.sin(yaw))
+
+
+def test_the_near_points_kept_between_draws_hold_everyone_within_the_stop_distance() -> None:
+    rng = np.random.default_rng(6)
+    for _ in range(40):
+        count, walkers = int(rng.integers(2, 14)), int(rng.integers(1, 10))
+        points = rng.uniform(0.0, 6.0, size=(count + walkers, 2))
+        near = NearPoints()
+        for _ in range(200):
+            # small steps mostly (walkers, the robot), now and then a jump
+            points += rng.normal(0.0, float(rng.choice([0.01, 0.05, 0.3])), size=points.shape)
+            kept = near.within([tuple(point) for point in points.tolist()], walkers=walkers)
+            for walker, indices in enumerate(kept):
+                here = points[count + walker]
+                gaps = np.hypot(*(points - here).T)
+                wanted = {int(i) for i in np.flatnonzero(gaps < WALKER_STOP_DISTANCE)}
+                assert wanted - {count + walker} <= set(indices)
+                assert count + walker not in indices
