@@ -25,6 +25,7 @@ import json
 import math
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -130,6 +131,18 @@ def _commit() -> str | None:
     return out.stdout.strip() or None
 
 
+def keep(cold: dict[str, Any], warm: dict[str, Any], args: Any) -> str:
+    """Where the two episodes that disagree are kept for a look (with ``--out`` they stay
+    where they are; the temporary directory goes, so they are copied out of it)."""
+    if args.out is not None:
+        return f"kept in {cold['out']} and {warm['out']}"
+    kept = Path(tempfile.mkdtemp(prefix=f"throughput-disagreed-seed{cold['episode_seed']}-",
+                                 dir=Path.cwd()))
+    for name, row in (("cold", cold), ("warm", warm)):
+        shutil.copytree(row["out"], kept / name)
+    return f"both kept in {kept}"
+
+
 def check(args: Any, parser: OneLineArgumentParser) -> None:
     """Refuse bad arguments in one line before any episode starts."""
     if args.episodes < 1 or not 1 <= args.jobs <= 16:
@@ -160,13 +173,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         warm, warm_s = timed(settings_for(args, out / "warm"), warm=True)
         print(line("warm", warm, warm_s), flush=True)
         print(sim_time_line(warm), flush=True)
-    agree = sum(1 for a, b in zip(cold, warm, strict=True) if judged(a) == judged(b))
-    print(f"warm/cold: {cold_s / warm_s:.2f}x episodes per hour; reports agree on "
-          f"{agree}/{len(cold)} episodes; load average {os.getloadavg()[0]:.2f} at the end")
-    for a, b in zip(cold, warm, strict=True):
-        if judged(a) != judged(b):
-            print(f"  seed {a['episode_seed']}: cold {judged(a)} / warm {judged(b)} "
-                  f"(warm failure: {b.get('failure')})")
+        agree = sum(1 for a, b in zip(cold, warm, strict=True) if judged(a) == judged(b))
+        print(f"warm/cold: {cold_s / warm_s:.2f}x episodes per hour; reports agree on "
+              f"{agree}/{len(cold)} episodes; load average {os.getloadavg()[0]:.2f} at the end")
+        for a, b in zip(cold, warm, strict=True):
+            if judged(a) != judged(b):
+                print(f"  seed {a['episode_seed']}: cold {judged(a)} / warm {judged(b)} "
+                      f"(warm failure: {b.get('failure')}); {keep(a, b, args)}")
     if args.json is not None:
         write_json(args.json, figures(args, argv, load_start=load_start,
                                       modes={"cold": (cold, cold_s), "warm": (warm, warm_s)}))

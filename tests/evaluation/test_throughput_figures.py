@@ -168,3 +168,23 @@ def test_results_md_names_the_checkout_the_episodes_were_played_on() -> None:
     resumed = [{**rows[0], "resumed": True}, {**rows[1], "revision": "commit `bbb`"}]
     assert revision_note(resumed, "commit `bbb`").startswith(
         " (1 episodes kept from an earlier run with --resume; baseline episodes on commit `bbb`")
+
+
+def test_episodes_whose_reports_disagree_are_kept_for_a_look(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A seed that did not replay is evidence: copied out of the benchmark's temporary
+    directory (or named where --out keeps it)."""
+    script = benchmark()
+    rows = []
+    for mode in ("cold", "warm"):
+        (tmp_path / mode).mkdir()
+        (tmp_path / mode / "report.json").write_text(f'{{"mode": "{mode}"}}')
+        rows.append({"out": str(tmp_path / mode), "episode_seed": 13})
+    monkeypatch.chdir(tmp_path)
+    said = script.keep(*rows, script.build_parser().parse_args([]))
+    kept = Path(said.removeprefix("both kept in "))
+    assert kept.parent == tmp_path and kept.name.startswith("throughput-disagreed-seed13-")
+    assert (kept / "warm" / "report.json").read_text() == '{"mode": "warm"}'
+    assert (kept / "cold" / "report.json").read_text() == '{"mode": "cold"}'
+    named = script.keep(*rows, script.build_parser().parse_args(["--out", "somewhere"]))
+    assert named == f"kept in {tmp_path / 'cold'} and {tmp_path / 'warm'}"
