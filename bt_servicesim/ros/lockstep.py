@@ -136,7 +136,8 @@ class LockstepClient:
         self.periods = 0
         """Periods this client has ticked for since it joined."""
         self.stalls = 0
-        """Periods ticked without every counted message (after :data:`STALL_WARNING_S`)."""
+        """Periods ticked without every counted message (after :data:`STALL_WARNING_S`), and a
+        join that ran out of :data:`JOIN_SETTLE_S` before it had taken what came before it."""
         self._tickers: list[LockstepTicker] = []
         self._idle_periods: int | None = None
         """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
@@ -213,17 +214,38 @@ class LockstepClient:
         holds it at the join's period), and what it sent before the answer was delivered to
         this process ahead of the answer (one writer process, one port, in order), except a
         latched topic's history: a reliable writer sends a newly matched reader that on its
-        own time. So the wait ends once every latched reader has what it is owed
-        (:meth:`_owed_history`) and nothing has arrived for :data:`JOIN_QUIET_S`; it is
-        bounded by :data:`JOIN_SETTLE_S`. A few hundredths of a second, mostly.
+        own time. So the wait ends once every reader of a topic the simulator announces has
+        matched its writer (:meth:`unmatched`: a reader matched only after the join would be
+        neither counted nor held, and would hand its messages on whenever they came), every
+        latched reader has what it is owed (:meth:`_owed_history`) and nothing has arrived for
+        :data:`JOIN_QUIET_S`. It is bounded by :data:`JOIN_SETTLE_S`: a few hundredths of a
+        second, mostly; a join that runs out of it says what it lacked and counts as a stall.
         """
         deadline = time.monotonic() + JOIN_SETTLE_S
         seen, quiet_since = self.traffic.arrivals, time.monotonic()
         while (now := time.monotonic()) < deadline and (
-                now - quiet_since < JOIN_QUIET_S or not self._owed_history(joined_at)):
+                now - quiet_since < JOIN_QUIET_S or not self._owed_history(joined_at)
+                or self.unmatched(joined_at)):
             executor.spin_once(timeout_sec=JOIN_QUIET_S)
             if self.traffic.arrivals != seen:
                 seen, quiet_since = self.traffic.arrivals, time.monotonic()
+        lacking = [*(f"a writer for {topic}" for topic in self.unmatched(joined_at)),
+                   *([] if self._owed_history(joined_at) else ["latched history"])]
+        if lacking:
+            self.stalls += 1
+            self.node.get_logger().warning(
+                f"lockstep: joined without {', '.join(lacking)} after {JOIN_SETTLE_S:.0f} s: "
+                "this run may not replay")
+
+    def unmatched(self, joined_at: LockstepPeriod) -> list[str]:
+        """The topics the simulator announces that a reliable reader of this node reads
+        without having matched a writer yet (by topic name)."""
+        announced = set(joined_at.topics)
+        return sorted({subscription.topic_name
+                       for subscription in self.traffic.readers.values()
+                       if subscription.topic_name in announced
+                       and subscription.qos_profile.reliability == Reliability.RELIABLE
+                       and subscription.get_publisher_count() == 0})
 
     def _owed_history(self, joined_at: LockstepPeriod) -> bool:
         """Whether every matched latched (transient-local) reader holds what DDS owes it: of

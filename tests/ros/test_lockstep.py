@@ -177,6 +177,33 @@ def test_the_join_waits_for_each_latched_readers_owed_history_only() -> None:
     assert owed()  # /odom is volatile, /pose has no publisher: nothing owed
 
 
+def test_the_join_waits_until_every_announced_topics_reader_has_matched_a_writer() -> None:
+    """A reader matched only after the join would be neither counted nor held: its messages
+    would reach the tree whenever DDS delivered them. Readers of topics the simulator does not
+    announce, and best-effort ones, are not waited for."""
+    from types import SimpleNamespace
+
+    from rclpy.qos import ReliabilityPolicy
+    from servicesim_competition.msg import LockstepPeriod
+
+    from bt_servicesim.ros.lockstep import LockstepClient
+
+    best_effort = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+    readers = {0: FakeReader("/odom", QoSProfile(depth=10), publishers=0),
+               1: FakeReader("/tf", QoSProfile(depth=10)),
+               2: FakeReader("/elsewhere", QoSProfile(depth=10), publishers=0),
+               3: FakeReader("/scan", best_effort, publishers=0)}
+    client = SimpleNamespace(traffic=SimpleNamespace(readers=readers))
+    joined_at = LockstepPeriod(topics=["/odom", "/scan", "/tf"], messages=[1, 1, 1])
+
+    def unmatched() -> list[str]:
+        return LockstepClient.unmatched(client, joined_at)  # type: ignore[arg-type]
+
+    assert unmatched() == ["/odom"]
+    readers[0].publishers = 1
+    assert unmatched() == []
+
+
 @pytest.mark.parametrize(("client", "endpoints", "requests"), [
     (0, [], []),
     (7, ["/servicebot/cmd_vel", "/servicesim/room_info"], [1234, 2]),
