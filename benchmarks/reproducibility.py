@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_servicesim.cli import OneLineArgumentParser
+from bt_servicesim.evaluation.figures_file import checkout_commit
 
 SETS = {"default": (False, ()), "random": (True, ()), "hard": (True, ("--difficulty", "hard"))}
 WALL_LIMIT_S = 1800.0
@@ -124,7 +125,7 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
         "command": shlex.join(["python", "benchmarks/reproducibility.py", *argv]),
         "executive": args.executive,
         "timing": timing_of(args),
-        "commit": _commit(),
+        "commit": checkout_commit(),
         "load_average": [round(value, 2) for value in os.getloadavg()],
         "results": results,
     }
@@ -135,15 +136,6 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
 
 def timing_of(args: Any) -> str:
     return "free running" if args.free_running else "lockstep"
-
-
-def _commit() -> str | None:
-    try:
-        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, check=True, cwd=Path(__file__).resolve().parent)
-    except (OSError, subprocess.CalledProcessError):
-        return None
-    return out.stdout.strip() or None
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -26,7 +26,6 @@ import math
 import os
 import shlex
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -36,6 +35,7 @@ from typing import Any
 
 from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser
 from bt_servicesim.evaluation.episodes import plan_episodes, run_episodes
+from bt_servicesim.evaluation.figures_file import checkout_commit
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.ros.environment import apply_localhost_defaults
@@ -104,7 +104,7 @@ def figures(args: Any, argv: Sequence[str], *, load_start: float,
     """What ``--json`` writes (read back by ``bt_servicesim.evaluation.throughput``)."""
     cold, warm = modes["cold"][0], modes["warm"][0]
     return {
-        "command": shlex.join(["python", PROG, *argv]), "commit": _commit(),
+        "command": shlex.join(["python", PROG, *argv]), "commit": checkout_commit(),
         "scenario": args.scenario, "executive": args.executive, "jobs": args.jobs,
         "cores": os.cpu_count(), "speed": args.speed,
         "load_average": [round(load_start, 2), round(os.getloadavg()[0], 2)],
@@ -120,15 +120,6 @@ def write_json(path: Path, document: dict[str, Any]) -> None:
     partial = path.with_name(path.name + ".partial")
     partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     partial.replace(path)
-
-
-def _commit() -> str | None:
-    try:
-        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, check=True, cwd=Path(__file__).resolve().parent)
-    except (OSError, subprocess.CalledProcessError):
-        return None
-    return out.stdout.strip() or None
 
 
 def keep(cold: dict[str, Any], warm: dict[str, Any], args: Any) -> str:

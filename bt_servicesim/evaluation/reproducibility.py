@@ -10,10 +10,11 @@ the evaluation's own episodes ran in lockstep.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from bt_servicesim.evaluation.figures_file import read_figures
 
 __all__ = ["PairFigures", "Reproducibility", "load_reproducibility", "reproducibility_section"]
 
@@ -43,12 +44,7 @@ class Reproducibility:
 
 def load_reproducibility(path: Path) -> Reproducibility:
     """The benchmark's figures in ``path``; ``ValueError`` with one line naming the problem."""
-    try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ValueError(f"{path}: cannot be read ({error.strerror or error})") from error
-    except ValueError as error:
-        raise ValueError(f"{path}: not JSON ({error})") from error
+    document = read_figures(path)
     try:
         figures = tuple(_pair_figures(entry) for entry in document["results"])
         result = Reproducibility(

@@ -11,10 +11,11 @@ gives the load the benchmark saw with them; the episodes themselves replay at an
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from bt_servicesim.evaluation.figures_file import read_figures
 
 __all__ = ["ModeFigures", "Throughput", "load_throughput", "throughput_section"]
 
@@ -56,12 +57,7 @@ class Throughput:
 
 def load_throughput(path: Path) -> Throughput:
     """The benchmark's figures in ``path``; ``ValueError`` with one line naming the problem."""
-    try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ValueError(f"{path}: cannot be read ({error.strerror or error})") from error
-    except ValueError as error:
-        raise ValueError(f"{path}: not JSON ({error})") from error
+    document = read_figures(path)
     try:
         result = _throughput(document)
     except (KeyError, TypeError, ValueError, AttributeError) as error:
