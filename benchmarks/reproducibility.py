@@ -8,7 +8,9 @@ task for ``default``, seed ``S + i`` for the seeded sets, ``--difficulty hard`` 
 started together so that they share the 2-core machine and load each other. It prints, per set
 and speed, the share of pairs whose ``report.json`` agree on what an episode is judged by --
 completed, each checkpoint's time, the penalties, the score -- and the commands of the pairs
-that differ, which ``run`` replays. ``--free-running`` measures the same without lockstep.
+that differ, which ``run`` replays; a pair that differs or has a run that stalled is kept for
+a look (both runs' directories and stderr, copied to ``reproducibility-kept-…`` in the working
+directory). ``--free-running`` measures the same without lockstep.
 ``--json FILE`` also writes the figures there, rewritten after each set and speed (so a run cut
 short keeps what it measured), for ``evaluate --reproducibility FILE`` to state in
 ``results.md``.
@@ -22,6 +24,7 @@ from __future__ import annotations
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -78,8 +81,11 @@ def command_for(args: Any, scenario: str, speed: float, index: int) -> list[str]
 def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """Both runs of a pair, started together; their reports."""
     outs = [root / "a", root / "b"]
+    logs = [(root / f"{out.name}.stderr").open("w") for out in outs]
     runs = [subprocess.Popen([*command, "--out", str(out)], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL) for out in outs]
+                             stderr=log) for out, log in zip(outs, logs, strict=True)]
+    for log in logs:
+        log.close()  # the runs hold their own copies
     for run in runs:
         run.wait(timeout=WALL_LIMIT_S)
     reports = []
@@ -91,6 +97,21 @@ def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, 
     return reports[0], reports[1]
 
 
+def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
+                name: str) -> Path | None:
+    """A pair whose reports differ, or a run that stalled, is evidence: both runs' directories
+    and what they said on stderr are copied out of the temporary directory (into the working
+    directory); where to, or ``None`` for a pair like any other."""
+    odd = (judged(first) != judged(second) or "no report" in (first.get("failure"),
+                                                              second.get("failure"))
+           or any(report.get("lockstep_stalls") for report in (first, second)))
+    if not odd:
+        return None
+    kept = Path(tempfile.mkdtemp(prefix=f"reproducibility-kept-{name}-", dir=Path.cwd()))
+    shutil.copytree(root, kept, dirs_exist_ok=True)
+    return kept
+
+
 def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
     """Run the pairs of one set and speed; print and return the figures."""
     identical, differing, started = 0, [], time.monotonic()
@@ -99,6 +120,9 @@ def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
         command = command_for(args, scenario, speed, index)
         with tempfile.TemporaryDirectory(prefix="reproducibility-") as root:
             first, second = run_pair(command, Path(root))
+            kept = keep_if_odd(Path(root), first, second, f"{scenario}-speed{speed:g}-{index}")
+        if kept is not None:
+            print(f"  kept for a look: {kept}", flush=True)
         stalled += sum(bool(report.get("lockstep_stalls")) for report in (first, second))
         completed += sum(bool(report.get("completed")) for report in (first, second))
         if judged(first) == judged(second) and first.get("failure") != "no report":

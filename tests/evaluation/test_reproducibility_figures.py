@@ -122,3 +122,19 @@ def test_evaluate_refuses_a_bad_figures_file_before_starting(tmp_path: Path) -> 
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "--reproducibility figures.json: not JSON" in lines[0]
     assert not (tmp_path / "evaluation").exists()
+
+
+def test_a_pair_that_differs_or_stalled_is_kept_for_a_look(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    script = benchmark()
+    root = tmp_path / "pair"
+    (root / "a").mkdir(parents=True)
+    (root / "a.stderr").write_text("lockstep: joined without a writer for /odom")
+    monkeypatch.chdir(tmp_path)
+    same = {"completed": True, "checkpoints": [], "penalties": {}, "score": 1.0}
+    assert script.keep_if_odd(root, same, dict(same), "random-speed0-0") is None
+    kept = script.keep_if_odd(root, same, {**same, "lockstep_stalls": 1}, "random-speed20-3")
+    assert kept is not None and kept.parent == tmp_path
+    assert kept.name.startswith("reproducibility-kept-random-speed20-3-")
+    assert (kept / "a.stderr").read_text().startswith("lockstep: joined without")
+    assert script.keep_if_odd(root, same, {**same, "score": 2.0}, "x") is not None
