@@ -106,8 +106,8 @@ def throughput_section(measured: Throughput | None) -> list[str]:
              f"`{measured.scenario}` episodes ({measured.executive}, speed {measured.speed:g}) "
              f"twice, {measured.jobs} at once on {measured.cores} cores: a process pair per "
              "episode (cold), then on warm pairs kept alive between episodes (warm). The load "
-             f"average was {start:g} at its start and {end:g} at its end; on a shared machine "
-             "these wall-clock figures move by a third from one hour to the next.", "",
+             f"average was {start:g} at its start and {end:g} at its end: wall-clock figures "
+             "follow the machine's load, where the episodes themselves do not.", "",
              "| episodes played | episodes | wall time (s) | episodes per hour | completed |",
              "|---|---|---|---|---|"]
     for figures in (cold, warm):
