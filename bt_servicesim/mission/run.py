@@ -114,21 +114,27 @@ class MissionRun:
         self._left_lockstep = False
 
     def execute(self) -> int:
-        """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`)."""
+        """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`).
+
+        A stop signal that came while the run cleaned up (when it is only noted) still makes
+        the exit status 128 + its number: the report tells how the mission went, the status
+        that the run was stopped, so that a shell loop around it stops too.
+        """
         with StopSignals() as stops:
             write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
                 if self.simulator is not None:
                     self.simulator.start()
                 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-                return self._execute_on(self._node(), stops)
+                code = self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
-                return self._stopped_while_starting(stop, stops)
+                code = self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
                 if self.simulator is not None:
                     self.simulator.stop()
                 rclpy.try_shutdown()
+            return _stopped_status(code, stops)
 
     def play(self) -> int:
         """:meth:`execute` for a warm episode: rclpy is up and the backend is the caller's.
@@ -144,7 +150,7 @@ class MissionRun:
                 return self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
-            return code if stops.first is None or code >= 128 else 128 + stops.first
+            return _stopped_status(code, stops)
 
     def _node(self) -> ExecutiveNode:
         """The executive's node, on sim time unless the run keeps the system clock.
@@ -488,3 +494,8 @@ def _succeeded(executive: Executive) -> bool:
 
 def _signal_name(stop: BaseException) -> str:
     return "SIGINT" if isinstance(stop, KeyboardInterrupt) else str(stop)
+
+
+def _stopped_status(code: int, stops: StopSignals) -> int:
+    """``code``, or 128 + the first stop signal if one came and ``code`` does not say so."""
+    return code if stops.first is None or code >= 128 else 128 + stops.first

@@ -3,6 +3,8 @@ sim-time backstop counts from the mission's start."""
 
 from __future__ import annotations
 
+import os
+import signal
 import time
 from pathlib import Path
 from typing import Any
@@ -124,3 +126,26 @@ def test_subscriptions_are_reliable_from_the_start_only_with_our_simulator_in_lo
                            free_running=free_running)
     run = MissionRun(settings=settings, make_executive=lambda node: None)  # type: ignore[arg-type]
     assert run.reliable_from_the_start() is reliable
+
+
+@pytest.mark.parametrize("code", [0, 1])
+def test_a_stop_signal_during_the_clean_up_still_makes_the_exit_status_say_so(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, code: int) -> None:
+    """The mission ended (completed or failed) and the run was cleaning up when Ctrl-C came:
+    the signal is only noted then, but the run must still exit 130, as ``run`` promises."""
+    settings = RunSettings(world=None, seed=None, speed=0.0, tree=DEFAULT_TREE, out=tmp_path,
+                           time_limit_s=900.0, headless=True, executive="bt")
+
+    def ended_then_interrupted(_run: MissionRun, _node: Any, stops: Any) -> int:
+        stops.hold()
+        os.kill(os.getpid(), signal.SIGINT)
+        return code
+
+    monkeypatch.setattr(mission_run.rclpy, "init", lambda **_: None)
+    monkeypatch.setattr(mission_run.rclpy, "try_shutdown", lambda: None)
+    monkeypatch.setattr(MissionRun, "_node", lambda _run: None)
+    monkeypatch.setattr(MissionRun, "_execute_on", ended_then_interrupted)
+    run = MissionRun(settings=settings, make_executive=lambda node: None)  # type: ignore[arg-type]
+    before = signal.getsignal(signal.SIGINT)
+    assert run.execute() == 130
+    assert signal.getsignal(signal.SIGINT) is before
