@@ -15,12 +15,11 @@ from typing import Any
 
 import pytest
 
-from bt_servicesim.evaluation.report import markdown_report
 from bt_servicesim.evaluation.reproducibility import (
     load_reproducibility,
     reproducibility_section,
 )
-from bt_servicesim.evaluation.settings import EvaluationSettings
+from tests.evaluation.report_sections import report_section
 from tests.evaluation.test_evaluate import evaluate_command
 
 REPO = Path(__file__).resolve().parents[2]
@@ -80,13 +79,8 @@ def test_without_figures_the_report_says_the_share_was_not_measured() -> None:
 
 
 def test_results_md_has_the_section(tmp_path: Path) -> None:
-    settings = EvaluationSettings(
-        episodes=1, scenarios=("random",), executives=("bt",), jobs=1, seed=0,
-        out=tmp_path / "evaluation", speed=0.0, episode_timeout_s=60.0, time_limit_s=900.0,
-        docs=None, command_line="python -m bt_servicesim.evaluate (test)",
-        reproducibility=load_reproducibility(figures(tmp_path)))
-    report = markdown_report(settings, [], ".", revision="commit `abc`")
-    section = report.split("## Reproducibility")[1].split("## Why episodes failed")[0]
+    section = report_section(tmp_path, heading="Reproducibility",
+                             reproducibility=load_reproducibility(figures(tmp_path)))
     assert "| default | 0 | 20/20 | 100% | 40/40 |" in section
 
 

@@ -16,9 +16,9 @@ from typing import Any
 
 import pytest
 
-from bt_servicesim.evaluation.report import markdown_report, revision_note
-from bt_servicesim.evaluation.settings import EvaluationSettings
+from bt_servicesim.evaluation.report import revision_note
 from bt_servicesim.evaluation.throughput import load_throughput, throughput_section
+from tests.evaluation.report_sections import report_section
 from tests.evaluation.test_evaluate import evaluate_command
 
 REPO = Path(__file__).resolve().parents[2]
@@ -82,13 +82,8 @@ def test_without_figures_the_section_says_they_were_not_measured() -> None:
 
 
 def test_results_md_has_the_section(tmp_path: Path) -> None:
-    settings = EvaluationSettings(
-        episodes=1, scenarios=("random",), executives=("bt",), jobs=1, seed=0,
-        out=tmp_path / "evaluation", speed=0.0, episode_timeout_s=60.0, time_limit_s=900.0,
-        docs=None, command_line="python -m bt_servicesim.evaluate (test)",
-        throughput=load_throughput(figures(tmp_path)))
-    report = markdown_report(settings, [], ".", revision="commit `abc`")
-    section = report.split("## Episodes per hour")[1].split("## Why episodes failed")[0]
+    section = report_section(tmp_path, heading="Episodes per hour",
+                             throughput=load_throughput(figures(tmp_path)))
     assert "| warm | 4 | 18.0 | 800 | 3/4 |" in section
 
 
