@@ -23,9 +23,9 @@ from tests.monitor.test_btview import btview, snapshot_rows
 STARTUP_LIMIT_S = 150.0
 STOP_LIMIT_S = 60.0
 SPEED = "1"
-"""Real time: the shipped task's mission lasts about 25 wall minutes, so it is still under way
-when the snapshot comes however loaded the machine is. (At speed 10 it lasted 150 s, and on a
-loaded CI machine the first snapshot once came as late as that.)"""
+"""Real time: the shipped task's mission (250 sim s) lasts about four wall minutes, so it is
+still under way when the snapshot comes however loaded the machine is. At speed 10 it lasted
+25 s, and on a loaded CI machine the SIGINT once came only as it ended (exit status 0)."""
 
 
 def snapshot_while_running(port: int, run: subprocess.Popen[str]) -> list[tuple[str, str]]:
