@@ -407,14 +407,29 @@ class ServerThread:
         self.executor = MultiThreadedExecutor(num_threads=threads, context=context)
         for server in servers:
             self.executor.add_node(server.node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self._turn = threading.Lock()
+        """Held while the executor takes its next turn (builds its wait set and hands out
+        what is ready): an entity destroyed meanwhile is one the wait set may still use."""
+        self._stopped = threading.Event()
+        self.thread = threading.Thread(target=self._spin, daemon=True)
         self.thread.start()
+
+    def _spin(self) -> None:
+        while not self._stopped.is_set():
+            with self._turn:
+                self.executor.spin_once(timeout_sec=0.05)
+
+    def between_turns(self, change: Callable[[], None]) -> None:
+        """``change`` the servers (destroy one) while the executor is between two turns."""
+        with self._turn:
+            change()
 
     def shutdown(self) -> None:
         for server in self.servers:
             server.stopping = True
-        self.executor.shutdown()
+        self._stopped.set()
         self.thread.join(timeout=5.0)
+        self.executor.shutdown()
         for server in self.servers:
             server.node.destroy_node()
 

@@ -155,7 +155,7 @@ def test_a_server_that_disappears_mid_goal_counts_as_lost(
     navigator.steps, navigator.step_s = 1000, 0.01
     navigate = client.navigate(action, silence_timeout=2.0)
     client.tick_until(navigate, lambda: Blackboard.exists("/remaining"))
-    navigator.vanish()
+    server.between_turns(navigator.vanish)
     try:
         assert client.tick_until_done(navigate, limit_s=15.0) == Status.FAILURE
         assert navigate.feedback_message.startswith("navigation server lost")
