@@ -35,7 +35,6 @@ from bt_servicesim.mission.settings import (
     TRAJECTORY_POLICIES,
     RunSettings,
 )
-from bt_servicesim.mission.simulator_process import SimulatorProcess
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for, signal_of
 from bt_servicesim.monitor.groot2_protocol import DEFAULT_HOST, DEFAULT_PORT
 from bt_servicesim.monitor.live_server import DEFAULT_PORT as FOXGLOVE_PORT
@@ -52,6 +51,7 @@ from bt_servicesim.tree.files import DEFAULT_TREE
 if TYPE_CHECKING:
     from rclpy.node import Node
 
+    from bt_servicesim.mission.run import MissionRun
     from bt_servicesim.monitor.groot2_server import Groot2Server
     from bt_servicesim.tree.executive import Executive
 
@@ -211,52 +211,67 @@ def main(argv: Sequence[str] | None = None) -> int:
     (:mod:`bt_servicesim.mission.head_start`): the tree needs every behaviour and its libraries
     imported, about a second here, and the simulator as long to come up. A tree, a monitor
     port or a Foxglove address refused after that takes the head start back, so bad input
-    still leaves nothing but its one-line error.
+    still leaves nothing but its one-line error. One :class:`StopSignals` covers the whole
+    start-up, up to the run's own: a stop signal at any moment of it ends the run in one line.
     """
     args = build_parser().parse_args(argv)
     try:
         settings = settings_from(args)
     except UsageError as error:
         return error_line(PROG, error)
-    with HeadStart(settings, sim_args=tuple(args.sim_arg)) as head_start:
-        started = _start(settings, head_start)
+    with StopSignals() as stops, HeadStart(settings, sim_args=tuple(args.sim_arg)) as head_start:
+        started = _start(settings, head_start, args=args, stops=stops)
         if isinstance(started, int):
             return started
-        make_executive, monitor, live = started
+        mission, monitor, live = started
         try:
-            return _run(settings, make_executive, args, monitor, live, head_start.hand_over())
+            if live is not None:
+                print(describe(live), flush=True)
+            return stops.exit_status(mission.execute(noted=stops))
         finally:
             _close_servers(monitor, live)
 
 
-def _start(settings: RunSettings, head_start: HeadStart
-           ) -> tuple[ExecutiveFactory, Groot2Server | None, LiveServer | None] | int:
-    """The head start, then the tree and the servers; an exit status if any was refused or a
-    stop signal came meanwhile (everything taken back)."""
+def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Namespace,
+           stops: StopSignals) -> tuple[MissionRun, Groot2Server | None, LiveServer | None] | int:
+    """The head start, then the tree, the servers and the run, which takes the simulator over;
+    an exit status if any was refused or a stop signal came meanwhile (everything taken back).
+
+    Once the run is made, or the start given up, ``stops`` only notes a stop signal (the run
+    raises one it noted in its own handlers' scope): no signal lands between the two, or cuts
+    the clean-up short.
+    """
     monitor: Groot2Server | None = None
     live: LiveServer | None = None
-    with StopSignals():
-        try:
-            head_start.begin(users_domain=_users_domain())
-            from bt_servicesim.tree.loading import MissionTreeError  # behaviours: after the start
+    try:
+        head_start.begin(users_domain=_users_domain())
+        from bt_servicesim.tree.loading import MissionTreeError  # behaviours: after the start
 
-            try:
-                make_executive = executive_factory(settings)
-                monitor = _open_monitor(settings)
-                live = open_live_server(settings.foxglove) if settings.foxglove else None
-            except (MissionTreeError, LiveServerError) as error:
-                raise UsageError(str(error)) from error
-            return make_executive, monitor, live
-        except (UsageError, OSError, NoFreeDomainError) as error:
-            _close_servers(monitor, live)
-            head_start.abandon()
-            return error_line(PROG, error)
-        except (KeyboardInterrupt, Terminated) as stop:
-            _close_servers(monitor, live)
-            head_start.abandon()
-            print(f"{PROG}: stopped by {signal.Signals(signal_of(stop)).name} while starting",
-                  file=sys.stderr)
-            return exit_code_for(stop)
+        try:
+            make_executive = executive_factory(settings)
+            monitor = _open_monitor(settings)
+            live = open_live_server(settings.foxglove) if settings.foxglove else None
+        except (MissionTreeError, LiveServerError) as error:
+            raise UsageError(str(error)) from error
+        from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
+
+        mission = MissionRun(
+            settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
+            monitor=monitor, live_server=live, simulator=head_start.hand_over())
+        stops.hold()
+        return mission, monitor, live
+    except (UsageError, OSError, NoFreeDomainError) as error:
+        stops.hold()
+        _close_servers(monitor, live)
+        head_start.abandon()
+        return error_line(PROG, error)
+    except (KeyboardInterrupt, Terminated) as stop:
+        stops.hold(stop)
+        _close_servers(monitor, live)
+        head_start.abandon()
+        print(f"{PROG}: stopped by {signal.Signals(signal_of(stop)).name} while starting",
+              file=sys.stderr)
+        return exit_code_for(stop)
 
 
 def _close_servers(monitor: Groot2Server | None, live: LiveServer | None) -> None:
@@ -274,19 +289,6 @@ def _open_monitor(settings: RunSettings) -> Groot2Server | None:
 
     host, port = settings.groot
     return Groot2Server(host=host, port=port)
-
-
-def _run(settings: RunSettings, make_executive: ExecutiveFactory, args: argparse.Namespace,
-         monitor: Groot2Server | None, live: LiveServer | None,
-         simulator: SimulatorProcess | None) -> int:
-    if live is not None:
-        print(describe(live), flush=True)
-    from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
-
-    return MissionRun(
-        settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
-        monitor=monitor, live_server=live, simulator=simulator,
-    ).execute()
 
 
 def _users_domain() -> int | None:

@@ -51,6 +51,7 @@ from bt_servicesim.mission.stopping import (
     StopSignals,
     Terminated,
     exit_code_for,
+    stop_for,
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
@@ -113,8 +114,12 @@ class MissionRun:
         """How the executive keeps time with the backend, as the report says it."""
         self._left_lockstep = False
 
-    def execute(self) -> int:
+    def execute(self, *, noted: StopSignals | None = None) -> int:
         """Run the mission and write the report; the exit status (see :mod:`bt_servicesim.cli`).
+
+        ``noted``: the caller's stop signals, held (only noted) since it made this run, so that
+        no moment of the start-up is left without a handler; a signal they noted stops the run
+        as one that comes once it is under way.
 
         A stop signal that came while the run cleaned up (when it is only noted) still makes
         the exit status 128 + its number: the report tells how the mission went, the status
@@ -123,6 +128,8 @@ class MissionRun:
         with StopSignals() as stops:
             write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
+                if noted is not None and noted.first is not None:
+                    raise stop_for(noted.first)
                 if self.simulator is not None:
                     self.simulator.start()
                 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -134,7 +141,7 @@ class MissionRun:
                 if self.simulator is not None:
                     self.simulator.stop()
                 rclpy.try_shutdown()
-            return _stopped_status(code, stops)
+            return stops.exit_status(code)
 
     def play(self) -> int:
         """:meth:`execute` for a warm episode: rclpy is up and the backend is the caller's.
@@ -150,7 +157,7 @@ class MissionRun:
                 return self._stopped_while_starting(stop, stops)
             finally:
                 stops.hold()
-            return _stopped_status(code, stops)
+            return stops.exit_status(code)
 
     def _node(self) -> ExecutiveNode:
         """The executive's node, on sim time unless the run keeps the system clock.
@@ -494,8 +501,3 @@ def _succeeded(executive: Executive) -> bool:
 
 def _signal_name(stop: BaseException) -> str:
     return "SIGINT" if isinstance(stop, KeyboardInterrupt) else str(stop)
-
-
-def _stopped_status(code: int, stops: StopSignals) -> int:
-    """``code``, or 128 + the first stop signal if one came and ``code`` does not say so."""
-    return code if stops.first is None or code >= 128 else 128 + stops.first

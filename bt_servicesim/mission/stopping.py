@@ -24,7 +24,7 @@ from types import FrameType, TracebackType
 from typing import Any
 
 __all__ = ["STOP_SIGNALS", "StopSignals", "Terminated", "exit_code_for", "parent_death_signal",
-           "signal_of"]
+           "signal_of", "stop_for"]
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
@@ -106,6 +106,11 @@ class StopSignals:
         """The signal that stopped the evaluation, if one did."""
         return self.received[0] if self.received else None
 
+    def exit_status(self, code: int) -> int:
+        """``code``, or 128 + the first stop signal if one came and ``code`` does not say so
+        (the signal came only during the clean-up, when it was noted)."""
+        return code if self.first is None or code >= 128 else 128 + self.first
+
     def _note(self, signal_number: int, _frame: FrameType | None) -> None:
         self.received.append(signal_number)
 
@@ -114,6 +119,14 @@ class StopSignals:
         if self._main:
             for number, handler in self._previous.items():
                 signal.signal(number, handler if handler is not None else signal.SIG_DFL)
+
+
+def stop_for(signal_number: int) -> BaseException:
+    """The exception a stop signal raises inside ``with StopSignals()``: to raise one that was
+    only noted, where it can be handled."""
+    if signal_number == signal.SIGINT:
+        return KeyboardInterrupt()
+    return Terminated(signal_number)
 
 
 def signal_of(stop: BaseException) -> int:
