@@ -808,13 +808,15 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
         raise KeyboardInterrupt
 
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    for number in STOP_SIGNALS:
-        signal.signal(number, stop)
-    executor = DrainingExecutor()
-    resets = EpisodeResets(episodes_ros_node())
-    executor.add_node(resets.node)
+    executor: DrainingExecutor | None = None
+    resets: EpisodeResets | None = None
     simulator: SimulatorNode | None = None
     try:
+        for number in STOP_SIGNALS:
+            signal.signal(number, stop)
+        executor = DrainingExecutor()
+        resets = EpisodeResets(episodes_ros_node())
+        executor.add_node(resets.node)
         while True:
             simulator = _start_episode(settings, engine, executor, resets)
             try:
@@ -833,10 +835,12 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     finally:
         for number in STOP_SIGNALS:  # a stop that came before the handler ran: clean up anyway
             signal.signal(number, signal.SIG_IGN)
-        if simulator is not None:
+        if simulator is not None and executor is not None:
             _end_episode(simulator, executor)
-        executor.shutdown()
-        resets.node.destroy_node()
+        if executor is not None:
+            executor.shutdown()
+        if resets is not None:
+            resets.node.destroy_node()
         rclpy.try_shutdown()
     return 0
 

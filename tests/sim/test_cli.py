@@ -72,6 +72,36 @@ def test_stop_signals_end_the_simulator_cleanly_even_when_repeated(
             process.wait()
 
 
+STOPPED_AT = {
+    "loading the world": "servicesim_sim.settings.playable_engine",
+    "joining ROS": "rclpy.init",
+}
+"""Moments of the start-up before the simulator's own stop handlers are in place, and what the
+test makes send the signal there (as Ctrl-C would at that instant)."""
+
+
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=lambda stop: stop.name)
+@pytest.mark.parametrize("moment", sorted(STOPPED_AT))
+def test_a_stop_signal_while_starting_is_one_line_and_128_plus_the_signal(
+        moment: str, stop: signal.Signals) -> None:
+    module, _, name = STOPPED_AT[moment].rpartition(".")
+    script = (
+        "import importlib, os, sys\n"
+        f"owner = importlib.import_module({module!r})\n"
+        f"original = getattr(owner, {name!r})\n"
+        "def stopping(*args, **kwargs):\n"
+        f"    os.kill(os.getpid(), {int(stop)})\n"
+        "    return original(*args, **kwargs)\n"
+        f"setattr(owner, {name!r}, stopping)\n"
+        "from servicesim_sim.__main__ import main\n"
+        "sys.exit(main(['--speed', '0']))\n")
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 128 + stop, result.stderr[-2000:]
+    assert result.stderr.strip().splitlines() == [
+        f"python -m servicesim_sim: stopped by {stop.name} while starting"]
+
+
 def test_guest_path_straight_reaches_the_guest_and_trail_is_the_default() -> None:
     from servicesim_sim.__main__ import build_parser
     from servicesim_sim.settings import difficulty_from
