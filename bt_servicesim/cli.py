@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from typing import NoReturn
 
 __all__ = [
@@ -21,6 +22,7 @@ __all__ = [
     "OneLineArgumentParser",
     "UsageError",
     "error_line",
+    "interruptible",
 ]
 
 EXIT_OK = EXIT_COMPLETED = 0
@@ -49,3 +51,15 @@ def error_line(prog: str, error: object) -> int:
     text = " ".join(str(error).split()) or type(error).__name__
     print(f"{prog}: error: {text}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+def interruptible(prog: str, main: Callable[[], int]) -> int:
+    """``main()``'s exit status, with Ctrl-C while it runs one line and
+    :data:`EXIT_INTERRUPTED` instead of a traceback: for the commands that start nothing and
+    write their files whole (a viewer, a drawing, a dump); ``run`` and ``evaluate`` clean up
+    after a stop signal themselves."""
+    try:
+        return main()
+    except KeyboardInterrupt:
+        print(f"{prog}: stopped by SIGINT", file=sys.stderr)
+        return EXIT_INTERRUPTED

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import py_trees
 
+from bt_servicesim.cli import interruptible
 from bt_servicesim.records.drawing import FORMATS, TEXT_FORMATS, GraphvizError, dot_source, drawing
 
 EXIT_OK, EXIT_NO_GRAPHVIZ, EXIT_BAD_INPUT = 0, 1, 2
@@ -132,4 +133,4 @@ def _write(prog: str, args: argparse.Namespace, root: py_trees.behaviour.Behavio
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible("python -m bt_servicesim.dump", main))

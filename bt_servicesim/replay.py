@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
-from bt_servicesim.cli import OneLineArgumentParser
+from bt_servicesim.cli import OneLineArgumentParser, interruptible
 from bt_servicesim.mission.settings import REPORT_NAME
 from bt_servicesim.records.tree_log import (
     LOG_NAME,
@@ -141,4 +141,4 @@ def reproduce_command(run: Path) -> str | None:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible(PROG, main))

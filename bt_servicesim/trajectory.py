@@ -12,7 +12,7 @@ from pathlib import Path
 
 from mcap.exceptions import McapError
 
-from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_OK, OneLineArgumentParser
+from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_OK, OneLineArgumentParser, interruptible
 from bt_servicesim.records.mcap import MCAP_NAME
 from bt_servicesim.records.trajectory import (
     TRAJECTORY_NAME,
@@ -57,4 +57,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible("python -m bt_servicesim.trajectory", main))

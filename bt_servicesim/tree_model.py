@@ -14,7 +14,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from bt_servicesim.cli import EXIT_FAILED, EXIT_OK, OneLineArgumentParser, error_line
+from bt_servicesim.cli import EXIT_FAILED, EXIT_OK, OneLineArgumentParser, error_line, interruptible
 from bt_servicesim.tree.model import DEFAULT_NODES, default_trees, nodes_file
 
 PROG = "python -m bt_servicesim.tree_model"
@@ -59,4 +59,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible(PROG, main))

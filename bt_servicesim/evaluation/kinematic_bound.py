@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_servicesim.cli import EXIT_FAILED, EXIT_OK, OneLineArgumentParser
+from bt_servicesim.cli import EXIT_FAILED, EXIT_OK, OneLineArgumentParser, interruptible
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 
 BOUND_COMMAND = (sys.executable, "-m", "servicesim_sim.task_bound")
@@ -219,4 +219,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible(PROG, main))

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser
+from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, interruptible
 
 PROG = "python -m bt_servicesim.evaluation.path_excess"
 STANDING_M_S = 0.05
@@ -156,4 +156,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible(PROG, main))

@@ -261,7 +261,8 @@ def boxes_from_blackboard(storage: Mapping[str, Any]) -> dict[str, Box]:
 
 def render_trajectory(trace: RunTrace, *, path: Path, boxes: Mapping[str, Box] | None = None,
                       title: str = "") -> None:
-    """Draw ``trace`` (and the target ``boxes``) to a PNG at ``path``."""
+    """Draw ``trace`` (and the target ``boxes``) to a PNG at ``path``, written whole: drawn
+    beside it and moved into place, so that an interrupted drawing leaves no half a picture."""
     figure = Figure(figsize=(14, 7.5), dpi=100)
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
@@ -278,7 +279,12 @@ def render_trajectory(trace: RunTrace, *, path: Path, boxes: Mapping[str, Box] |
     if axes.get_legend_handles_labels()[0]:
         axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
     figure.tight_layout()
-    figure.savefig(path, format="png")
+    partial = path.with_name(f".{path.name}.partial")
+    try:
+        figure.savefig(partial, format="png")
+        partial.replace(path)
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def _draw_boxes(axes: Any, boxes: Mapping[str, Box]) -> None:

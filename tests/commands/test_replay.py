@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import io
 import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -165,3 +168,24 @@ def test_progress_shows_the_live_tree_on_a_terminal_but_not_headless(tmp_path: P
         is None
     assert ProgressView(headless=False, stream=io.StringIO(), tree_root=run.tree.root) \
         .tree_view is None  # a pipe gets plain lines
+
+
+def test_ctrl_c_while_stepping_is_one_line_and_exit_130(tmp_path: Path) -> None:
+    """The stepper waits for a key; Ctrl-C there quits as a command interrupted, not with a
+    traceback."""
+    RecordedRun(tmp_path)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "bt_servicesim.replay", str(tmp_path), "--step"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout is not None
+        while "quit" not in process.stdout.readline():  # the first screen's prompt: waiting
+            assert process.poll() is None
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    assert process.returncode == 130
+    assert stderr == "python -m bt_servicesim.replay: stopped by SIGINT\n"
