@@ -236,10 +236,12 @@ def evaluate(settings: EvaluationSettings, command: EpisodeCommand | None = None
 
 def main(argv: Sequence[str] | None = None, command: EpisodeCommand | None = None) -> int:
     """The command; ``command`` makes each episode's command line (tests give a stand-in)."""
-    with StopSignals():  # a stop before any episode started: nothing to clean up, no traceback
+    with StopSignals():  # a stop before any episode started: nothing to clean up, one line
         try:
             return _main(argv, command)
         except (KeyboardInterrupt, Terminated) as stop:
+            print(f"{PROG}: stopped by {signal.Signals(signal_of(stop)).name} while starting",
+                  file=sys.stderr)
             return 128 + signal_of(stop)
 
 

@@ -628,3 +628,16 @@ def test_a_tree_that_cannot_play_is_one_line_before_anything_starts(tmp_path: Pa
         assert result.returncode == 2 and len(lines) == 1, result.stderr
         assert named in lines[0] and lines[0].count("--tree") == 1
         assert not (tmp_path / "evaluation").exists(), "nothing is started or written"
+
+
+def test_a_stop_before_any_episode_started_is_one_line(
+        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    def interrupted(*_: object) -> None:
+        raise KeyboardInterrupt
+
+    from bt_servicesim.evaluate import main
+
+    monkeypatch.setattr("bt_servicesim.evaluate.settings_from", interrupted)
+    assert main(["--episodes", "1"]) == 130
+    assert capsys.readouterr().err == (
+        "python -m bt_servicesim.evaluate: stopped by SIGINT while starting\n")
