@@ -631,13 +631,14 @@ def test_a_tree_that_cannot_play_is_one_line_before_anything_starts(tmp_path: Pa
 
 
 def test_a_stop_before_any_episode_started_is_one_line(
-        monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
     def interrupted(*_: object) -> None:
         raise KeyboardInterrupt
 
     from bt_servicesim.evaluate import main
 
     monkeypatch.setattr("bt_servicesim.evaluate.settings_from", interrupted)
-    assert main(["--episodes", "1"]) == 130
+    assert main(["--episodes", "1", "--out", str(tmp_path)]) == 130
     assert capsys.readouterr().err == (
         "python -m bt_servicesim.evaluate: stopped by SIGINT while starting\n")
