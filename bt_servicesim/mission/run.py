@@ -126,8 +126,8 @@ class MissionRun:
         that the run was stopped, so that a shell loop around it stops too.
         """
         with StopSignals() as stops:
-            write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
+                write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 if noted is not None and noted.first is not None:
                     raise stop_for(noted.first)
                 if self.simulator is not None:
@@ -150,8 +150,8 @@ class MissionRun:
         the exit status 128 + its number, so that the caller stops too.
         """
         with StopSignals() as stops:
-            write_report(self.settings.out / REPORT_NAME, self._header("running"))
             try:
+                write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 code = self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
                 return self._stopped_while_starting(stop, stops)
