@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_servicesim.cli import OneLineArgumentParser
-from bt_servicesim.evaluation.figures_file import checkout_commit
+from bt_servicesim.evaluation.figures_file import checkout_commit, write_figures
 
 SETS = {"default": (False, ()), "random": (True, ()), "hard": (True, ("--difficulty", "hard"))}
 WALL_LIMIT_S = 1800.0
@@ -153,9 +153,7 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
         "load_average": [round(value, 2) for value in os.getloadavg()],
         "results": results,
     }
-    partial = path.with_name(path.name + ".partial")
-    partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-    partial.replace(path)
+    write_figures(path, document)
 
 
 def timing_of(args: Any) -> str:

@@ -21,7 +21,6 @@ else ran); nothing here is asserted. Bad arguments give one line and exit status
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import shlex
@@ -35,7 +34,7 @@ from typing import Any
 
 from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser
 from bt_servicesim.evaluation.episodes import plan_episodes, run_episodes
-from bt_servicesim.evaluation.figures_file import checkout_commit
+from bt_servicesim.evaluation.figures_file import checkout_commit, write_figures
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.ros.environment import apply_localhost_defaults
@@ -115,13 +114,6 @@ def figures(args: Any, argv: Sequence[str], *, load_start: float,
     }
 
 
-def write_json(path: Path, document: dict[str, Any]) -> None:
-    """Written whole: a temporary file renamed over ``path``."""
-    partial = path.with_name(path.name + ".partial")
-    partial.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-    partial.replace(path)
-
-
 def keep(cold: dict[str, Any], warm: dict[str, Any], args: Any) -> str:
     """Where the two episodes that disagree are kept for a look (with ``--out`` they stay
     where they are; the temporary directory goes, so they are copied out of it)."""
@@ -172,7 +164,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"  seed {a['episode_seed']}: cold {judged(a)} / warm {judged(b)} "
                       f"(warm failure: {b.get('failure')}); {keep(a, b, args)}")
     if args.json is not None:
-        write_json(args.json, figures(args, argv, load_start=load_start,
+        write_figures(args.json, figures(args, argv, load_start=load_start,
                                       modes={"cold": (cold, cold_s), "warm": (warm, warm_s)}))
         print(f"figures written to {args.json}")
     return EXIT_OK

@@ -2,8 +2,9 @@
 
 The benchmarks whose figures ``results.md`` states (``benchmarks/reproducibility.py``,
 ``benchmarks/throughput.py``) write them with ``--json FILE`` and name the checkout's commit
-(:func:`checkout_commit`); ``evaluate`` reads such a file before anything starts
-(:func:`read_figures`), so that a file that cannot be read is one line naming the problem.
+(:func:`checkout_commit`) and write it whole (:func:`write_figures`); ``evaluate`` reads such a
+file before anything starts (:func:`read_figures`), so that a file that cannot be read is one
+line naming the problem.
 """
 
 from __future__ import annotations
@@ -13,7 +14,9 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
-__all__ = ["checkout_commit", "read_figures"]
+from bt_servicesim.mission.report import write_report
+
+__all__ = ["checkout_commit", "read_figures", "write_figures"]
 
 
 def checkout_commit() -> str | None:
@@ -35,3 +38,9 @@ def read_figures(path: Path) -> Any:
         raise ValueError(f"{path}: cannot be read ({error.strerror or error})") from error
     except ValueError as error:
         raise ValueError(f"{path}: not JSON ({error})") from error
+
+
+def write_figures(path: Path, document: dict[str, Any]) -> None:
+    """Write ``document`` to ``path`` whole, as a run's report is written (a temporary file
+    renamed over it): a benchmark cut short leaves the last figures, never half of them."""
+    write_report(path, document)

@@ -1,8 +1,8 @@
 """results.md states episodes per hour, warm and cold, from the throughput benchmark's JSON.
 
 The figures are written the way ``benchmarks/throughput.py --json`` writes them (its own
-``figures`` and ``write_json``, on rows like those its episodes return); bad files are refused in
-one line before an evaluation starts.
+``figures``, on rows like those its episodes return, and ``write_figures``); bad files are
+refused in one line before an evaluation starts.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 
+from bt_servicesim.evaluation.figures_file import write_figures
 from bt_servicesim.evaluation.report import revision_note
 from bt_servicesim.evaluation.throughput import load_throughput, throughput_section
 from tests.evaluation.report_sections import report_section
@@ -50,7 +51,7 @@ def figures(tmp_path: Path, *, warm_differs: bool = False) -> Path:
     document = script.figures(args, argv, load_start=1.5,
                               modes={"cold": (cold, 36.0), "warm": (warm, 18.0)})
     path = tmp_path / "figures.json"
-    script.write_json(path, document)
+    write_figures(path, document)
     return path
 
 
@@ -65,7 +66,7 @@ def test_the_benchmarks_figures_are_read_back_as_written(tmp_path: Path) -> None
     assert cold.episodes_per_hour == pytest.approx(400.0)
     assert warm.episodes_per_hour == pytest.approx(800.0)
     assert measured.agreeing == 3
-    assert not list(tmp_path.glob("*.partial"))
+    assert [entry.name for entry in tmp_path.iterdir()] == ["figures.json"]  # no temporary
 
 
 def test_the_section_states_both_modes_their_ratio_and_the_load(tmp_path: Path) -> None:
