@@ -20,8 +20,7 @@ from collections.abc import Sequence
 from types import FrameType
 
 from servicesim_sim.arguments import EXIT_BAD_INPUT, PROG, build_parser
-
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+from servicesim_sim.stop_signals import STOP_SIGNALS
 
 
 class StoppedWhileStarting(BaseException):

@@ -87,6 +87,7 @@ from servicesim_sim.pose_messages import (
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
+from servicesim_sim.stop_signals import STOP_SIGNALS
 
 RCLError = rclpy_implementation.RCLError
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
@@ -783,10 +784,6 @@ def simulator_ros_node(name: str = "servicesim") -> Node:
     """
     return Node(name, start_parameter_services=False, parameter_overrides=[
         Parameter("start_type_description_service", value=False)])
-
-
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-"""The signals that stop the simulator, Ctrl-C's among them."""
 
 
 def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> int:
