@@ -18,7 +18,9 @@ mostly that per-message work. Two things it does differently are handled here: i
 timers on ROS time (Kilted), so the executives tick from the clock itself
 (:mod:`bt_servicesim.ros.sim_ticker`); and it catches SIGINT and SIGTERM itself to shut the
 context down, so the run puts Python's handlers back: Ctrl-C must reach the run as
-``KeyboardInterrupt``, which stops the tree and cancels what is in flight first.
+``KeyboardInterrupt``, which stops the tree and cancels what is in flight first. While the node
+spins, a stop signal is raised between two turns of the executor, never inside a callback
+(:meth:`~bt_servicesim.mission.stopping.StopSignals.defer`).
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ from bt_servicesim.mission.run_records import RunRecords
 from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.simulator_process import SimulatorProcess
 from bt_servicesim.mission.stopping import (
+    BetweenSpins,
     StopSignals,
     Terminated,
     exit_code_for,
@@ -198,9 +201,10 @@ class MissionRun:
             self.monitor.watch(tree)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
                              tree_file=self.settings.tree, live_server=self.live_server)
+        stops.defer()  # a signal is raised between the executor's turns, not in a callback
         try:
             try:
-                code = self._run(node, executor, monitor, executive, records)
+                code = self._run(node, BetweenSpins(executor, stops), monitor, executive, records)
             except Exception as error:
                 if (stop := stop_behind(error)) is not None:
                     raise stop from error  # a signal that landed inside rclpy's C++

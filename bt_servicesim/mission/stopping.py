@@ -5,8 +5,13 @@ its terminal closing (SIGHUP). All three take the same way out: the tree is stop
 behaviours cancel what they have in flight, the simulator is stopped, the records are closed
 (an MCAP file needs its summary written to be read) and the report says how the run ended.
 Inside ``with StopSignals()``, SIGINT arrives as Python's ``KeyboardInterrupt`` and SIGTERM and
-SIGHUP raise :class:`Terminated`. Once clean-up has begun, :meth:`StopSignals.hold` keeps a
-second signal from interrupting it: it is remembered, and the process still exits as it was
+SIGHUP raise :class:`Terminated`. While the mission runs, :meth:`StopSignals.defer` keeps a
+signal out of the callbacks that rclpy's executor runs: it is noted, and :class:`BetweenSpins`
+raises it once the executor's turn is over, where the run handles it (raised inside a callback,
+it reached rclpy's C++ executor, which logged it as a fatal error before it came out). A second
+signal while the first waits for its turn is raised at once, so that a tick stuck in a
+behaviour still gives way to Ctrl-C. Once clean-up has begun, :meth:`StopSignals.hold` keeps a
+further signal from interrupting it: it is remembered, and the process still exits as it was
 told. An evaluation is stopped the same way as a run.
 
 A SIGKILL cannot be caught. A child started with :func:`parent_death_signal` (a run's
@@ -23,8 +28,8 @@ from collections.abc import Callable
 from types import FrameType, TracebackType
 from typing import Any
 
-__all__ = ["STOP_SIGNALS", "StopSignals", "Terminated", "exit_code_for", "parent_death_signal",
-           "signal_of", "stop_for"]
+__all__ = ["STOP_SIGNALS", "BetweenSpins", "StopSignals", "Terminated", "exit_code_for",
+           "parent_death_signal", "signal_of", "stop_for"]
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
@@ -83,6 +88,7 @@ class StopSignals:
     def __init__(self) -> None:
         self.received: list[int] = []
         self._previous: dict[int, Any] = {}
+        self._deferred = False
         self._main = threading.current_thread() is threading.main_thread()
 
     def __enter__(self) -> StopSignals:
@@ -93,8 +99,22 @@ class StopSignals:
             signal.signal(signal.SIGHUP, _raise_terminated)
         return self
 
+    def defer(self) -> None:
+        """From now on a stop signal is noted, and raised by :meth:`raise_deferred` (a second
+        one, while the first still waits, is raised at once, wherever the process is)."""
+        self._deferred = True
+        if self._main:
+            for number in STOP_SIGNALS:
+                signal.signal(number, self._defer)
+
+    def raise_deferred(self) -> None:
+        """Raise the stop signal that :meth:`defer` noted, if one came; else nothing."""
+        if self._deferred and self.received:
+            raise stop_for(self.received.pop(0))
+
     def hold(self, stop: BaseException | None = None) -> None:
         """From now on a stop signal is only noted; ``stop`` is one that was raised."""
+        self._deferred = False
         if stop is not None:
             self.received.insert(0, signal_of(stop))
         if self._main:
@@ -114,11 +134,37 @@ class StopSignals:
     def _note(self, signal_number: int, _frame: FrameType | None) -> None:
         self.received.append(signal_number)
 
+    def _defer(self, signal_number: int, _frame: FrameType | None) -> None:
+        if self.received:  # the first still waits for its turn: the user insists
+            raise stop_for(self.received.pop(0))
+        self.received.append(signal_number)
+
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  _traceback: TracebackType | None) -> None:
         if self._main:
             for number, handler in self._previous.items():
                 signal.signal(number, handler if handler is not None else signal.SIG_DFL)
+
+
+class BetweenSpins:
+    """An executor whose ``spin_once`` raises a deferred stop signal when its turn is over.
+
+    The run spins its node through one of these while :meth:`StopSignals.defer` is in force, so
+    a signal is raised between two turns of the executor and never inside a callback. Every
+    other attribute is the executor's own.
+    """
+
+    def __init__(self, executor: Any, stops: StopSignals) -> None:
+        self._executor = executor
+        self._stops = stops
+
+    def spin_once(self, timeout_sec: float | None = None) -> None:
+        self._stops.raise_deferred()
+        self._executor.spin_once(timeout_sec=timeout_sec)
+        self._stops.raise_deferred()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._executor, name)
 
 
 def stop_for(signal_number: int) -> BaseException:

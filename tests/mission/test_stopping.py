@@ -1,0 +1,126 @@
+"""Stop signals while the node spins: raised between two turns of the executor, never inside a
+callback, and a second one at once."""
+
+from __future__ import annotations
+
+import os
+import signal
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from std_msgs.msg import Empty
+
+from bt_servicesim.mission.stopping import BetweenSpins, StopSignals, Terminated
+
+
+class _Executor:
+    """One turn runs ``callback``, as an executor runs a callback that has work."""
+
+    def __init__(self, callback: Callable[[], None]) -> None:
+        self.callback = callback
+        self.turns = 0
+
+    def spin_once(self, timeout_sec: float | None = None) -> None:
+        self.turns += 1
+        self.callback()
+
+
+def _signal_then_work(number: int, done: list[str]) -> Callable[[], None]:
+    def callback() -> None:
+        os.kill(os.getpid(), number)
+        sum(range(10_000))  # Python runs on after the signal: its handler runs here
+        done.append("callback finished")
+
+    return callback
+
+
+@pytest.mark.parametrize(("number", "raised"), [(signal.SIGINT, KeyboardInterrupt),
+                                                (signal.SIGTERM, Terminated)])
+def test_a_deferred_signal_lets_the_callback_finish_and_comes_after_the_turn(
+        number: int, raised: type[BaseException]) -> None:
+    done: list[str] = []
+    executor = _Executor(_signal_then_work(number, done))
+    with StopSignals() as stops:
+        stops.defer()
+        spinner = BetweenSpins(executor, stops)
+        with pytest.raises(raised) as caught:
+            spinner.spin_once(timeout_sec=0.05)
+        assert done == ["callback finished"]
+        stops.hold(caught.value)
+        assert stops.first == number
+        assert stops.exit_status(1) == 128 + number
+
+
+def test_a_second_signal_while_the_first_waits_is_raised_where_the_process_is() -> None:
+    """A tick stuck in a behaviour never ends its turn: Ctrl-C twice still stops it."""
+    reached: list[str] = []
+
+    def stuck() -> None:
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(10_000))
+        reached.append("after the first")
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(10_000))
+        reached.append("after the second")
+
+    with StopSignals() as stops:
+        stops.defer()
+        with pytest.raises(KeyboardInterrupt):
+            BetweenSpins(_Executor(stuck), stops).spin_once()
+    assert reached == ["after the first"]
+
+
+def test_once_held_a_signal_is_only_noted_and_the_spinner_raises_nothing() -> None:
+    done: list[str] = []
+    with StopSignals() as stops:
+        stops.defer()
+        stops.hold()
+        executor = _Executor(_signal_then_work(signal.SIGINT, done))
+        BetweenSpins(executor, stops).spin_once()
+        BetweenSpins(executor, stops).spin_once()
+    assert done == ["callback finished"] * 2
+    assert stops.received == [signal.SIGINT, signal.SIGINT]
+
+
+def test_the_spinner_is_the_executor_for_everything_else() -> None:
+    executor = _Executor(lambda: None)
+    with StopSignals() as stops:
+        assert BetweenSpins(executor, stops).turns == 0
+
+
+def test_a_signal_in_a_subscription_callback_of_the_events_executor_logs_no_fatal_error(
+        ros_context: Any, capfd: pytest.CaptureFixture[str]) -> None:
+    """Raised inside the callback, Ctrl-C reached rclpy's C++ ``EventsExecutor``, which logged
+    "[FATAL] Exception in 'subscriptions' callback" and a stack on stderr before it came out."""
+    from rclpy.experimental import EventsExecutor
+    from rclpy.node import Node
+
+    node = Node("stopping_test", context=ros_context)
+    publisher = node.create_publisher(Empty, "/stopping_test", 10)
+    taken: list[str] = []
+
+    def on_message(_message: Empty) -> None:
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(10_000))
+        taken.append("taken")
+
+    node.create_subscription(Empty, "/stopping_test", on_message, 10)
+    with StopSignals() as stops:
+        handlers = {number: signal.getsignal(number) for number in (signal.SIGINT,
+                                                                      signal.SIGTERM)}
+        executor = EventsExecutor(context=ros_context)
+        for number, handler in handlers.items():
+            signal.signal(number, handler)
+        executor.add_node(node)
+        stops.defer()
+        spinner = BetweenSpins(executor, stops)
+        with pytest.raises(KeyboardInterrupt):
+            for _ in range(200):
+                publisher.publish(Empty())
+                spinner.spin_once(timeout_sec=0.05)
+        stops.hold(KeyboardInterrupt())
+        executor.shutdown()
+    node.destroy_node()
+    assert taken == ["taken"]
+    assert "FATAL" not in capfd.readouterr().err
