@@ -4,6 +4,11 @@ The simulator shares no code with the executive (they share only ROS interfaces)
 the simulator's own copy of what the executive's ``bt_servicesim/ros/environment.py`` does:
 
 * discovery stays on loopback unless the user set ``ROS_AUTOMATIC_DISCOVERY_RANGE``;
+* on loopback with Fast DDS, and unless a profile was named (``FASTDDS_DEFAULT_PROFILES_FILE``,
+  also when the executive that started the simulator named its own) or lies in the working
+  directory, Fast DDS reads ``fastdds_profile.xml``: participants announce themselves and
+  reliable writers send heartbeats every 0.5 s instead of every 3 s, so that a client starting
+  beside the simulator finds it, and the latched messages it missed, without waiting 3 s;
 * the Fast DDS shared-memory segments that dead participants of this user left in ``/dev/shm``
   (``fastdds_<16 hex digits>`` and its lock file ``…_el``) are removed: a participant holds an
   exclusive ``flock`` on its lock file while it lives, so a segment whose lock this process can
@@ -24,9 +29,16 @@ import re
 import stat
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
-__all__ = ["apply_environment_defaults", "remove_dead_segments", "shut_ros_down_at_exit"]
+__all__ = ["apply_environment_defaults", "reads_the_simulators_profile", "remove_dead_segments",
+           "shut_ros_down_at_exit"]
+
+FAST_DDS_PROFILE = Path(__file__).with_name("fastdds_profile.xml")
+USER_PROFILE_VARIABLES = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE")
+USER_PROFILE_FILES = ("DEFAULT_FASTDDS_PROFILES.xml", "DEFAULT_FASTRTPS_PROFILES.xml")
+FAST_DDS_IMPLEMENTATIONS = ("rmw_fastrtps_cpp", "rmw_fastrtps_dynamic_cpp")
 
 SHARED_MEMORY = Path("/dev/shm")
 SEGMENT_LOCK = re.compile(r"^fastdds_[0-9a-f]{16}_el$")
@@ -40,11 +52,25 @@ def apply_environment_defaults() -> None:
     participant deleted at exit."""
     if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    if reads_the_simulators_profile(os.environ, working_directory=Path.cwd()):
+        os.environ[USER_PROFILE_VARIABLES[0]] = str(FAST_DDS_PROFILE)
     remove_dead_segments()
     global _at_exit_registered
     if not _at_exit_registered:
         atexit.register(shut_ros_down_at_exit)
         _at_exit_registered = True
+
+
+def reads_the_simulators_profile(environment: Mapping[str, str], *,
+                                 working_directory: Path) -> bool:
+    """Whether Fast DDS should read ``fastdds_profile.xml``: loopback discovery, Fast DDS (ROS
+    2's default), and no profile named or kept in the working directory."""
+    return (FAST_DDS_PROFILE.is_file()
+            and environment.get("ROS_AUTOMATIC_DISCOVERY_RANGE") == "LOCALHOST"
+            and environment.get("RMW_IMPLEMENTATION", FAST_DDS_IMPLEMENTATIONS[0])
+            in FAST_DDS_IMPLEMENTATIONS
+            and not any(environment.get(name) for name in USER_PROFILE_VARIABLES)
+            and not any((working_directory / name).exists() for name in USER_PROFILE_FILES))
 
 
 def remove_dead_segments(directory: Path = SHARED_MEMORY, *,

@@ -1,5 +1,5 @@
-"""``benchmarks/sim_rtf.py``: bad arguments are one line on stderr and exit status 2, before any
-process starts."""
+"""``benchmarks/sim_rtf.py`` and ``benchmarks/startup.py``: bad arguments are one line on stderr
+and exit status 2, before any process starts."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 SIM_RTF = Path(__file__).resolve().parents[2] / "benchmarks" / "sim_rtf.py"
+STARTUP = SIM_RTF.with_name("startup.py")
 
 
 @pytest.mark.parametrize(("arguments", "named"), [
@@ -24,4 +25,19 @@ def test_a_bad_argument_is_one_line_and_status_2(arguments: list[str], named: st
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("benchmarks/sim_rtf.py: error: "), lines
+    assert named in lines[0]
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--runs", "0"], "--runs must be at least 1, not 0"),
+    (["--runs", "x"], "argument --runs: invalid int value: 'x'"),
+    (["--seed", "1.5"], "argument --seed: invalid int value: '1.5'"),
+])
+def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
+                                                                 named: str) -> None:
+    done = subprocess.run([sys.executable, str(STARTUP), *arguments], capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("benchmarks/startup.py: error: "), lines
     assert named in lines[0]

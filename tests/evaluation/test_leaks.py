@@ -122,8 +122,11 @@ def test_only_this_process_environment_is_swept(tmp_path: Path,
     swept: list[bool] = []
     monkeypatch.setattr(executive_environment, "remove_dead_segments",
                         lambda *args, **kwargs: swept.append(True) or [])
+    monkeypatch.chdir(tmp_path)
     child: dict[str, str] = {}
     executive_environment.apply_localhost_defaults(child)
-    assert child == {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"} and not swept
+    assert child == {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+                     "FASTDDS_DEFAULT_PROFILES_FILE": str(executive_environment.FAST_DDS_PROFILE)}
+    assert not swept
     executive_environment.apply_localhost_defaults()
     assert swept == [True]
