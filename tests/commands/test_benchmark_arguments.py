@@ -20,11 +20,16 @@ STARTUP = SIM_RTF.with_name("startup.py")
     (["--speed", "-1"], "--speed -1.0: must be 0 or more"),
 ])
 def test_a_bad_argument_is_one_line_and_status_2(arguments: list[str], named: str) -> None:
-    done = subprocess.run([sys.executable, str(SIM_RTF), *arguments], capture_output=True,
+    _refused_in_one_line(SIM_RTF, arguments, named)
+
+
+def _refused_in_one_line(script: Path, arguments: list[str], named: str) -> None:
+    done = subprocess.run([sys.executable, str(script), *arguments], capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("benchmarks/sim_rtf.py: error: "), lines
+    assert len(lines) == 1, lines
+    assert lines[0].startswith(f"benchmarks/{script.name}: error: "), lines
     assert named in lines[0]
 
 
@@ -35,9 +40,4 @@ def test_a_bad_argument_is_one_line_and_status_2(arguments: list[str], named: st
 ])
 def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                                  named: str) -> None:
-    done = subprocess.run([sys.executable, str(STARTUP), *arguments], capture_output=True,
-                          text=True, timeout=60)
-    assert done.returncode == 2, done.stderr
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("benchmarks/startup.py: error: "), lines
-    assert named in lines[0]
+    _refused_in_one_line(STARTUP, arguments, named)
