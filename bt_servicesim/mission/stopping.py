@@ -14,6 +14,14 @@ behaviour still gives way to Ctrl-C. Once clean-up has begun, :meth:`StopSignals
 further signal from interrupting it: it is remembered, and the process still exits as it was
 told. An evaluation is stopped the same way as a run.
 
+A stop signal the process was started with ignored stays ignored, as Unix programs keep it:
+``nohup`` ignores SIGHUP so that a long evaluation outlives the terminal, and a shell ignores
+SIGINT in its background jobs. (The run handled it all the same, and ``nohup python -m
+bt_servicesim.evaluate`` stopped when its terminal closed.) A child this project starts and
+stops itself (a run's simulator, an evaluation's episodes and warm pairs, each in a session of
+its own, out of the terminal's reach) gets the stop signals back at their defaults, so that the
+SIGINT its parent stops it with is not ignored.
+
 A SIGKILL cannot be caught. A child started with :func:`parent_death_signal` (a run's
 simulator, an evaluation's episodes) gets SIGTERM from the kernel the moment its parent is gone.
 """
@@ -66,6 +74,8 @@ def parent_death_signal(parent: int) -> Callable[[], None]:
     prctl = ctypes.CDLL(None, use_errno=True).prctl
 
     def in_the_child() -> None:
+        for number in STOP_SIGNALS:  # ours to stop: what the user's shell ignored is not
+            signal.signal(number, signal.SIG_DFL)
         prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
         if os.getppid() != parent:  # the evaluation died before the request took effect
             os.kill(os.getpid(), signal.SIGTERM)
@@ -90,22 +100,27 @@ class StopSignals:
         self._previous: dict[int, Any] = {}
         self._deferred = False
         self._main = threading.current_thread() is threading.main_thread()
+        self._handled: tuple[int, ...] = ()
+        """The stop signals handled here: those the process was not started with ignored."""
 
     def __enter__(self) -> StopSignals:
         if self._main:
             self._previous = {number: signal.getsignal(number) for number in STOP_SIGNALS}
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-            signal.signal(signal.SIGTERM, _raise_terminated)
-            signal.signal(signal.SIGHUP, _raise_terminated)
+            self._handled = tuple(number for number, handler in self._previous.items()
+                                  if handler is not signal.SIG_IGN)
+            self._install(lambda number: signal.default_int_handler
+                          if number == signal.SIGINT else _raise_terminated)
         return self
+
+    def _install(self, handler_for: Callable[[int], Any]) -> None:
+        for number in self._handled:
+            signal.signal(number, handler_for(number))
 
     def defer(self) -> None:
         """From now on a stop signal is noted, and raised by :meth:`raise_deferred` (a second
         one, while the first still waits, is raised at once, wherever the process is)."""
         self._deferred = True
-        if self._main:
-            for number in STOP_SIGNALS:
-                signal.signal(number, self._defer)
+        self._install(lambda _number: self._defer)
 
     def raise_deferred(self) -> None:
         """Raise the stop signal that :meth:`defer` noted, if one came; else nothing."""
@@ -117,9 +132,7 @@ class StopSignals:
         self._deferred = False
         if stop is not None:
             self.received.insert(0, signal_of(stop))
-        if self._main:
-            for number in STOP_SIGNALS:
-                signal.signal(number, self._note)
+        self._install(lambda _number: self._note)
 
     @property
     def first(self) -> int | None:

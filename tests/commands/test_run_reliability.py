@@ -100,6 +100,34 @@ def test_a_stop_signal_ends_the_run_with_its_report_and_no_simulator_left(
     assert summary is not None and summary.statistics.message_count > 0
 
 
+def test_a_run_started_as_nohup_starts_it_outlives_its_terminal(tmp_path: Path) -> None:
+    """SIGHUP ignored at the start (``nohup``) stays ignored: the terminal closing does not
+    stop the run, Ctrl-C still does."""
+    out = tmp_path / "run"
+    process = subprocess.Popen(
+        [*RUN, "--out", str(out), "--speed", "2"], cwd=REPO, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))
+    try:
+        wait_for(mission_started(out), "the mission to start")
+        (simulator,) = children(process.pid)
+        ticks = (out / "tree_log.jsonl").read_text().count('"kind": "tick"')
+        process.send_signal(signal.SIGHUP)
+        wait_for(lambda: process.poll() is not None or (
+            out / "tree_log.jsonl").read_text().count('"kind": "tick"') > ticks,
+            "the tree to tick on after SIGHUP")
+        assert process.poll() is None and alive(simulator), process.returncode
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=60)
+        assert process.returncode == 130
+        assert report_of(out)["failure"] == "interrupted (SIGINT)"
+        wait_for(lambda: not alive(simulator), "the simulator to end", 10.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.communicate()
+
+
 def test_a_killed_run_takes_its_simulator_with_it_and_leaves_a_record(
         running: tuple[subprocess.Popen[str], int, Path]) -> None:
     process, simulator, out = running

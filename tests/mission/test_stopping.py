@@ -1,17 +1,25 @@
 """Stop signals while the node spins: raised between two turns of the executor, never inside a
-callback, and a second one at once."""
+callback, and a second one at once; a stop signal the process was started with ignored stays
+ignored, and the children the project stops itself get them back."""
 
 from __future__ import annotations
 
 import os
 import signal
-from collections.abc import Callable
+import subprocess
+import sys
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
 from std_msgs.msg import Empty
 
-from bt_servicesim.mission.stopping import BetweenSpins, StopSignals, Terminated
+from bt_servicesim.mission.stopping import (
+    BetweenSpins,
+    StopSignals,
+    Terminated,
+    parent_death_signal,
+)
 
 
 class _Executor:
@@ -124,3 +132,43 @@ def test_a_signal_in_a_subscription_callback_of_the_events_executor_logs_no_fata
     node.destroy_node()
     assert taken == ["taken"]
     assert "FATAL" not in capfd.readouterr().err
+
+
+@pytest.fixture
+def sighup_ignored() -> Iterator[None]:
+    """The process as ``nohup`` starts it: SIGHUP ignored."""
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGHUP, before)
+
+
+def test_a_stop_signal_the_process_was_started_with_ignored_stays_ignored(
+        sighup_ignored: None) -> None:
+    """``nohup python -m bt_servicesim.evaluate`` must outlive its terminal."""
+    with StopSignals() as stops:
+        for stage in ("entered", "deferred", "held"):
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN, stage
+            os.kill(os.getpid(), signal.SIGHUP)
+            sum(range(10_000))
+            {"entered": stops.defer, "deferred": stops.hold, "held": lambda: None}[stage]()
+        assert signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
+        assert stops.received == []
+    assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+
+
+def test_a_child_we_start_and_stop_gets_the_stop_signals_at_their_defaults(
+        sighup_ignored: None) -> None:
+    """Its parent stops it with a signal: what the user's shell ignored must not keep it on."""
+    program = ("import signal; print([signal.getsignal(number) is signal.SIG_IGN "
+               "for number in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)])")
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        plain, ours = (subprocess.run([sys.executable, "-c", program], capture_output=True,
+                                      text=True, timeout=60, check=True, preexec_fn=preexec)
+                       for preexec in (None, parent_death_signal(os.getpid())))
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert plain.stdout.strip() == "[True, False, True]"  # what the child would inherit
+    assert ours.stdout.strip() == "[False, False, False]"
