@@ -20,10 +20,11 @@ STARTUP = SIM_RTF.with_name("startup.py")
     (["--speed", "-1"], "--speed -1.0: must be 0 or more"),
 ])
 def test_a_bad_argument_is_one_line_and_status_2(arguments: list[str], named: str) -> None:
-    _refused_in_one_line(SIM_RTF, arguments, named)
+    refused_in_one_line(SIM_RTF, arguments, named)
 
 
-def _refused_in_one_line(script: Path, arguments: list[str], named: str) -> None:
+def refused_in_one_line(script: Path, arguments: list[str], named: str) -> None:
+    """``script`` refuses ``arguments`` with one line naming the problem and exit status 2."""
     done = subprocess.run([sys.executable, str(script), *arguments], capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 2, done.stderr
@@ -40,4 +41,4 @@ def _refused_in_one_line(script: Path, arguments: list[str], named: str) -> None
 ])
 def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                                  named: str) -> None:
-    _refused_in_one_line(STARTUP, arguments, named)
+    refused_in_one_line(STARTUP, arguments, named)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -19,6 +18,7 @@ import pytest
 from bt_servicesim.evaluation.figures_file import write_figures
 from bt_servicesim.evaluation.report import revision_note
 from bt_servicesim.evaluation.throughput import load_throughput, throughput_section
+from tests.commands.test_benchmark_arguments import refused_in_one_line
 from tests.evaluation.report_sections import report_section
 from tests.evaluation.test_evaluate import evaluate_command
 
@@ -144,11 +144,7 @@ def test_evaluate_refuses_a_bad_figures_file_before_starting(tmp_path: Path) -> 
 ])
 def test_the_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                          named: str) -> None:
-    done = subprocess.run([sys.executable, str(BENCHMARK), *arguments], capture_output=True,
-                          text=True, timeout=60)
-    assert done.returncode == 2, done.stderr
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and named in lines[0], lines
+    refused_in_one_line(BENCHMARK, arguments, named)
 
 
 
