@@ -65,7 +65,7 @@ from bt_servicesim.ros.discovery import (
     await_backend_discovery,
 )
 from bt_servicesim.ros.node import ExecutiveNode, stop_behind
-from bt_servicesim.ros.sim_clock import sim_now_s
+from bt_servicesim.ros.sim_clock import clock_now_ns, sim_now_s
 from bt_servicesim.tree.executive import Executive
 
 TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
@@ -265,7 +265,7 @@ class MissionRun:
                 if node.lockstep.periods == looked_at and time.monotonic() < next_exit_check:
                     continue
                 looked_at = node.lockstep.periods
-            now_ns = node.get_clock().now().nanoseconds
+            now_ns = clock_now_ns(node.get_clock())
             records.note_phase(executive.phase())
             view.update(executive=executive, monitor=monitor,
                         sim_time_s=(now_ns - shown_from_ns) / 1e9)

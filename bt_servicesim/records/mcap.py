@@ -54,6 +54,7 @@ from visualization_msgs.msg import MarkerArray
 from bt_servicesim.records.tree_log import TickRecord, TreeState
 from bt_servicesim.ros.messages import pose_from_msg
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
+from bt_servicesim.ros.sim_clock import clock_now_ns
 
 MCAP_NAME = "run.mcap"
 TASK_TOPIC = "/bt_servicesim/task"
@@ -275,7 +276,7 @@ class McapRecorder:
         def write(data: bytes) -> None:
             if self._stream is None:
                 return
-            now = self.node.get_clock().now().nanoseconds
+            now = clock_now_ns(self.node.get_clock())
             self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
                                      data=data, sequence=self.counts[topic])
             self.counts[topic] += 1

@@ -28,6 +28,8 @@ import json
 import reprlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from itertools import compress
+from operator import attrgetter, is_not, ne
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -41,6 +43,8 @@ FORMAT_VERSION = 1
 _SHORT = reprlib.Repr()
 _SHORT.maxstring = _SHORT.maxother = 120
 _SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 6
+_STATE = attrgetter("status", "feedback_message")
+"""A behaviour's :data:`~bt_servicesim.tree.shape.NodeState`."""
 
 
 class TreeLogError(ValueError):
@@ -112,6 +116,8 @@ class TreeLog:
         self._key_of = {id(behaviour): key
                         for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
         self._last_states: list[NodeState | None] = [None] * len(self._behaviours)
+        self._last_keys: list[str] = []
+        self._last_objects: list[Any] = []
         self._last_nodes: dict[str, NodeState] = {}
         self._last_tip: str | None = None
         self._last_values: dict[str, tuple[Any, str]] = {}
@@ -144,23 +150,21 @@ class TreeLog:
     def capture(self, *, tick: int) -> TickRecord | None:
         """What changed since the last record, or ``None`` when nothing did.
 
-        Runs after every tick, so it compares node by node against the states last written
-        without building a dictionary of the whole tree each time.
+        Runs after every tick, so the node by node comparison against the states last written
+        is made by the interpreter's built-ins (``map``, ``compress``) rather than a Python
+        loop over the whole tree: a tick changes a few of the tree's hundred and more nodes.
         """
-        last = self._last_states
-        changed_at: list[tuple[int, NodeState]] = []
-        for index, behaviour in enumerate(self._behaviours):
-            state = (behaviour.status, behaviour.feedback_message)
-            if last[index] != state:
-                changed_at.append((index, state))
+        states = list(map(_STATE, self._behaviours))
+        changed_at = list(compress(range(len(states)), map(ne, states, self._last_states)))
         tip = self._tip_key()
         values = self._blackboard_changes()
         if not changed_at and not values and tip == self._last_tip:
             return None
         changed: dict[str, NodeState] = {}
-        for index, state in changed_at:
-            key = self._keys[index]
-            last[index] = self._last_nodes[key] = changed[key] = state
+        for index in changed_at:
+            key, state = self._keys[index], states[index]
+            self._last_nodes[key] = changed[key] = state
+        self._last_states = states
         self._last_tip = tip
         return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
                           tip=tip, nodes=changed, blackboard=values)
@@ -170,9 +174,20 @@ class TreeLog:
         return None if tip is None else self._key_of.get(id(tip))
 
     def _blackboard_changes(self) -> dict[str, str | None]:
+        """The keys whose value is another object with another repr, or that went.
+
+        Keys rarely come or go, so while they stay as they were the values are compared by
+        identity with built-ins, and only the keys that hold another object are looked at.
+        """
         current = self._blackboard()
+        keys, values = list(current), list(current.values())
+        if keys == self._last_keys:
+            moved = compress(keys, map(is_not, values, self._last_objects))
+        else:
+            moved = iter(keys)
         changes: dict[str, str | None] = {}
-        for key, value in current.items():
+        for key in moved:
+            value = current[key]
             last = self._last_values.get(key)
             if last is not None and last[0] is value:
                 continue
@@ -180,9 +195,11 @@ class TreeLog:
             self._last_values[key] = (value, text)
             if last is None or last[1] != text:
                 changes[key] = text
-        for key in [key for key in self._last_values if key not in current]:
-            del self._last_values[key]
-            changes[key] = None
+        if keys != self._last_keys:
+            for key in [key for key in self._last_values if key not in current]:
+                del self._last_values[key]
+                changes[key] = None
+        self._last_keys, self._last_objects = keys, values
         return changes
 
     def _write(self, line: dict[str, Any]) -> None:

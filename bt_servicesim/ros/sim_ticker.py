@@ -32,6 +32,8 @@ from rclpy.clock import JumpThreshold, ROSClock
 from rclpy.duration import Duration
 from rclpy.node import Node
 
+from bt_servicesim.ros.sim_clock import clock_now_ns
+
 __all__ = ["SimTicker", "sim_ticker"]
 
 _LIVE: dict[int, set[SimTicker]] = {}
@@ -51,7 +53,7 @@ class SimTicker:
         self._period_ns = round(period_s * 1e9)
         self._tolerance_ns = round(self._period_ns * DUE_TOLERANCE)
         self._clock = node.get_clock()
-        self._start_ns = self._clock.now().nanoseconds
+        self._start_ns = clock_now_ns(self._clock)
         self._due_ns = self._start_ns + self._period_ns  # the first call a period on, as a timer
         self._scheduled = False
         self._cancelled = False
@@ -88,7 +90,7 @@ class SimTicker:
     def _on_clock(self, _jump: object) -> None:
         if self._scheduled or self._cancelled:
             return
-        if self._clock.now().nanoseconds + self._tolerance_ns >= self._due_ns:
+        if clock_now_ns(self._clock) + self._tolerance_ns >= self._due_ns:
             self._scheduled = True
             self.node.executor.create_task(self._fire)
 
@@ -96,7 +98,7 @@ class SimTicker:
         self._scheduled = False
         if self._cancelled:
             return
-        reached = self._clock.now().nanoseconds + self._tolerance_ns
+        reached = clock_now_ns(self._clock) + self._tolerance_ns
         if reached < self._due_ns:  # time went back after it was scheduled
             return
         periods = (reached - self._start_ns) // self._period_ns + 1
