@@ -97,6 +97,12 @@ def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, 
     return reports[0], reports[1]
 
 
+def out_of_step(report: dict[str, Any]) -> bool:
+    """Whether a run left lockstep's guarantee: it ticked a period without every message, or
+    the simulator dropped it and it ran free."""
+    return bool(report.get("lockstep_stalls") or report.get("lockstep_dropped"))
+
+
 def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
                 name: str) -> Path | None:
     """A pair whose reports differ, or a run that stalled, is evidence: both runs' directories
@@ -104,7 +110,7 @@ def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
     directory); where to, or ``None`` for a pair like any other."""
     odd = (judged(first) != judged(second) or "no report" in (first.get("failure"),
                                                               second.get("failure"))
-           or any(report.get("lockstep_stalls") for report in (first, second)))
+           or any(out_of_step(report) for report in (first, second)))
     if not odd:
         return None
     kept = Path(tempfile.mkdtemp(prefix=f"reproducibility-kept-{name}-", dir=Path.cwd()))
@@ -123,7 +129,7 @@ def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
             kept = keep_if_odd(Path(root), first, second, f"{scenario}-speed{speed:g}-{index}")
         if kept is not None:
             print(f"  kept for a look: {kept}", flush=True)
-        stalled += sum(bool(report.get("lockstep_stalls")) for report in (first, second))
+        stalled += sum(out_of_step(report) for report in (first, second))
         completed += sum(bool(report.get("completed")) for report in (first, second))
         if judged(first) == judged(second) and first.get("failure") != "no report":
             identical += 1
@@ -133,8 +139,8 @@ def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
     wall_s = time.monotonic() - started
     print(f"{scenario:8s} speed {speed:g}: {identical}/{args.pairs} pairs identical "
           f"({100.0 * identical / args.pairs:.0f}%), {wall_s:.0f} s wall; {completed} of "
-          f"{2 * args.pairs} runs completed, {stalled} ticked a period without every "
-          "message (lockstep stalls)", flush=True)
+          f"{2 * args.pairs} runs completed, {stalled} left lockstep's guarantee "
+          "(ticked a period without every message, or dropped by the simulator)", flush=True)
     for pair in differing:
         print(f"  differs ({pair['scores'][0]} vs {pair['scores'][1]}): {pair['command']}",
               flush=True)

@@ -295,6 +295,10 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
     print_ticks(ticks, start=task.pairs[0][1], end=task.pairs[-1][1])
     if report.get("lockstep_stalls"):
         print(f"  lockstep: {report['lockstep_stalls']} period(s) ticked without every message")
+    if report.get("lockstep_dropped"):
+        dropped = report["lockstep_dropped"]
+        print(f"  lockstep: the simulator dropped the run at period {dropped['period']} "
+              f"({dropped['sim_time_s']:.1f} sim s); it ran free from there")
     for line in warnings[:3]:
         print(f"  the run said: {line.strip()[:200]}")
     if len(cpu.marks) == 2:

@@ -439,12 +439,22 @@ class MissionRun:
             "traceback": TRACEBACK_NAME if self.traceback else None,
             "ticks": getattr(executive, "ticks", None),
             "lockstep_stalls": self.lockstep.stalls if self.lockstep else None,
+            "lockstep_dropped": self._lockstep_dropped(),
         }
         write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"
         print(f"mission {verdict}: score {report['score']:.1f}, "
               f"{report['sim_time_s']:.1f} s sim, {report['wall_time_s']:.1f} s wall; "
               f"report: {self.settings.out / REPORT_NAME}")
+
+    def _lockstep_dropped(self) -> dict[str, Any] | None:
+        """Where the simulator went on without this run (it then ran free and will not
+        replay): the first period it announced without waiting, and that period's sim time."""
+        dropped = self.lockstep.dropped_at if self.lockstep else None
+        if dropped is None:
+            return None
+        return {"period": int(dropped.period),
+                "sim_time_s": dropped.sim_time.sec + dropped.sim_time.nanosec / 1e9}
 
     @staticmethod
     def _spin_for(executor: Executor, seconds: float) -> None:

@@ -26,6 +26,18 @@ has passed, and what the client has then received stands for everything announce
 Answers are totals per endpoint: the client takes every answer on an endpoint it has a client
 for as its own (the evaluation runs one executive per simulator).
 
+A client the simulator gave up waiting for (this project's simulator drops one that has not
+said done within 10 s of wall time: a stopped process, a debugger's breakpoint, a starved
+machine) learns so exactly, from the periods announced: while it is joined, the
+simulator announces at most two periods past the last one it said done for (the pipeline's one
+period, and the one its done lets the simulator step). An announcement beyond that means the
+simulator went on without it, so the client stops holding (what it held is handed on at once),
+no longer says done, and follows the newest announcement as free running follows ``/clock``:
+the tree ticks on, periods it could not keep up with skipped, and the run reports that it will
+not replay (:attr:`LockstepClient.dropped_at`). Held on, it would tick every period the
+simulator, now free, raced through, hold every message of them, and fall further behind for
+ever (one run held 15 GB before it was stopped).
+
 Lockstep is an extension only this project's simulator offers: :func:`offered` finds out
 within a bounded wall time, and a backend without it (Gazebo, a real robot) is run free, on
 :class:`~bt_servicesim.ros.sim_ticker.SimTicker`, exactly as before.
@@ -72,6 +84,9 @@ the simulator still until :meth:`LockstepClient.leave`, so that what the run rep
 end does not depend on how long it takes to report."""
 STALL_WARNING_S = 10.0
 """Wall seconds a period may wait for its messages before the client ticks anyway and says so."""
+PIPELINE_REACH = 2
+"""Periods a simulator that waits for this client announces at most past the client's last done:
+the one it steps while the client ticks, and the one that done lets it step."""
 DUE_TOLERANCE_NS = 10_000_000
 """A period's sim time within this of a tick's due time counts as reaching it."""
 
@@ -138,6 +153,9 @@ class LockstepClient:
         self.stalls = 0
         """Periods ticked without every counted message (after :data:`STALL_WARNING_S`), and a
         join that ran out of :data:`JOIN_SETTLE_S` before it had taken what came before it."""
+        self.dropped_at: LockstepPeriod | None = None
+        """The first period the simulator announced without waiting for this client (it dropped
+        it); from then on the client runs free on the announcements. None while in step."""
         self._tickers: list[LockstepTicker] = []
         self._idle_periods: int | None = None
         """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
@@ -306,21 +324,42 @@ class LockstepClient:
     def leave(self) -> None:
         """Leave the lockstep: the simulator no longer waits for this client."""
         if self.client_id is not None:
-            self._done.publish(LockstepDone(client=self.client_id, leaving=True))
+            if self.dropped_at is None:
+                self._done.publish(LockstepDone(client=self.client_id, leaving=True))
             self.client_id = None
             self.traffic.on_arrival = None
             self.traffic.stop_holding()
+
+    @property
+    def in_step(self) -> bool:
+        """Whether the simulator waits for this client: joined, not left, not dropped."""
+        return self.client_id is not None and self.dropped_at is None
 
     # ---------------------------------------------------------------- period
     def _on_period(self, message: LockstepPeriod) -> None:
         last = self._pending[-1].period if self._pending else self._ticked
         if message.period <= last:
             return
+        if self.in_step and message.period > self._ticked + PIPELINE_REACH:
+            self._go_free(message)
+        if self.dropped_at is not None:
+            self._pending.clear()  # free: the newest period is the time, as /clock would be
         if not self._pending:
             self._pending_since = time.monotonic()
         self._pending.append(message)
         if self.client_id is not None:
             self._check()
+
+    def _go_free(self, message: LockstepPeriod) -> None:
+        """The simulator went on without this client: hand on what was held, run free."""
+        self.dropped_at = message
+        self.node.get_logger().warning(
+            f"lockstep: the simulator announced period {message.period} without waiting for "
+            f"this client's done for period {self._ticked + 1}: it dropped this client (it "
+            "waits a bounded wall time for a done); running free from here, so this run will "
+            "not replay")
+        self.traffic.on_arrival = None
+        self.traffic.stop_holding()
 
     def missing(self) -> list[str]:
         """What the oldest pending period still waits for, in words; empty when it may tick."""
@@ -366,8 +405,13 @@ class LockstepClient:
 
         Called on every arrival: while fewer messages have arrived than the period lacked at
         the last full look, nothing is looked at (each arrival makes up at most one)."""
-        if (not self._pending or self._scheduled or self.holding or self.client_id is None
-                or (self.traffic.arrivals < self._ready_no_sooner
+        if (not self._pending or self._scheduled or self.holding or self.client_id is None):
+            return
+        if self.dropped_at is not None:  # free: tick the newest period as it comes
+            self._scheduled = True
+            self.node.executor.create_task(self._run_period)
+            return
+        if ((self.traffic.arrivals < self._ready_no_sooner
                     and self._head_targets[0] is self._pending[0])
                 or self.missing()):
             return
@@ -377,7 +421,7 @@ class LockstepClient:
 
     def check_stalled(self) -> None:
         """Tick a period that waited too long for its messages anyway, and say what lacked."""
-        if (not self._pending or self._scheduled or self.holding or self.client_id is None
+        if (not self._pending or self._scheduled or self.holding or not self.in_step
                 or time.monotonic() - self._pending_since < STALL_WARNING_S):
             return
         self.stalls += 1
@@ -395,14 +439,17 @@ class LockstepClient:
         self._pending_since = time.monotonic()
         now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
         self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
-        self._release(period)  # on the period's clock: /clock of the next may be in already
+        in_step = self.in_step
+        if in_step:
+            self._release(period)  # on the period's clock: /clock of the next may be in already
         for ticker in list(self._tickers):
             ticker.tick_if_due(now_ns)
         if self._idle_periods is not None:
             self._idle_periods += 1
         self.periods += 1
         self._ticked = int(period.period)
-        self._publish_done(self._ticked)
+        if in_step and self.in_step:  # a tick may have learned of the drop
+            self._publish_done(self._ticked)
         self._check()  # the next period may have arrived whole meanwhile
 
     def _release(self, period: LockstepPeriod) -> None:

@@ -3,12 +3,16 @@
 A fake simulator in the test's process announces periods and publishes one topic; the
 executive's node joins its lockstep. A message of period 2 that has reached the node before
 the tick of period 1 must not be seen by that tick, and must be seen by the tick of period 2.
+A client the simulator went on without (an announcement further ahead than a simulator waiting
+for it could make) hands on what it held and ticks free, with no more done messages.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from typing import Any
 
 from rclpy.executors import SingleThreadedExecutor
@@ -44,18 +48,32 @@ def announcement(period: int, messages: int) -> LockstepPeriod:
     return message
 
 
-def test_a_message_of_the_next_period_arriving_early_is_not_seen_by_this_periods_tick(
-        ros_context: Any) -> None:
+@dataclass
+class FakeSimulator:
+    """The simulator's side of the protocol in the test's process, and a joined client."""
+
+    executor: SingleThreadedExecutor
+    writer: Any
+    announcer: Any
+    client: LockstepClient
+    seen: list[str] = field(default_factory=list)
+    seen_at_done: dict[int, list[str]] = field(default_factory=dict)
+
+    def announce(self, period: int, messages: int) -> None:
+        self.announcer.publish(announcement(period, messages))
+
+    def spin_until(self, done: Callable[[], bool], what: str) -> None:
+        spin_until(self.executor, done, what)
+
+
+@contextmanager
+def joined(ros_context: Any) -> Iterator[FakeSimulator]:
+    """A fake simulator publishing one topic, and an executive's node joined to its lockstep."""
     simulator = Node("fake_simulator", context=ros_context)
     node = ExecutiveNode("pipeline_client", context=ros_context)
     executor = SingleThreadedExecutor(context=ros_context)
     executor.add_node(simulator)
     executor.add_node(node)
-    seen: list[str] = []
-    seen_at_done: dict[int, list[str]] = {}
-
-    def on_done(done: LockstepDone) -> None:
-        seen_at_done.setdefault(int(done.period), list(seen))
 
     def on_join(_request: Any, response: Any) -> Any:
         response.client, response.joined_at = 7, announcement(0, 0)
@@ -64,25 +82,70 @@ def test_a_message_of_the_next_period_arriving_early_is_not_seen_by_this_periods
     try:
         writer = simulator.create_publisher(String, TOPIC, RELIABLE)
         announcer = simulator.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
-        simulator.create_subscription(LockstepDone, DONE_TOPIC, on_done, PROTOCOL_QOS)
         simulator.create_service(LockstepJoin, JOIN_SERVICE, on_join)
-        node.create_subscription(String, TOPIC, lambda m: seen.append(m.data), RELIABLE)
-        client = LockstepClient(node, name="pipeline")
-        spin_until(executor, lambda: writer.get_subscription_count() > 0
-                   and announcer.get_subscription_count() > 0, "matching")
-        assert client.join(executor, wait_s=10.0)
-        assert client.traffic.holding
-        writer.publish(String(data="period 1"))
-        writer.publish(String(data="period 2, early"))
-        spin_until(executor, lambda: sum(client.traffic.received.values()) == 2, "messages")
-        announcer.publish(announcement(1, 1))
-        spin_until(executor, lambda: 1 in seen_at_done, "done 1")
-        assert seen_at_done[1] == ["period 1"]
-        announcer.publish(announcement(2, 2))
-        spin_until(executor, lambda: 2 in seen_at_done, "done 2")
-        assert seen_at_done[2] == ["period 1", "period 2, early"]
-        assert client.periods == 2
+        fake = FakeSimulator(executor=executor, writer=writer, announcer=announcer,
+                             client=LockstepClient(node, name="pipeline"))
+        simulator.create_subscription(
+            LockstepDone, DONE_TOPIC,
+            lambda done: fake.seen_at_done.setdefault(int(done.period), list(fake.seen)),
+            PROTOCOL_QOS)
+        node.create_subscription(String, TOPIC, lambda m: fake.seen.append(m.data), RELIABLE)
+        fake.spin_until(lambda: writer.get_subscription_count() > 0
+                        and announcer.get_subscription_count() > 0, "matching")
+        assert fake.client.join(executor, wait_s=10.0)
+        yield fake
     finally:
         executor.shutdown()
         node.destroy_node()
         simulator.destroy_node()
+
+
+def test_a_message_of_the_next_period_arriving_early_is_not_seen_by_this_periods_tick(
+        ros_context: Any) -> None:
+    with joined(ros_context) as fake:
+        client = fake.client
+        assert client.traffic.holding
+        fake.writer.publish(String(data="period 1"))
+        fake.writer.publish(String(data="period 2, early"))
+        fake.spin_until(lambda: sum(client.traffic.received.values()) == 2, "messages")
+        fake.announce(1, 1)
+        fake.spin_until(lambda: 1 in fake.seen_at_done, "done 1")
+        assert fake.seen_at_done[1] == ["period 1"]
+        fake.announce(2, 2)
+        fake.spin_until(lambda: 2 in fake.seen_at_done, "done 2")
+        assert fake.seen_at_done[2] == ["period 1", "period 2, early"]
+        assert client.periods == 2
+
+
+def test_a_client_the_simulator_went_on_without_hands_on_what_it_held_and_runs_free(
+        ros_context: Any) -> None:
+    with joined(ros_context) as fake:
+        client = fake.client
+        ticked_at: list[float] = []
+        client.ticker(0.1, lambda: ticked_at.append(
+            client.node.get_clock().now().nanoseconds / 1e9))
+        fake.writer.publish(String(data="period 1"))
+        fake.announce(1, 1)
+        fake.spin_until(lambda: 1 in fake.seen_at_done, "done 1")
+        # two periods past the last done are what a simulator waiting for it may announce
+        fake.writer.publish(String(data="period 2"))
+        fake.announce(2, 2)
+        fake.announce(3, 2)
+        fake.spin_until(lambda: 3 in fake.seen_at_done, "done 3")
+        assert client.dropped_at is None and client.periods == 3
+        fake.writer.publish(String(data="period 4, held"))
+        fake.spin_until(lambda: sum(client.traffic.received.values()) == 3, "message 3")
+        assert fake.seen == ["period 1", "period 2"]  # held for period 4's tick
+        fake.announce(6, 3)  # three past done 3: the simulator did not wait for done 4
+        fake.spin_until(lambda: client.periods == 4, "the tick of period 6")
+        assert client.dropped_at is not None and client.dropped_at.period == 6
+        assert fake.seen == ["period 1", "period 2", "period 4, held"]
+        assert not client.traffic.holding
+        fake.writer.publish(String(data="free"))
+        fake.spin_until(lambda: fake.seen[-1] == "free", "a message handed on as it came")
+        fake.announce(7, 4)
+        fake.spin_until(lambda: client.periods == 5, "the tick of period 7")
+        assert ticked_at == [0.2, 0.3, 0.6, 0.7]  # the periods in between are skipped
+        for _ in range(10):
+            fake.executor.spin_once(timeout_sec=0.02)
+        assert sorted(fake.seen_at_done) == [0, 1, 2, 3]  # no done once dropped
