@@ -9,6 +9,14 @@ the simulator's own copy of what the executive's ``bt_servicesim/ros/environment
   directory, Fast DDS reads ``fastdds_profile.xml``: participants announce themselves and
   reliable writers send heartbeats every 0.5 s instead of every 3 s, so that a client starting
   beside the simulator finds it, and the latched messages it missed, without waiting 3 s;
+* Fast DDS publishes synchronously (``RMW_FASTRTPS_PUBLICATION_MODE=SYNCHRONOUS``, whatever the
+  user set): lockstep counts every message the simulator publishes, and a latched topic's
+  writer keeps one message. Published asynchronously, a message waits in that one-deep history
+  for Fast DDS's own thread to send it, and the next one published on the topic replaced it
+  unsent: the referee's state of one period never reached the client, which waited for it 10 s
+  before the simulator dropped it (4 of 14 runs with the user's setting ``ASYNCHRONOUS``, at
+  the join or later). Sent within ``publish``, a message is in the reader's queue before the
+  next replaces it;
 * the Fast DDS shared-memory segments that dead participants of this user left in ``/dev/shm``
   (``fastdds_<16 hex digits>`` and its lock file ``…_el``) are removed: a participant holds an
   exclusive ``flock`` on its lock file while it lives, so a segment whose lock this process can
@@ -39,6 +47,7 @@ FAST_DDS_PROFILE = Path(__file__).with_name("fastdds_profile.xml")
 USER_PROFILE_VARIABLES = ("FASTDDS_DEFAULT_PROFILES_FILE", "FASTRTPS_DEFAULT_PROFILES_FILE")
 USER_PROFILE_FILES = ("DEFAULT_FASTDDS_PROFILES.xml", "DEFAULT_FASTRTPS_PROFILES.xml")
 FAST_DDS_IMPLEMENTATIONS = ("rmw_fastrtps_cpp", "rmw_fastrtps_dynamic_cpp")
+PUBLICATION_MODE_VARIABLE = "RMW_FASTRTPS_PUBLICATION_MODE"
 
 SHARED_MEMORY = Path("/dev/shm")
 SEGMENT_LOCK = re.compile(r"^fastdds_[0-9a-f]{16}_el$")
@@ -48,10 +57,11 @@ _at_exit_registered = False
 
 
 def apply_environment_defaults() -> None:
-    """Before ``rclpy.init``: loopback discovery by default, dead segments removed, and the
-    participant deleted at exit."""
+    """Before ``rclpy.init``: loopback discovery by default, synchronous publication, dead
+    segments removed, and the participant deleted at exit."""
     if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ[PUBLICATION_MODE_VARIABLE] = "SYNCHRONOUS"  # see the module docstring
     if reads_the_simulators_profile(os.environ, working_directory=Path.cwd()):
         os.environ[USER_PROFILE_VARIABLES[0]] = str(FAST_DDS_PROFILE)
     remove_dead_segments()

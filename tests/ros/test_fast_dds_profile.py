@@ -124,3 +124,17 @@ def test_the_simulator_keeps_the_profile_its_executive_named(
     monkeypatch.delenv("FASTDDS_DEFAULT_PROFILES_FILE")
     simulator_environment.apply_environment_defaults()
     assert os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] == str(PROFILES["simulator"])
+
+
+def test_the_simulator_publishes_synchronously_whatever_the_user_set(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(simulator_environment, "remove_dead_segments", lambda *a, **k: [])
+    monkeypatch.setattr(simulator_environment, "_at_exit_registered", True)
+    for chosen in (None, "ASYNCHRONOUS", "AUTO"):
+        if chosen is None:
+            monkeypatch.delenv("RMW_FASTRTPS_PUBLICATION_MODE", raising=False)
+        else:
+            monkeypatch.setenv("RMW_FASTRTPS_PUBLICATION_MODE", chosen)
+        simulator_environment.apply_environment_defaults()
+        assert os.environ["RMW_FASTRTPS_PUBLICATION_MODE"] == "SYNCHRONOUS"
