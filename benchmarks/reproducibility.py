@@ -35,6 +35,7 @@ from typing import Any
 
 from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.evaluation.figures_file import checkout_commit, write_figures
+from bt_servicesim.evaluation.reproducibility import left_lockstep
 
 SETS = {"default": (False, ()), "random": (True, ()), "hard": (True, ("--difficulty", "hard"))}
 WALL_LIMIT_S = 1800.0
@@ -97,12 +98,6 @@ def run_pair(command: list[str], root: Path) -> tuple[dict[str, Any], dict[str, 
     return reports[0], reports[1]
 
 
-def out_of_step(report: dict[str, Any]) -> bool:
-    """Whether a run left lockstep's guarantee: it ticked a period without every message, or
-    the simulator dropped it and it ran free."""
-    return bool(report.get("lockstep_stalls") or report.get("lockstep_dropped"))
-
-
 def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
                 name: str) -> Path | None:
     """A pair whose reports differ, or a run that stalled, is evidence: both runs' directories
@@ -110,7 +105,7 @@ def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
     directory); where to, or ``None`` for a pair like any other."""
     odd = (judged(first) != judged(second) or "no report" in (first.get("failure"),
                                                               second.get("failure"))
-           or any(out_of_step(report) for report in (first, second)))
+           or any(left_lockstep(report) for report in (first, second)))
     if not odd:
         return None
     kept = Path(tempfile.mkdtemp(prefix=f"reproducibility-kept-{name}-", dir=Path.cwd()))
@@ -129,7 +124,7 @@ def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
             kept = keep_if_odd(Path(root), first, second, f"{scenario}-speed{speed:g}-{index}")
         if kept is not None:
             print(f"  kept for a look: {kept}", flush=True)
-        stalled += sum(out_of_step(report) for report in (first, second))
+        stalled += sum(left_lockstep(report) for report in (first, second))
         completed += sum(bool(report.get("completed")) for report in (first, second))
         if judged(first) == judged(second) and first.get("failure") != "no report":
             identical += 1

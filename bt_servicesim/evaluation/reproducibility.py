@@ -16,7 +16,8 @@ from typing import Any
 
 from bt_servicesim.evaluation.figures_file import read_figures
 
-__all__ = ["PairFigures", "Reproducibility", "load_reproducibility", "reproducibility_section"]
+__all__ = ["PairFigures", "Reproducibility", "left_lockstep", "load_reproducibility",
+           "reproducibility_section"]
 
 
 @dataclass(frozen=True)
@@ -71,14 +72,28 @@ def _pair_figures(entry: dict[str, Any]) -> PairFigures:
     return figures
 
 
+def left_lockstep(row: dict[str, Any]) -> bool:
+    """Whether a run that joined lockstep left its guarantee: it ticked a period without every
+    message, or the simulator dropped it and it ran free (``report.json``'s fields)."""
+    return bool(row.get("lockstep_stalls") or row.get("lockstep_dropped"))
+
+
 def reproducibility_section(rows: list[dict[str, Any]],
                             measured: Reproducibility | None) -> list[str]:
     """The report's lines: the episodes' timing, then the benchmark's figures if given."""
-    timings = [str(row.get("timing")) for row in rows if row.get("timing")]
-    lockstep = sum(timing == "lockstep" for timing in timings)
-    lines = [f"{lockstep} of {len(timings)} episodes that say how they were timed ran in "
-             "lockstep, where the same world, seed, knobs, tree and code play the same mission "
-             "at any speed and load.", ""]
+    timed = [row for row in rows if row.get("timing")]
+    lockstep = [row for row in timed if row["timing"] == "lockstep"]
+    left = [row for row in lockstep if left_lockstep(row)]
+    lines = [f"{len(lockstep) - len(left)} of {len(timed)} episodes that say how they were "
+             "timed ran in lockstep throughout, where the same world, seed, knobs, tree and "
+             "code play the same mission at any speed and load.", ""]
+    if left:
+        named = ", ".join(f"{row.get('executive')} {row.get('scenario')} seed "
+                          f"{row.get('seed')}" for row in left)
+        lines += [f"{len(left)} joined lockstep but left its guarantee on the way (a period "
+                  "ticked without every message after 10 s of wall time, or the simulator "
+                  f"went on without the run and it ran free): they may not replay ({named}).",
+                  ""]
     if measured is None:
         return [*lines, "The share of seeds that replay was not measured for this report "
                 "(`evaluate --reproducibility FILE` states the figures of "

@@ -66,10 +66,24 @@ def test_the_report_states_the_share_and_the_pairs_that_differed(tmp_path: Path)
     measured = load_reproducibility(figures(tmp_path, differing=True))
     rows = [{"timing": "lockstep"}, {"timing": "lockstep"}, {"timing": "free running"}, {}]
     lines = "\n".join(reproducibility_section(rows, measured))
-    assert "2 of 3 episodes that say how they were timed ran in lockstep" in lines
+    assert "2 of 3 episodes that say how they were timed ran in lockstep throughout" in lines
+    assert "left its guarantee" not in lines
     assert "| default | 0 | 20/20 | 100% | 40/40 |" in lines
     assert "| hard | 20 | 19/20 | 95% | 39/40 |" in lines
     assert "- `python -m bt_servicesim.run --seed 7`" in lines
+
+
+def test_episodes_that_left_lockstep_on_the_way_are_counted_out_and_named() -> None:
+    rows = [{"timing": "lockstep", "lockstep_stalls": 0, "lockstep_dropped": None},
+            {"timing": "lockstep", "lockstep_stalls": 1, "executive": "bt",
+             "scenario": "random", "seed": 4},
+            {"timing": "lockstep", "lockstep_stalls": 0, "executive": "baseline",
+             "scenario": "hard", "seed": 9,
+             "lockstep_dropped": {"period": 8, "sim_time_s": 0.8}}]
+    lines = "\n".join(reproducibility_section(rows, None))
+    assert "1 of 3 episodes that say how they were timed ran in lockstep throughout" in lines
+    assert "2 joined lockstep but left its guarantee" in lines
+    assert "(bt random seed 4, baseline hard seed 9)" in lines
 
 
 def test_without_figures_the_report_says_the_share_was_not_measured() -> None:
