@@ -12,7 +12,11 @@ it reached rclpy's C++ executor, which logged it as a fatal error before it came
 signal while the first waits for its turn is raised at once, so that a tick stuck in a
 behaviour still gives way to Ctrl-C. Once clean-up has begun, :meth:`StopSignals.hold` keeps a
 further signal from interrupting it: it is remembered, and the process still exits as it was
-told. An evaluation is stopped the same way as a run.
+told. Only a user who insists -- :data:`FORCE_AFTER` stop signals during clean-up -- ends the
+process at once (a clean-up that hung would otherwise leave only SIGKILL): the second says so,
+the third exits with 128 + the first signal, leaving the records as last written (a report
+still ``running``, as after SIGKILL) and its children to their parent-death signal. An
+evaluation is stopped the same way as a run.
 
 A stop signal the process was started with ignored stays ignored, as Unix programs keep it:
 ``nohup`` ignores SIGHUP so that a long evaluation outlives the terminal, and a shell ignores
@@ -31,6 +35,7 @@ from __future__ import annotations
 import ctypes
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable
 from types import FrameType, TracebackType
@@ -41,6 +46,8 @@ __all__ = ["STOP_SIGNALS", "BetweenSpins", "StopSignals", "Terminated", "exit_co
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
+FORCE_AFTER = 3
+"""Stop signals during clean-up after which the process ends at once (see the module docstring)."""
 
 
 class Terminated(BaseException):
@@ -99,6 +106,7 @@ class StopSignals:
         self.received: list[int] = []
         self._previous: dict[int, Any] = {}
         self._deferred = False
+        self._noted_in_clean_up = 0
         self._main = threading.current_thread() is threading.main_thread()
         self._handled: tuple[int, ...] = ()
         """The stop signals handled here: those the process was not started with ignored."""
@@ -146,6 +154,15 @@ class StopSignals:
 
     def _note(self, signal_number: int, _frame: FrameType | None) -> None:
         self.received.append(signal_number)
+        self._noted_in_clean_up += 1
+        name = signal.Signals(signal_number).name
+        if self._noted_in_clean_up == FORCE_AFTER - 1:
+            print(f"{name} during clean-up: records are being closed; one more stop signal "
+                  "ends the process at once", file=sys.stderr, flush=True)
+        elif self._noted_in_clean_up >= FORCE_AFTER:
+            print(f"stopped at once by {name} during clean-up: records not written yet are "
+                  "lost", file=sys.stderr, flush=True)
+            os._exit(128 + self.received[0])
 
     def _defer(self, signal_number: int, _frame: FrameType | None) -> None:
         if self.received:  # the first still waits for its turn: the user insists

@@ -172,3 +172,26 @@ def test_a_child_we_start_and_stop_gets_the_stop_signals_at_their_defaults(
         signal.signal(signal.SIGINT, before)
     assert plain.stdout.strip() == "[True, False, True]"  # what the child would inherit
     assert ours.stdout.strip() == "[False, False, False]"
+
+
+def test_a_user_who_insists_ends_a_clean_up_at_once_with_the_first_signals_status() -> None:
+    script = (
+        "import os, signal, sys, time\n"
+        "from bt_servicesim.mission.stopping import StopSignals\n"
+        "with StopSignals() as stops:\n"
+        "    stops.hold()\n"
+        "    for number in (signal.SIGTERM, signal.SIGINT):\n"
+        "        os.kill(os.getpid(), number)\n"
+        "        time.sleep(0.05)\n"
+        "    print('still cleaning up', flush=True)\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    time.sleep(5)\n"
+        "    print('clean-up finished', flush=True)\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60, check=False)
+    assert done.returncode == 128 + signal.SIGTERM
+    assert done.stdout == "still cleaning up\n"
+    lines = done.stderr.splitlines()
+    assert lines == ["SIGINT during clean-up: records are being closed; one more stop signal "
+                     "ends the process at once",
+                     "stopped at once by SIGINT during clean-up: records not written yet are lost"]
