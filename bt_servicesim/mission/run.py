@@ -112,9 +112,10 @@ class MissionRun:
         self.started_wall = time.monotonic()
         self.failure: str | None = None
         self.traceback: str | None = None
-        self.timing = "free running"
+        self.timing: str | None = None
+        """How the executive keeps time with the backend, as the report says it: "lockstep" or
+        "free running", None until the run has found out (a report written while it starts)."""
         self.lockstep: lockstep.LockstepClient | None = None
-        """How the executive keeps time with the backend, as the report says it."""
         self._left_lockstep = False
 
     def execute(self, *, noted: StopSignals | None = None) -> int:
@@ -332,6 +333,7 @@ class MissionRun:
         Decided before the tree sets up: in lockstep every subscription is reliable, so that
         the client can count every message the simulator announces.
         """
+        self.timing = "free running"  # until the join
         if not self._asks_for_lockstep():
             print("free running: " + ("--free-running asked for it" if self.settings.free_running
                                       else "the run keeps the system clock (--clock system)"),

@@ -126,6 +126,7 @@ def test_subscriptions_are_reliable_from_the_start_only_with_our_simulator_in_lo
                            free_running=free_running)
     run = MissionRun(settings=settings, make_executive=lambda node: None)  # type: ignore[arg-type]
     assert run.reliable_from_the_start() is reliable
+    assert run._header("running")["timing"] is None  # not known before the offer
 
 
 @pytest.mark.parametrize("code", [0, 1])
