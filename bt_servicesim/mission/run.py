@@ -447,7 +447,7 @@ class MissionRun:
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"
         print(f"mission {verdict}: score {report['score']:.1f}, "
               f"{report['sim_time_s']:.1f} s sim, {report['wall_time_s']:.1f} s wall; "
-              f"report: {self.settings.out / REPORT_NAME}")
+              f"report: {self.settings.out / REPORT_NAME}{_replay_warning(report)}")
 
     def _lockstep_dropped(self) -> dict[str, Any] | None:
         """Where the simulator went on without this run (it then ran free and will not
@@ -467,6 +467,18 @@ class MissionRun:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
+
+
+def _replay_warning(report: dict[str, Any]) -> str:
+    """What the run's last line adds when the mission may not replay, though it joined lockstep."""
+    dropped = report.get("lockstep_dropped")
+    if dropped:
+        return (f" (may not replay: the simulator dropped the run from lockstep at "
+                f"{dropped['sim_time_s']:.1f} s sim, and it ran free from there)")
+    if report.get("lockstep_stalls"):
+        return (f" (may not replay: {report['lockstep_stalls']} lockstep period(s) went on "
+                "without every message)")
+    return ""
 
 
 def outlived_time_limit(*, started_ns: int, now_ns: int, time_limit_s: float) -> bool:

@@ -150,3 +150,15 @@ def test_a_stop_signal_during_the_clean_up_still_makes_the_exit_status_say_so(
     before = signal.getsignal(signal.SIGINT)
     assert run.execute() == 130
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_the_last_line_says_when_a_lockstep_run_may_not_replay() -> None:
+    in_step = {"lockstep_stalls": 0, "lockstep_dropped": None}
+    assert mission_run._replay_warning(in_step) == ""
+    assert mission_run._replay_warning({"lockstep_stalls": None}) == ""  # free running
+    assert "2 lockstep period(s)" in mission_run._replay_warning(
+        {**in_step, "lockstep_stalls": 2})
+    dropped = mission_run._replay_warning(
+        {**in_step, "lockstep_dropped": {"period": 1388, "sim_time_s": 138.8}})
+    assert dropped == (" (may not replay: the simulator dropped the run from lockstep at "
+                       "138.8 s sim, and it ran free from there)")
