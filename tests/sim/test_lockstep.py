@@ -101,3 +101,38 @@ def test_the_simulator_runs_one_period_ahead_unless_told_to_take_turns(
     monkeypatch.setenv(LAG_VARIABLE, "2")
     with pytest.raises(SystemExit, match=f"{LAG_VARIABLE}='2': must be 0 or 1"):
         pipeline_lag()
+
+
+def test_a_join_is_answered_once_every_reader_acknowledged_what_was_published(
+        ros_context: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    """What the simulator sent before a join must be in the client's readers before the answer
+    (docs/simulator.md, "Lockstep"): every publisher is waited on, within one deadline; a
+    reader that does not acknowledge in time does not keep the client out."""
+    from rclpy.publisher import Publisher
+    from servicesim_competition.srv import LockstepJoin
+    from std_msgs.msg import String
+
+    from servicesim_sim import lockstep
+
+    node = Node("acknowledged_join", context=ros_context)
+    asked: list[tuple[str, float]] = []
+
+    def wait_for_all_acked(publisher: Publisher, timeout: Any) -> bool:
+        asked.append((publisher.topic_name, timeout.nanoseconds / 1e9))
+        return publisher.topic_name != "/stuck"
+
+    monkeypatch.setattr(Publisher, "wait_for_all_acked", wait_for_all_acked)
+    try:
+        server = lockstep.LockstepServer(node)
+        node.create_publisher(String, "/first", 10)
+        answer = server._on_join(LockstepJoin.Request(name="a"), LockstepJoin.Response())
+        assert sorted(topic for topic, _ in asked) == sorted(
+            publisher.topic_name for publisher in node.publishers)
+        assert all(0.0 < timeout <= lockstep.JOIN_ACK_WAIT_S for _, timeout in asked)
+        assert answer.client == 1
+        asked.clear()
+        node.create_publisher(String, "/stuck", 10)
+        answer = server._on_join(LockstepJoin.Request(name="b"), LockstepJoin.Response())
+        assert ("/stuck" in {topic for topic, _ in asked}) and answer.client == 2
+    finally:
+        node.destroy_node()
