@@ -35,7 +35,7 @@ from typing import Any
 
 from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.evaluation.figures_file import checkout_commit, write_figures
-from bt_servicesim.evaluation.reproducibility import left_lockstep
+from bt_servicesim.mission.report import left_lockstep
 
 SETS = {"default": (False, ()), "random": (True, ()), "hard": (True, ("--difficulty", "hard"))}
 WALL_LIMIT_S = 1800.0

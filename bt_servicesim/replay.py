@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TextIO
 
 from bt_servicesim.cli import OneLineArgumentParser, interruptible
+from bt_servicesim.mission.report import replay_caveat
 from bt_servicesim.mission.settings import REPORT_NAME
 from bt_servicesim.records.tree_log import (
     LOG_NAME,
@@ -137,7 +138,8 @@ def reproduce_command(run: Path) -> str | None:
     command = report.get("reproduce") if isinstance(report, dict) else None
     if not command:
         return None
-    return command if report.get("timing") == "lockstep" else f"{command} (ran free: may differ)"
+    caveat = replay_caveat(report)
+    return command if caveat is None else f"{command} ({caveat}: may differ)"
 
 
 if __name__ == "__main__":

@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from bt_servicesim.evaluation.figures_file import read_figures
+from bt_servicesim.mission.report import left_lockstep
 
-__all__ = ["PairFigures", "Reproducibility", "left_lockstep", "load_reproducibility",
-           "reproducibility_section"]
+__all__ = ["PairFigures", "Reproducibility", "load_reproducibility", "reproducibility_section"]
 
 
 @dataclass(frozen=True)
@@ -70,12 +70,6 @@ def _pair_figures(entry: dict[str, Any]) -> PairFigures:
     if not 0 <= figures.identical <= figures.pairs or figures.pairs < 1:
         raise ValueError(f"{figures.identical} identical of {figures.pairs} pairs")
     return figures
-
-
-def left_lockstep(row: dict[str, Any]) -> bool:
-    """Whether a run that joined lockstep left its guarantee: it ticked a period without every
-    message, or the simulator dropped it and it ran free (``report.json``'s fields)."""
-    return bool(row.get("lockstep_stalls") or row.get("lockstep_dropped"))
 
 
 def reproducibility_section(rows: list[dict[str, Any]],

@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["read_report", "write_report"]
+__all__ = ["left_lockstep", "read_report", "replay_caveat", "write_report"]
 
 
 def write_report(path: Path, report: dict[str, Any]) -> None:
@@ -40,3 +40,23 @@ def read_report(path: Path) -> dict[str, Any] | None:
     except (OSError, ValueError):
         return None
     return report if isinstance(report, dict) else None
+
+
+def left_lockstep(report: dict[str, Any]) -> bool:
+    """Whether a run that joined lockstep left its guarantee on the way: it ticked a period
+    without every message, or the simulator dropped it and it ran free from there."""
+    return bool(report.get("lockstep_stalls") or report.get("lockstep_dropped"))
+
+
+def replay_caveat(report: dict[str, Any]) -> str | None:
+    """Why the report's ``reproduce`` command may play another mission, in words; None for a
+    run that was in lockstep from start to end."""
+    if report.get("timing") != "lockstep":
+        return "ran free"
+    dropped = report.get("lockstep_dropped")
+    if isinstance(dropped, dict):
+        return (f"the simulator dropped the run from lockstep at {dropped.get('sim_time_s')} "
+                "s sim, and it ran free from there")
+    if report.get("lockstep_stalls"):
+        return f"{report['lockstep_stalls']} lockstep period(s) went on without every message"
+    return None

@@ -45,7 +45,7 @@ from servicesim_competition.srv import NewTask
 from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_COMPLETED, EXIT_FAILED
 from bt_servicesim.mission.progress import ProgressView
 from bt_servicesim.mission.referee_monitor import REFEREE_TOPIC, RefereeMonitor
-from bt_servicesim.mission.report import write_report
+from bt_servicesim.mission.report import replay_caveat, write_report
 from bt_servicesim.mission.run_records import RunRecords
 from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.simulator_process import SimulatorProcess
@@ -471,14 +471,8 @@ class MissionRun:
 
 def _replay_warning(report: dict[str, Any]) -> str:
     """What the run's last line adds when the mission may not replay, though it joined lockstep."""
-    dropped = report.get("lockstep_dropped")
-    if dropped:
-        return (f" (may not replay: the simulator dropped the run from lockstep at "
-                f"{dropped['sim_time_s']:.1f} s sim, and it ran free from there)")
-    if report.get("lockstep_stalls"):
-        return (f" (may not replay: {report['lockstep_stalls']} lockstep period(s) went on "
-                "without every message)")
-    return ""
+    caveat = replay_caveat(report) if report.get("timing") == "lockstep" else None
+    return f" (may not replay: {caveat})" if caveat else ""
 
 
 def outlived_time_limit(*, started_ns: int, now_ns: int, time_limit_s: float) -> bool:

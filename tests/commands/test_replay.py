@@ -7,6 +7,7 @@ the live tree drawn at the same tick. The live view draws to a stream that says 
 from __future__ import annotations
 
 import io
+import json
 import os
 import signal
 import subprocess
@@ -189,3 +190,19 @@ def test_ctrl_c_while_stepping_is_one_line_and_exit_130(tmp_path: Path) -> None:
             process.communicate()
     assert process.returncode == 130
     assert stderr == "python -m bt_servicesim.replay: stopped by SIGINT\n"
+
+
+@pytest.mark.parametrize(("fields", "shown"), [
+    ({"timing": "lockstep", "lockstep_stalls": 0, "lockstep_dropped": None}, "python -m x"),
+    ({"timing": "free running"}, "python -m x (ran free: may differ)"),
+    ({"timing": "lockstep", "lockstep_stalls": 3},
+     "python -m x (3 lockstep period(s) went on without every message: may differ)"),
+    ({"timing": "lockstep", "lockstep_stalls": 0,
+      "lockstep_dropped": {"period": 8, "sim_time_s": 0.8}},
+     "python -m x (the simulator dropped the run from lockstep at 0.8 s sim, and it ran free "
+     "from there: may differ)"),
+], ids=["lockstep throughout", "free running", "stalled", "dropped"])
+def test_the_command_that_plays_a_mission_again_says_when_it_may_differ(
+        tmp_path: Path, fields: dict[str, object], shown: str) -> None:
+    (tmp_path / "report.json").write_text(json.dumps({"reproduce": "python -m x", **fields}))
+    assert replay.reproduce_command(tmp_path) == shown

@@ -153,9 +153,10 @@ def test_a_stop_signal_during_the_clean_up_still_makes_the_exit_status_say_so(
 
 
 def test_the_last_line_says_when_a_lockstep_run_may_not_replay() -> None:
-    in_step = {"lockstep_stalls": 0, "lockstep_dropped": None}
+    in_step = {"timing": "lockstep", "lockstep_stalls": 0, "lockstep_dropped": None}
     assert mission_run._replay_warning(in_step) == ""
-    assert mission_run._replay_warning({"lockstep_stalls": None}) == ""  # free running
+    free = {"timing": "free running", "lockstep_stalls": None}
+    assert mission_run._replay_warning(free) == ""  # it said so at start-up
     assert "2 lockstep period(s)" in mission_run._replay_warning(
         {**in_step, "lockstep_stalls": 2})
     dropped = mission_run._replay_warning(
