@@ -32,6 +32,7 @@ from bt_servicesim.evaluation.summary import (
     unplayed,
 )
 from bt_servicesim.evaluation.throughput import throughput_section
+from bt_servicesim.mission.report import replay_caveat
 from bt_servicesim.mission.settings import EXECUTIVES
 
 
@@ -234,9 +235,11 @@ def failure_table(rows: list[dict[str, Any]], *, tree: Path | None = None) -> li
 def _rerun(executive: str, scenario: str, group: list[dict[str, Any]], *,
            tree: Path | None = None) -> str:
     """The run options that play the group's episodes again: the tree, seeds, then the set's
-    knobs."""
+    knobs; a seed whose episode left lockstep on the way says that its replay may differ."""
     seeds = sorted({row.get("episode_seed") for row in group}, key=lambda s: (s is None, s))
-    tasks = ", ".join("the shipped task" if seed is None else f"`--seed {seed}`"
+    left = {row.get("episode_seed") for row in group if row.get("timing") and replay_caveat(row)}
+    tasks = ", ".join(("the shipped task" if seed is None else f"`--seed {seed}`")
+                      + (" (left lockstep on the way: may differ)" if seed in left else "")
                       for seed in seeds)
     scenario_set = SCENARIO_SETS.get(scenario)
     knobs = " ".join(f"`--sim-arg={argument}`"

@@ -23,3 +23,12 @@ def test_failed_episodes_name_their_seeds_and_the_sets_knobs() -> None:
     assert "--seed 7" not in hard  # it completed
     default = next(line for line in table if "| default |" in line)
     assert default.endswith("| `--executive bt` the shipped task |")
+
+
+def test_a_seed_whose_episode_left_lockstep_says_its_replay_may_differ() -> None:
+    dropped = {**row("random", 5), "timing": "lockstep", "lockstep_stalls": 0,
+               "lockstep_dropped": {"period": 8, "sim_time_s": 0.8}}
+    in_step = {**row("random", 6), "timing": "lockstep", "lockstep_stalls": 0,
+               "lockstep_dropped": None}
+    line = next(line for line in failure_table([dropped, in_step]) if "| random |" in line)
+    assert "`--seed 5` (left lockstep on the way: may differ), `--seed 6` |" in line
