@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from bt_servicesim.mission.stopping import parent_death_signal
+
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -43,7 +45,8 @@ class Simulator:
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "servicesim_sim", "--speed", repr(speed), *arguments],
                 stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                start_new_session=True)
+                start_new_session=True,  # stopped with SIGINT, which it must not ignore:
+                preexec_fn=parent_death_signal(os.getpid()))  # defaults, and dies with us
 
     def check_running(self) -> None:
         if self.process.poll() is not None:

@@ -8,6 +8,7 @@ placed), so a world that loads but cannot be played is one line too. The argumen
 A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator with status 0
 (:func:`servicesim_sim.node.run_simulator`); one that comes while it is still starting (its
 imports, the world, ROS) ends it in one line with 128 + the signal, as an interrupted command.
+One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from collections.abc import Sequence
 from types import FrameType
 
 from servicesim_sim.arguments import EXIT_BAD_INPUT, PROG, build_parser
-from servicesim_sim.stop_signals import STOP_SIGNALS
+from servicesim_sim.stop_signals import handled, note_ignored_at_start
 
 
 class StoppedWhileStarting(BaseException):
@@ -37,7 +38,8 @@ def _stopped_while_starting(signal_number: int, _frame: FrameType | None) -> Non
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    for number in STOP_SIGNALS:  # until run_simulator puts its own in place
+    note_ignored_at_start()
+    for number in handled():  # until run_simulator puts its own in place
         signal.signal(number, _stopped_while_starting)
     try:
         return _play(args)

@@ -87,7 +87,7 @@ from servicesim_sim.pose_messages import (
 from servicesim_sim.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.scenario import make_scenario
 from servicesim_sim.settings import SimSettings
-from servicesim_sim.stop_signals import STOP_SIGNALS
+from servicesim_sim.stop_signals import STOP_SIGNALS, handled
 
 RCLError = rclpy_implementation.RCLError
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
@@ -809,7 +809,7 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
     resets: EpisodeResets | None = None
     simulator: SimulatorNode | None = None
     try:
-        for number in STOP_SIGNALS:
+        for number in handled():  # those the process was started with ignored stay ignored
             signal.signal(number, stop)
         executor = DrainingExecutor()
         resets = EpisodeResets(episodes_ros_node())

@@ -111,3 +111,31 @@ def test_guest_path_straight_reaches_the_guest_and_trail_is_the_default() -> Non
     straight = difficulty_from(parser.parse_args(["--guest-path", "straight",
                                                   "--difficulty", "hard"]))
     assert (straight.guest_path, straight.drift_scale) == ("straight", 0.25)
+
+
+def test_a_stop_signal_the_simulator_was_started_with_ignored_stays_ignored(
+        tmp_path: Path) -> None:
+    """``nohup python -m servicesim_sim`` outlives its terminal: SIGHUP, ignored from the
+    start, leaves it running; Ctrl-C still stops it."""
+    def as_nohup_starts_it() -> None:
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    log = tmp_path / "sim.log"
+    with log.open("wb") as stream:
+        process = subprocess.Popen([*SIM, "--speed", "1"], stdout=stream,
+                                   stderr=subprocess.STDOUT, preexec_fn=as_nohup_starts_it)
+    try:
+        deadline = time.monotonic() + 60
+        while b"world " not in log.read_bytes():
+            assert time.monotonic() < deadline and process.poll() is None, log.read_text()
+            time.sleep(0.1)
+        process.send_signal(signal.SIGHUP)
+        time.sleep(1.0)
+        assert process.poll() is None, log.read_text()[-2000:]
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=30) == 0, log.read_text()[-2000:]
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
