@@ -54,9 +54,9 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.VOLATILE)
 GATE_WAIT_S = 0.05
+"""Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
 JOIN_ACK_WAIT_S = 1.0
 """Wall seconds a join waits at most for every reader to acknowledge what was published."""
-"""Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
 LOOK_EVERY_PERIODS = 10
 """In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
 request; at least this often it looks for other work (a join, a request from outside)."""
