@@ -32,7 +32,7 @@ from bt_servicesim.evaluation.summary import (
     unplayed,
 )
 from bt_servicesim.evaluation.throughput import throughput_section
-from bt_servicesim.mission.report import replay_caveat
+from bt_servicesim.mission.report import left_lockstep
 from bt_servicesim.mission.settings import EXECUTIVES
 
 
@@ -237,15 +237,23 @@ def _rerun(executive: str, scenario: str, group: list[dict[str, Any]], *,
     """The run options that play the group's episodes again: the tree, seeds, then the set's
     knobs; a seed whose episode left lockstep on the way says that its replay may differ."""
     seeds = sorted({row.get("episode_seed") for row in group}, key=lambda s: (s is None, s))
-    left = {row.get("episode_seed") for row in group if row.get("timing") and replay_caveat(row)}
-    tasks = ", ".join(("the shipped task" if seed is None else f"`--seed {seed}`")
-                      + (" (left lockstep on the way: may differ)" if seed in left else "")
+    notes = {row.get("episode_seed"): _replay_note(row) for row in group}
+    tasks = ", ".join(("the shipped task" if seed is None else f"`--seed {seed}`") + notes[seed]
                       for seed in seeds)
     scenario_set = SCENARIO_SETS.get(scenario)
     knobs = " ".join(f"`--sim-arg={argument}`"
                      for argument in (scenario_set.sim_args if scenario_set else ()))
     own = f" `--tree {tree}`" if tree is not None and executive == "bt" else ""
     return f"`--executive {executive}`{own} {tasks} {knobs}".strip()
+
+
+def _replay_note(row: dict[str, Any]) -> str:
+    """What a seed's rerun adds when its episode may not play again as it did."""
+    if not row.get("timing"):
+        return ""
+    if row["timing"] != "lockstep":
+        return " (ran free: may differ)"
+    return " (left lockstep on the way: may differ)" if left_lockstep(row) else ""
 
 
 def _checkpoints_done(row: dict[str, Any]) -> str:

@@ -82,8 +82,9 @@ def reproducibility_section(rows: list[dict[str, Any]],
              "timed ran in lockstep throughout, where the same world, seed, knobs, tree and "
              "code play the same mission at any speed and load.", ""]
     if left:
-        named = ", ".join(f"{row.get('executive')} {row.get('scenario')} seed "
-                          f"{row.get('seed')}" for row in left)
+        named = ", ".join(f"{row.get('executive')} {row.get('scenario')} "
+                          + ("the shipped task" if row.get("seed") is None
+                             else f"seed {row.get('seed')}") for row in left)
         lines += [f"{len(left)} joined lockstep but left its guarantee on the way (a period "
                   "ticked without every message after 10 s of wall time, or the simulator "
                   f"went on without the run and it ran free): they may not replay ({named}).",

@@ -75,15 +75,17 @@ def test_the_report_states_the_share_and_the_pairs_that_differed(tmp_path: Path)
 
 def test_episodes_that_left_lockstep_on_the_way_are_counted_out_and_named() -> None:
     rows = [{"timing": "lockstep", "lockstep_stalls": 0, "lockstep_dropped": None},
+            {"timing": "lockstep", "lockstep_stalls": 2, "executive": "bt",
+             "scenario": "default", "seed": None},
             {"timing": "lockstep", "lockstep_stalls": 1, "executive": "bt",
              "scenario": "random", "seed": 4},
             {"timing": "lockstep", "lockstep_stalls": 0, "executive": "baseline",
              "scenario": "hard", "seed": 9,
              "lockstep_dropped": {"period": 8, "sim_time_s": 0.8}}]
     lines = "\n".join(reproducibility_section(rows, None))
-    assert "1 of 3 episodes that say how they were timed ran in lockstep throughout" in lines
-    assert "2 joined lockstep but left its guarantee" in lines
-    assert "(bt random seed 4, baseline hard seed 9)" in lines
+    assert "1 of 4 episodes that say how they were timed ran in lockstep throughout" in lines
+    assert "3 joined lockstep but left its guarantee" in lines
+    assert "(bt default the shipped task, bt random seed 4, baseline hard seed 9)" in lines
 
 
 def test_without_figures_the_report_says_the_share_was_not_measured() -> None:
