@@ -22,7 +22,7 @@ from servicesim_sim.navigation import (
     Navigator,
     PolylinePath,
 )
-from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length
+from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length, step_weights
 from servicesim_sim.world import OccupancyMap
 
 RESOLUTION = 0.05
@@ -382,6 +382,19 @@ def test_plan_avoids_a_marked_person_and_static_only_ignores_them() -> None:
     assert closest >= 0.3 + 0.25
     straight = planner.plan((1.0, 1.6), (11.0, 1.6), with_people=False)
     assert straight.waypoints == [(1.0, 1.6), (11.0, 1.6)]
+
+
+def test_the_graph_reweighs_only_the_marked_cells_steps_to_the_same_weights() -> None:
+    costmap = Costmap(door_map(), lidar=MARK_AT_ANY_RANGE)
+    graph = Planner(costmap).graph
+    costmap.observe(1.0, 3.0, 0.0, [(3.0, 3.0), (3.5, 1.2), (8.0, 4.0)], now=0.0)
+    assert costmap.marks  # the people's costs differ from the static layer's somewhere
+    for costs in (costmap.costs(), costmap.static, costmap.costs()):
+        every_step = step_weights(costs.ravel()[graph.targets], graph.lengths, cost_weight=4.0)
+        weighted = graph.weighted(costs, cost_weight=4.0)
+        assert np.array_equal(weighted.data, every_step)
+        assert np.array_equal(weighted.indices, graph.targets)
+    assert np.isinf(every_step).any() and (every_step > graph.lengths).any()
 
 
 # --------------------------------------------------------------------------- navigator
