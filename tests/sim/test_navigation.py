@@ -22,7 +22,7 @@ from servicesim_sim.navigation import (
     Navigator,
     PolylinePath,
 )
-from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length, step_weights
+from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length
 from servicesim_sim.world import OccupancyMap
 
 RESOLUTION = 0.05
@@ -390,7 +390,9 @@ def test_the_graph_reweighs_only_the_marked_cells_steps_to_the_same_weights() ->
     costmap.observe(1.0, 3.0, 0.0, [(3.0, 3.0), (3.5, 1.2), (8.0, 4.0)], now=0.0)
     assert costmap.marks  # the people's costs differ from the static layer's somewhere
     for costs in (costmap.costs(), costmap.static, costmap.costs()):
-        every_step = step_weights(costs.ravel()[graph.targets], graph.lengths, cost_weight=4.0)
+        entered = costs.ravel()[graph.targets].astype(np.float64)  # every step weighed anew
+        every_step = np.where(entered >= INSCRIBED, np.inf,
+                              graph.lengths * (1.0 + 4.0 * entered / MAX_INFLATED))
         weighted = graph.weighted(costs, cost_weight=4.0)
         assert np.array_equal(weighted.data, every_step)
         assert np.array_equal(weighted.indices, graph.targets)
