@@ -29,6 +29,7 @@ from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, TREE_TOPIC, McapRecor
 from bt_servicesim.records.trajectory import (
     LATCHED,
     ROBOT_COLOUR,
+    MapImage,
     TrajectoryRecorder,
     boxes_from_blackboard,
     boxes_from_tree_log,
@@ -291,3 +292,25 @@ def test_a_run_loads_matplotlib_only_to_draw() -> None:
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
                           timeout=120, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_the_map_is_cut_to_its_known_cells_and_the_frames_margin() -> None:
+    """The picture draws only the part of the map it can show: the known cells, the frame's
+    margin around them (still the map's own cells), nothing beyond the map's edge."""
+    cells = np.full((40, 60), -1, dtype=np.int8)
+    cells[10:20, 30:59] = 0
+    cells[12, 40] = 100
+    whole = MapImage(cells=cells, origin=(-5.0, -2.0), resolution=0.5)
+    part = whole.known_part(margin_m=1.0)  # 1 m = 2 cells, and one more
+    assert part.cells.shape == (10 + 2 * 3, 60 - 27)  # cut at the map's right edge
+    assert part.origin == (-5.0 + 27 * 0.5, -2.0 + 7 * 0.5)
+    assert np.array_equal(part.cells, cells[7:23, 27:60])
+    assert part.known_bounds() == whole.known_bounds()
+    pixels = part.grey_pixels()
+    assert pixels.dtype == np.uint8 and pixels.shape == (*part.cells.shape, 3)
+    assert pixels[12 - 7, 40 - 27].tolist() == [0, 0, 0]
+    assert pixels[15 - 7, 35 - 27].tolist() == [255, 255, 255]
+    assert pixels[0, 0].tolist() == [217, 217, 217]  # unknown: light grey (0.85)
+    unknown = MapImage(cells=np.full((4, 4), -1, dtype=np.int8), origin=(0.0, 0.0),
+                       resolution=1.0)
+    assert unknown.known_part(margin_m=1.0) is unknown
