@@ -9,11 +9,12 @@ themselves; their values are never overwritten.
 
 On loopback it also gives Fast DDS two shorter periods (``fastdds_profile.xml``, the default
 profile unless the user names one with ``FASTDDS_DEFAULT_PROFILES_FILE`` or keeps one in the
-working directory): participants announce themselves and reliable writers ask their readers
-what they lack every 0.5 s instead of every 3 s. With Fast DDS's own periods, one run's start in
-about seven waited 3 s for the simulator's participant, whose first announcements it had
-missed, and one in twelve waited 2.7 s at the lockstep join for a latched message sent again
-only at the next heartbeat (docs/evaluation.md, "Fast DDS's periods"). rmw_fastrtps still puts its
+working directory): participants announce themselves every 0.5 s and reliable writers ask their
+readers what they lack every 0.1 s, instead of every 3 s. With Fast DDS's own periods, one run's
+start in about seven waited 3 s for the simulator's participant, whose first announcements it
+had missed, and one in twelve waited 2.7 s at the lockstep join for a latched message sent again
+only at the next heartbeat; and every join waited for a heartbeat before the simulator had the
+acknowledgements it answers a join after (docs/evaluation.md, "Fast DDS's periods"). rmw_fastrtps still puts its
 loopback-only transports and every ROS QoS on top of the profile.
 
 On loopback, rmw_fastrtps gives every participant (one per process) Fast DDS's shared-memory

@@ -6,9 +6,11 @@ the simulator's own copy of what the executive's ``bt_servicesim/ros/environment
 * discovery stays on loopback unless the user set ``ROS_AUTOMATIC_DISCOVERY_RANGE``;
 * on loopback with Fast DDS, and unless a profile was named (``FASTDDS_DEFAULT_PROFILES_FILE``,
   also when the executive that started the simulator named its own) or lies in the working
-  directory, Fast DDS reads ``fastdds_profile.xml``: participants announce themselves and
-  reliable writers send heartbeats every 0.5 s instead of every 3 s, so that a client starting
-  beside the simulator finds it, and the latched messages it missed, without waiting 3 s;
+  directory, Fast DDS reads ``fastdds_profile.xml``: participants announce themselves every
+  0.5 s and reliable writers send heartbeats every 0.1 s, instead of every 3 s, so that a client
+  starting beside the simulator finds it, and the latched messages it missed, without waiting
+  3 s, and a join is answered as soon as the client's readers have acknowledged what they hold
+  (they acknowledge when a heartbeat asks);
 * Fast DDS publishes synchronously (``RMW_FASTRTPS_PUBLICATION_MODE=SYNCHRONOUS``, whatever the
   user set): lockstep counts every message the simulator publishes, and a latched topic's
   writer keeps one message. Published asynchronously, a message waits in that one-deep history

@@ -26,7 +26,8 @@ JUDGES: dict[str, Callable[..., bool]] = {
     "executive": executive_environment.uses_the_projects_profile,
     "simulator": simulator_environment.reads_the_simulators_profile,
 }
-HALF_A_SECOND = {"sec": "0", "nanosec": "500000000"}
+PERIODS = {"/participant/rtps/builtin/discovery_config/leaseAnnouncement": "500000000",
+           "/data_writer/times/heartbeat_period": "100000000"}  # ns
 
 
 def _settings(path: Path) -> dict[str, str]:
@@ -47,11 +48,9 @@ def _settings(path: Path) -> dict[str, str]:
 @pytest.mark.parametrize("process", PROFILES)
 def test_the_profile_sets_only_the_announcement_and_heartbeat_periods(process: str) -> None:
     """Nothing about transports or addresses: rmw_fastrtps keeps traffic on loopback."""
-    announcement = "/participant/rtps/builtin/discovery_config/leaseAnnouncement"
-    heartbeat = "/data_writer/times/heartbeat_period"
     assert _settings(PROFILES[process]) == {
-        f"{where}/{unit}": value for where in (announcement, heartbeat)
-        for unit, value in HALF_A_SECOND.items()}
+        f"{where}/{unit}": value for where, nanoseconds in PERIODS.items()
+        for unit, value in (("sec", "0"), ("nanosec", nanoseconds))}
 
 
 @pytest.mark.parametrize("process", PROFILES)
