@@ -14,8 +14,8 @@ readers what they lack every 0.1 s, instead of every 3 s. With Fast DDS's own pe
 start in about seven waited 3 s for the simulator's participant, whose first announcements it
 had missed, and one in twelve waited 2.7 s at the lockstep join for a latched message sent again
 only at the next heartbeat; and every join waited for a heartbeat before the simulator had the
-acknowledgements it answers a join after (docs/evaluation.md, "Fast DDS's periods"). rmw_fastrtps still puts its
-loopback-only transports and every ROS QoS on top of the profile.
+acknowledgements it answers a join after (docs/evaluation.md, "Fast DDS's periods").
+rmw_fastrtps still puts its loopback-only transports and every ROS QoS on top of the profile.
 
 On loopback, rmw_fastrtps gives every participant (one per process) Fast DDS's shared-memory
 transport: a segment in ``/dev/shm`` (``fastdds_<16 hex digits>`` and its lock file ``…_el``,

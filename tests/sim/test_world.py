@@ -265,6 +265,23 @@ def test_sixteen_bit_images_scale_by_their_full_range(tmp_path: Path) -> None:
         assert occupancy.grid.tolist() == [expected], mode
 
 
+@pytest.mark.parametrize(("mode", "negate"), list(EXPECTED))
+def test_a_grey_map_reads_as_the_same_image_in_colour_does(tmp_path: Path, mode: str,
+                                                           negate: int) -> None:
+    """8-bit grey images are read without a colour copy; every grey level must still give the
+    cell the mean of the three colour channels gives."""
+    levels = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    grey_dir, colour_dir = tmp_path / "grey", tmp_path / "colour"
+    grey_dir.mkdir()
+    colour_dir.mkdir()
+    grey = load_map(write_map(grey_dir, Image.fromarray(levels, mode="L"), mode=mode,
+                              negate=negate))
+    colour = load_map(write_map(colour_dir, Image.fromarray(levels, mode="L").convert("RGB"),
+                                suffix="png", mode=mode, negate=negate))
+    assert np.array_equal(grey.grid, colour.grid)
+    assert len(np.unique(grey.grid)) > 2
+
+
 def test_area_box_geometry() -> None:
     box = AreaBox(min_x=1.0, min_y=2.0, max_x=4.0, max_y=3.0)
     assert box.centre == (2.5, 2.5) and (box.width, box.height) == (3.0, 1.0)
