@@ -224,12 +224,17 @@ class MissionRun:
             self.traceback = "".join(traceback.format_exception(error))
             code = EXIT_FAILED
         stops.hold()
+        simulator = self.simulator if self.owns_simulator else None
         if self.owns_simulator:
             self._leave_lockstep()
-            if self.simulator is not None:
-                self.simulator.stop()
-        records.finish(title=self._title(monitor),
-                       trajectory=self.settings.trajectory == "always" or code != EXIT_COMPLETED)
+        if simulator is not None:
+            simulator.ask_to_stop()  # it shuts down on the other core while the records close
+        try:
+            records.finish(title=self._title(monitor), trajectory=(
+                self.settings.trajectory == "always" or code != EXIT_COMPLETED))
+        finally:
+            if simulator is not None:
+                simulator.stop()
         self._finish(monitor, code, executive)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()

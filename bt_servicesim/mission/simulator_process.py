@@ -54,6 +54,7 @@ class SimulatorProcess:
         self.command += list(extra_args)
         self.log_path = log_path
         self._process: subprocess.Popen[bytes] | None = None
+        self._asked = False  # SIGINT sent by ask_to_stop
 
     @classmethod
     def for_run(cls, settings: RunSettings, sim_args: tuple[str, ...], *,
@@ -111,11 +112,20 @@ class SimulatorProcess:
             return "no simulator output"
         return lines[-1].strip() if lines else "no simulator output"
 
+    def ask_to_stop(self) -> None:
+        """SIGINT, without waiting: the simulator shuts down while the caller finishes its own
+        work, then :meth:`stop` waits for it."""
+        if self._process is not None and self._process.poll() is None:
+            self._process.send_signal(signal.SIGINT)
+            self._asked = True
+
     def stop(self, *, grace_s: float = 5.0) -> None:
-        """SIGINT, then SIGKILL if it does not exit within ``grace_s``."""
+        """SIGINT (unless :meth:`ask_to_stop` sent it), then SIGKILL if it does not exit within
+        ``grace_s``."""
         if self._process is None or self._process.poll() is not None:
             return
-        self._process.send_signal(signal.SIGINT)
+        if not self._asked:
+            self._process.send_signal(signal.SIGINT)
         try:
             self._process.wait(timeout=grace_s)
         except subprocess.TimeoutExpired:
