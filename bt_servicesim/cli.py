@@ -9,6 +9,7 @@ status. Every command (``run``, ``evaluate``, ``dump``, ``replay``, ``trajectory
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable
 from typing import NoReturn
@@ -19,10 +20,12 @@ __all__ = [
     "EXIT_FAILED",
     "EXIT_INTERRUPTED",
     "EXIT_OK",
+    "EXIT_OUTPUT_CLOSED",
     "OneLineArgumentParser",
     "UsageError",
     "error_line",
     "interruptible",
+    "output_closed",
 ]
 
 EXIT_OK = EXIT_COMPLETED = 0
@@ -33,6 +36,9 @@ EXIT_BAD_INPUT = 2
 """Bad input: arguments, files or settings; nothing was started."""
 EXIT_INTERRUPTED = 130
 """Stopped by Ctrl-C (128 + SIGINT), after cleaning up."""
+EXIT_OUTPUT_CLOSED = 141
+"""The reader of its output went away (``| head``): 128 + SIGPIPE, as a shell reports a Unix
+tool that SIGPIPE ended."""
 
 
 class UsageError(ValueError):
@@ -57,9 +63,26 @@ def interruptible(prog: str, main: Callable[[], int]) -> int:
     """``main()``'s exit status, with Ctrl-C while it runs one line and
     :data:`EXIT_INTERRUPTED` instead of a traceback: for the commands that start nothing and
     write their files whole (a viewer, a drawing, a dump); ``run`` and ``evaluate`` clean up
-    after a stop signal themselves."""
+    after a stop signal themselves.
+
+    Output whose reader went away (``| head``) ends the command quietly with
+    :data:`EXIT_OUTPUT_CLOSED`, as SIGPIPE ends a Unix tool, instead of a traceback.
+    """
     try:
         return main()
     except KeyboardInterrupt:
         print(f"{prog}: stopped by SIGINT", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        output_closed()
+        return EXIT_OUTPUT_CLOSED
+
+
+def output_closed() -> None:
+    """Send what standard output still holds, and anything written later, to ``/dev/null``:
+    the interpreter's flush at exit would find the closed pipe again and print a traceback."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, sys.stdout.fileno())
+    finally:
+        os.close(devnull)

@@ -58,6 +58,7 @@ from bt_servicesim.mission.stopping import (
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
+from bt_servicesim.records.trajectory import TRAJECTORY_NAME
 from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.discovery import (
     SIM_CLOCK_PROBE,
@@ -131,6 +132,7 @@ class MissionRun:
         """
         with StopSignals() as stops:
             try:
+                self._clear_what_an_earlier_run_left()
                 write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 if noted is not None and noted.first is not None:
                     raise stop_for(noted.first)
@@ -155,6 +157,7 @@ class MissionRun:
         """
         with StopSignals() as stops:
             try:
+                self._clear_what_an_earlier_run_left()
                 write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 code = self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
@@ -162,6 +165,13 @@ class MissionRun:
             finally:
                 stops.hold()
             return stops.exit_status(code)
+
+    def _clear_what_an_earlier_run_left(self) -> None:
+        """In a directory reused with ``--overwrite``: the records a run writes only sometimes
+        (what it raised, the picture, which a completed run draws only when asked) would be taken
+        for this run's. Everything else a run writes it writes anew."""
+        for name in (TRACEBACK_NAME, TRAJECTORY_NAME):
+            (self.settings.out / name).unlink(missing_ok=True)
 
     def _node(self) -> ExecutiveNode:
         """The executive's node, on sim time unless the run keeps the system clock.

@@ -26,6 +26,15 @@ stops itself (a run's simulator, an evaluation's episodes and warm pairs, each i
 its own, out of the terminal's reach) gets the stop signals back at their defaults, so that the
 SIGINT its parent stops it with is not ignored.
 
+A closed standard output is a stop too: ``run ... | head -3`` stops the run once ``head`` has
+its lines, as a Unix tool stops when SIGPIPE kills it. Python ignores SIGPIPE (a write to a
+closed pipe raises ``BrokenPipeError`` instead), and it stays ignored: a handler would also fire
+when a monitor's client hangs up on one of the run's sockets. Inside ``with StopSignals()``,
+``sys.stdout`` is watched instead (:class:`WatchedOutput`): the first write that finds the pipe
+closed points the output at ``/dev/null`` and stops the run as SIGPIPE would, the way a stop
+signal is taken at that moment (raised, deferred or, during clean-up, noted), so the records
+are closed, the report says ``interrupted (SIGPIPE)`` and the exit status is 128 + SIGPIPE.
+
 A SIGKILL cannot be caught. A child started with :func:`parent_death_signal` (a run's
 simulator, an evaluation's episodes) gets SIGTERM from the kernel the moment its parent is gone.
 """
@@ -39,10 +48,12 @@ import sys
 import threading
 from collections.abc import Callable
 from types import FrameType, TracebackType
-from typing import Any
+from typing import Any, TextIO
 
-__all__ = ["STOP_SIGNALS", "BetweenSpins", "StopSignals", "Terminated", "exit_code_for",
-           "parent_death_signal", "signal_of", "stop_for"]
+from bt_servicesim.cli import output_closed
+
+__all__ = ["STOP_SIGNALS", "BetweenSpins", "StopSignals", "Terminated", "WatchedOutput",
+           "exit_code_for", "parent_death_signal", "signal_of", "stop_for"]
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 PR_SET_PDEATHSIG = 1  # from <linux/prctl.h>
@@ -105,7 +116,9 @@ class StopSignals:
     def __init__(self) -> None:
         self.received: list[int] = []
         self._previous: dict[int, Any] = {}
+        self._previous_stdout: TextIO | None = None
         self._deferred = False
+        self._held = False
         self._noted_in_clean_up = 0
         self._main = threading.current_thread() is threading.main_thread()
         self._handled: tuple[int, ...] = ()
@@ -118,6 +131,8 @@ class StopSignals:
                                   if handler is not signal.SIG_IGN)
             self._install(lambda number: signal.default_int_handler
                           if number == signal.SIGINT else _raise_terminated)
+            self._previous_stdout = sys.stdout
+            sys.stdout = WatchedOutput(sys.stdout, on_closed=self.output_closed)  # innermost
         return self
 
     def _install(self, handler_for: Callable[[int], Any]) -> None:
@@ -138,6 +153,7 @@ class StopSignals:
     def hold(self, stop: BaseException | None = None) -> None:
         """From now on a stop signal is only noted; ``stop`` is one that was raised."""
         self._deferred = False
+        self._held = True
         if stop is not None:
             self.received.insert(0, signal_of(stop))
         self._install(lambda _number: self._note)
@@ -164,6 +180,15 @@ class StopSignals:
                   "lost", file=sys.stderr, flush=True)
             os._exit(128 + self.received[0])
 
+    def output_closed(self) -> None:
+        """Standard output's reader went away: a stop as SIGPIPE, taken as a stop signal is
+        now (raised in the main thread before :meth:`defer`, else noted for its turn)."""
+        in_main_thread = threading.current_thread() is threading.main_thread()
+        if self._held or self._deferred or not in_main_thread:
+            self.received.append(int(signal.SIGPIPE))
+            return
+        raise Terminated(signal.SIGPIPE)
+
     def _defer(self, signal_number: int, _frame: FrameType | None) -> None:
         if self.received:  # the first still waits for its turn: the user insists
             raise stop_for(self.received.pop(0))
@@ -174,6 +199,43 @@ class StopSignals:
         if self._main:
             for number, handler in self._previous.items():
                 signal.signal(number, handler if handler is not None else signal.SIG_DFL)
+            if self._previous_stdout is not None:
+                sys.stdout, self._previous_stdout = self._previous_stdout, None
+
+
+class WatchedOutput:
+    """A text stream (``sys.stdout``) that calls ``on_closed`` once when its pipe's reader has
+    gone away, and from then on writes to ``/dev/null``; everything else is the stream's own."""
+
+    def __init__(self, stream: TextIO, *, on_closed: Callable[[], None]) -> None:
+        while isinstance(stream, WatchedOutput):  # a nested StopSignals: the inner one decides
+            stream = stream._stream
+        self._stream = stream
+        self._on_closed = on_closed
+        self.closed_by_reader = False
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._reader_gone()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._reader_gone()
+
+    def _reader_gone(self) -> None:
+        if self.closed_by_reader:
+            return
+        self.closed_by_reader = True
+        output_closed()
+        self._on_closed()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
 
 
 class BetweenSpins:

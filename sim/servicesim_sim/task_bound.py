@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -64,6 +65,7 @@ from servicesim_sim.world import AreaBox, World, load_world
 
 PROG = "python -m servicesim_sim.task_bound"
 EXIT_BAD_INPUT = 2
+EXIT_OUTPUT_CLOSED = 141  # 128 + SIGPIPE
 JUNCTIONS = 4  # start and return (halves), entering the pick-up area, the pick-up, the drop-off
 FORCED_WAITS_S = 0.0  # see the module docstring: no rule makes the robot stop
 
@@ -350,8 +352,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BoundInputError as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    json.dump(result, sys.stdout, indent=1)
-    sys.stdout.write("\n")
+    try:
+        json.dump(result, sys.stdout, indent=1)
+        sys.stdout.write("\n")
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader went away (| head): quietly, as SIGPIPE ends a tool
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # the flush at exit must not meet the pipe
+        os.close(devnull)
+        return EXIT_OUTPUT_CLOSED
     return 0
 
 

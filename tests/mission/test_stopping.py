@@ -195,3 +195,57 @@ def test_a_user_who_insists_ends_a_clean_up_at_once_with_the_first_signals_statu
     assert lines == ["SIGINT during clean-up: records are being closed; one more stop signal "
                      "ends the process at once",
                      "stopped at once by SIGINT during clean-up: records not written yet are lost"]
+
+
+# ------------------------------------------------------------------ a closed standard output
+@pytest.fixture
+def closed_stdout(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[], None]]:
+    """Puts ``sys.stdout`` on a pipe whose reader has gone, as under ``| head`` once it has its
+    lines (Python ignores SIGPIPE: a write raises ``BrokenPipeError``). Called in the test
+    itself: pytest puts its own capture back in place between a fixture and the test."""
+    reader, writer = os.pipe()
+    os.close(reader)
+    stream = os.fdopen(writer, "w")
+    yield lambda: monkeypatch.setattr(sys, "stdout", stream)
+    stream.close()
+
+
+def test_a_closed_output_stops_as_sigpipe_before_the_mission_defers_signals(
+        closed_stdout: Callable[[], None]) -> None:
+    closed_stdout()
+    with StopSignals() as stops, pytest.raises(Terminated) as stopped:
+        print("a line nobody reads", flush=True)
+    assert stopped.value.signal_number == signal.SIGPIPE
+    assert stops.received == []
+    print("and later ones go nowhere, without an error", flush=True)
+
+
+def test_a_closed_output_while_the_node_spins_is_raised_between_turns(
+        closed_stdout: Callable[[], None]) -> None:
+    closed_stdout()
+    with StopSignals() as stops:
+        stops.defer()
+        spinner = BetweenSpins(_Executor(lambda: print("progress", flush=True)), stops)
+        with pytest.raises(Terminated) as stopped:
+            spinner.spin_once()
+    assert stopped.value.signal_number == signal.SIGPIPE
+
+
+def test_a_closed_output_during_clean_up_is_noted_in_the_exit_status(
+        closed_stdout: Callable[[], None]) -> None:
+    closed_stdout()
+    with StopSignals() as stops:
+        stops.hold()
+        print("mission completed", flush=True)
+        print("a second line", flush=True)
+    assert stops.received == [signal.SIGPIPE]
+    assert stops.exit_status(0) == 128 + signal.SIGPIPE
+
+
+def test_the_output_is_the_callers_again_after_the_stop_signals(
+        closed_stdout: Callable[[], None]) -> None:
+    closed_stdout()
+    before = sys.stdout
+    with StopSignals(), StopSignals():
+        assert sys.stdout is not before
+    assert sys.stdout is before
