@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import ndimage
 
 from servicesim_sim.world import OccupancyMap
 
@@ -31,9 +30,7 @@ class WallClearance:
 
     def __init__(self, occupancy_map: OccupancyMap) -> None:
         self.map = occupancy_map
-        free = ~occupancy_map.blocked_mask()
-        self.grid = (ndimage.distance_transform_edt(free) * occupancy_map.resolution).astype(
-            np.float32)
+        self.grid = occupancy_map.wall_distance.astype(np.float32)
         self._cols = self.grid.shape[1]
         self._cells = memoryview(self.grid).cast("B").cast("f")
 

@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
-from servicesim_sim.world import AreaBox, DriftSpec, OccupancyMap, TaskSpec, World
+from servicesim_sim.world import AreaBox, DriftSpec, TaskSpec, World
 
 GUEST_PADDING_M = 1.0  # the original spawns the guest 1.0 m inside a room's area
 NARROW_AREA_M = 2.0  # narrower than this (bathrooms, cubicle strips): the centre line instead
@@ -167,24 +166,9 @@ def _three_areas(world: World, rng: np.random.Generator, *,
     return pick_up, drop_off, start
 
 
-_SPOT_MASKS: weakref.WeakKeyDictionary[OccupancyMap, np.ndarray] = weakref.WeakKeyDictionary()
-
-
 def _spot_mask(world: World) -> np.ndarray:
-    """Cells where a person or the robot may stand: free and clear of walls.
-
-    Once per loaded map (a distance transform, a tenth of a second): the episodes a reset
-    plays on one world share it, read-only.
-    """
-    occupancy = world.map
-    mask = _SPOT_MASKS.get(occupancy)
-    if mask is None:
-        clearance = (ndimage.distance_transform_edt(~occupancy.blocked_mask())
-                     * occupancy.resolution)
-        mask = clearance >= PERSON_CLEARANCE_M
-        mask.setflags(write=False)
-        _SPOT_MASKS[occupancy] = mask
-    return mask
+    """Cells where a person or the robot may stand: free and clear of walls."""
+    return world.map.wall_distance >= PERSON_CLEARANCE_M
 
 
 def _free(world: World, free: np.ndarray, x: float, y: float) -> bool:

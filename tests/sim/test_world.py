@@ -290,6 +290,21 @@ def test_area_box_geometry() -> None:
     assert box.contains(2.5, 2.5, margin=0.4) and not box.contains(1.3, 2.5, margin=0.4)
 
 
+def test_wall_distance_is_metres_to_the_nearest_obstacle_cell_worked_out_once() -> None:
+    grid = np.zeros((6, 9), dtype=np.int8)
+    grid[0, :] = 100  # a wall along the bottom row
+    grid[4, 7] = -1  # an unknown cell is an obstacle too
+    grid[2, 2] = 49  # the highest free value
+    occupancy = OccupancyMap(grid=grid, resolution=0.5, origin_x=0.0, origin_y=0.0)
+    obstacles = np.argwhere(occupancy.blocked_mask())
+    expected = np.array([[0.5 * min(math.hypot(row - r, col - c) for r, c in obstacles)
+                          for col in range(9)] for row in range(6)])
+    distance = occupancy.wall_distance
+    np.testing.assert_allclose(distance, expected)
+    assert distance[0, 3] == 0.0 and distance[4, 7] == 0.0 and distance[2, 2] == 1.0
+    assert occupancy.wall_distance is distance and not distance.flags.writeable
+
+
 # --------------------------------------------------------------------------- broken world files
 WORLD = """\
 name: tiny
