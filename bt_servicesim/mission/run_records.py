@@ -63,7 +63,17 @@ class RunRecords:
                                     tree_file=str(tree_file))
             self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
             self.tree_log.listeners.append(self.tree_topic.publish)
-            self.tree.add_post_tick_handler(self.tree_log)
+            self.tree.add_post_tick_handler(self._log_tick)
+
+    def _log_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
+        """Log the tick, after its lockstep done when there is one (see ``after_done``)."""
+        assert self.tree_log is not None
+        log, tick = self.tree_log.log, tree.count + 1  # py_trees counts after the handlers
+        lockstep = getattr(self._node, "lockstep", None)
+        if lockstep is None:
+            log(tick=tick)
+        else:
+            lockstep.after_done(lambda: log(tick=tick))
 
     def note_phase(self, phase: str) -> None:
         """The mission's phase now (the executive's ``phase()``), kept for the picture."""

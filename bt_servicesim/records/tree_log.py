@@ -139,7 +139,11 @@ class TreeLog:
 
     def __call__(self, tree: py_trees.trees.BehaviourTree) -> None:
         """The post-tick handler: log this tick if anything changed."""
-        record = self.capture(tick=tree.count + 1)  # py_trees counts after the handlers
+        self.log(tick=tree.count + 1)  # py_trees counts after the handlers
+
+    def log(self, *, tick: int) -> None:
+        """Log tick number ``tick`` if anything changed; the tree must not have ticked since."""
+        record = self.capture(tick=tick)
         if record is None:
             return
         self._write(record.to_json())

@@ -8,7 +8,9 @@ counts that this node can receive has arrived -- the messages on every topic it 
 to reliably, the answers to its requests -- so a tick never depends on which message DDS
 happened to deliver first. After the tick it sends its *done* with the number of requests it
 has sent since it joined (those its callbacks sent between ticks included), and the simulator
-serves them before it steps on.
+serves them before it steps on. Work the tick only records (the tree's log, its snapshot
+topic) can wait until the done has gone out (:meth:`LockstepClient.after_done`): the simulator
+then goes on with the next period while the client writes it down, instead of waiting for it.
 
 The simulator steps its next period while the client ticks on the last one (a one-period
 pipeline, docs/simulator.md "Lockstep"), so messages and answers of period *k*+1 reach the
@@ -157,6 +159,8 @@ class LockstepClient:
         """The first period the simulator announced without waiting for this client (it dropped
         it); from then on the client runs free on the announcements. None while in step."""
         self._tickers: list[LockstepTicker] = []
+        self._after_done: list[Callable[[], None]] | None = None
+        """Work left for after this period's done (:meth:`after_done`); None between periods."""
         self._idle_periods: int | None = None
         """Periods since the last ticker stopped; None while one ticks (or none ever did)."""
         self._pending: deque[LockstepPeriod] = deque()
@@ -316,6 +320,18 @@ class LockstepClient:
             if not self._tickers:
                 self._idle_periods = 0
 
+    def after_done(self, work: Callable[[], None]) -> None:
+        """Run ``work`` once the period being ticked has said done; at once between periods.
+
+        For what only records the tick: it sees the same state (nothing runs between the tick
+        and its done), but the simulator no longer waits for it. What it raises is kept as a
+        callback's error is (the node's ``note_error``), not raised into the executor.
+        """
+        if self._after_done is None:
+            work()
+        else:
+            self._after_done.append(work)
+
     @property
     def holding(self) -> bool:
         """Whether the client holds the simulator still (its executive has finished)."""
@@ -442,15 +458,30 @@ class LockstepClient:
         in_step = self.in_step
         if in_step:
             self._release(period)  # on the period's clock: /clock of the next may be in already
-        for ticker in list(self._tickers):
-            ticker.tick_if_due(now_ns)
-        if self._idle_periods is not None:
-            self._idle_periods += 1
-        self.periods += 1
-        self._ticked = int(period.period)
-        if in_step and self.in_step:  # a tick may have learned of the drop
-            self._publish_done(self._ticked)
+        self._after_done = []
+        try:
+            for ticker in list(self._tickers):
+                ticker.tick_if_due(now_ns)
+            if self._idle_periods is not None:
+                self._idle_periods += 1
+            self.periods += 1
+            self._ticked = int(period.period)
+            if in_step and self.in_step:  # a tick may have learned of the drop
+                self._publish_done(self._ticked)
+        finally:
+            self._run_after_done()
         self._check()  # the next period may have arrived whole meanwhile
+
+    def _run_after_done(self) -> None:
+        work, self._after_done = self._after_done or [], None
+        for step in work:
+            try:
+                step()
+            except Exception as error:  # escaping an executor's callback kills the process
+                note = getattr(self.node, "note_error", None)
+                if note is None:
+                    raise
+                note(error, where="recording a tick")
 
     def _release(self, period: LockstepPeriod) -> None:
         """Hand on what ``period`` counts; what a callback raises is kept, not raised."""

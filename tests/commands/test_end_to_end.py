@@ -64,6 +64,11 @@ def test_the_default_shipped_task_completes(tmp_path: Path) -> None:
     assert report["penalties"]["failed_dropoff"] == 0
     assert 0.0 < report["sim_time_s"] < 900.0
     assert (tmp_path / "trajectory.png").is_file(), "every run draws its picture by default"
+    # logged after each period's lockstep done, each tick still under its own number
+    ticks = [json.loads(line) for line in (tmp_path / "tree_log.jsonl").read_text().splitlines()]
+    numbers = [row["tick"] for row in ticks if row["kind"] == "tick"]
+    assert numbers[0] == 1 and numbers[-1] == report["ticks"] and numbers == sorted(set(numbers))
+    assert ticks[-1]["root"] == "SUCCESS"
 
 
 def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(

@@ -149,3 +149,27 @@ def test_a_client_the_simulator_went_on_without_hands_on_what_it_held_and_runs_f
         for _ in range(10):
             fake.executor.spin_once(timeout_sec=0.02)
         assert sorted(fake.seen_at_done) == [0, 1, 2, 3]  # no done once dropped
+
+
+def test_work_left_for_after_the_done_runs_after_it_goes_out_and_at_once_between_periods(
+        ros_context: Any) -> None:
+    with joined(ros_context) as fake:
+        client = fake.client
+        events: list[str] = []
+        publish = client._done.publish
+        client._done.publish = lambda message: (events.append("done"), publish(message))
+
+        def tick() -> None:
+            events.append("tick")
+            client.after_done(lambda: events.append("record"))
+            client.after_done(lambda: 1 / 0)  # kept as the node's error, not raised
+
+        client.ticker(0.1, tick)
+        for period in (1, 2, 3):
+            fake.announce(period, 0)
+            fake.spin_until(lambda period=period: period in fake.seen_at_done, f"done {period}")
+        # the ticker's first call only sets its due time, as a timer's first period does
+        assert events == ["done", "tick", "done", "record", "tick", "done", "record"]
+        assert "ZeroDivisionError" in (client.node.callback_traceback or "")
+        client.after_done(lambda: events.append("between periods"))
+        assert events[-1] == "between periods"
