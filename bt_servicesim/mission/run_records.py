@@ -32,6 +32,7 @@ from bt_servicesim.records.trajectory import (
     trace_from_recording,
 )
 from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
+from bt_servicesim.ros.lockstep import after_this_period
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
 from bt_servicesim.tree.shape import ShadowTree
@@ -66,14 +67,10 @@ class RunRecords:
             self.tree.add_post_tick_handler(self._log_tick)
 
     def _log_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
-        """Log the tick, after its lockstep done when there is one (see ``after_done``)."""
+        """Log the tick, after its lockstep done when there is one."""
         assert self.tree_log is not None
         log, tick = self.tree_log.log, tree.count + 1  # py_trees counts after the handlers
-        lockstep = getattr(self._node, "lockstep", None)
-        if lockstep is None:
-            log(tick=tick)
-        else:
-            lockstep.after_done(lambda: log(tick=tick))
+        after_this_period(self._node, lambda: log(tick=tick))
 
     def note_phase(self, phase: str) -> None:
         """The mission's phase now (the executive's ``phase()``), kept for the picture."""

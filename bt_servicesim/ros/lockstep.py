@@ -105,6 +105,19 @@ def offered(node: Node, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> 
         node.destroy_client(client)
 
 
+def after_this_period(node: Node, work: Callable[[], None]) -> None:
+    """Run ``work``, which only records, once the period ``node`` is ticking has said done.
+
+    At once when the node has no lockstep client (free running) or is between periods; see
+    :meth:`LockstepClient.after_done`.
+    """
+    client = getattr(node, "lockstep", None)
+    if client is None:
+        work()
+    else:
+        client.after_done(work)
+
+
 class LockstepTicker:
     """Calls ``callback`` every ``period_s`` of announced sim time; ``cancel`` stops it."""
 
@@ -323,9 +336,10 @@ class LockstepClient:
     def after_done(self, work: Callable[[], None]) -> None:
         """Run ``work`` once the period being ticked has said done; at once between periods.
 
-        For what only records the tick: it sees the same state (nothing runs between the tick
-        and its done), but the simulator no longer waits for it. What it raises is kept as a
-        callback's error is (the node's ``note_error``), not raised into the executor.
+        For what only records the period (the messages handed on, the tick): it sees the same
+        state (nothing runs between the tick and its done), but the simulator no longer waits
+        for it. Work runs in the order it was left. What it raises is kept as a callback's
+        error is (the node's ``note_error``), not raised into the executor.
         """
         if self._after_done is None:
             work()
@@ -456,10 +470,10 @@ class LockstepClient:
         now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
         self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
         in_step = self.in_step
-        if in_step:
-            self._release(period)  # on the period's clock: /clock of the next may be in already
         self._after_done = []
         try:
+            if in_step:  # on the period's clock: /clock of the next may be in already
+                self._release(period)
             for ticker in list(self._tickers):
                 ticker.tick_if_due(now_ns)
             if self._idle_periods is not None:
