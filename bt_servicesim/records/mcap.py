@@ -52,7 +52,6 @@ from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 from bt_servicesim.records.tree_log import TickRecord, TreeState
-from bt_servicesim.ros.lockstep import after_this_period
 from bt_servicesim.ros.messages import pose_from_msg
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 from bt_servicesim.ros.sim_clock import clock_now_ns
@@ -270,8 +269,6 @@ class McapRecorder:
     def _writes_to(self, topic: str, channel: int) -> Callable[[bytes], None]:
         """The callback for one topic: writes the message.
 
-        In lockstep the message is written once the period has said done
-        (:func:`~bt_servicesim.ros.lockstep.after_this_period`), with the time it came at.
         The topic is read through the node's shared subscription
         (:mod:`bt_servicesim.ros.shared_subscription`), which takes a burst of messages (the 50 Hz
         score arrives five at a time) in one wake-up.
@@ -279,11 +276,10 @@ class McapRecorder:
         def write(data: bytes) -> None:
             if self._stream is None:
                 return
-            now, sequence = clock_now_ns(self.node.get_clock()), self.counts[topic]
-            self.counts[topic] = sequence + 1
-            after_this_period(self.node, lambda: self._writer.add_message(
-                channel_id=channel, log_time=now, publish_time=now, data=data,
-                sequence=sequence))
+            now = clock_now_ns(self.node.get_clock())
+            self._writer.add_message(channel_id=channel, log_time=now, publish_time=now,
+                                     data=data, sequence=self.counts[topic])
+            self.counts[topic] += 1
 
         return write
 

@@ -336,9 +336,9 @@ class LockstepClient:
     def after_done(self, work: Callable[[], None]) -> None:
         """Run ``work`` once the period being ticked has said done; at once between periods.
 
-        For what only records the period (the messages handed on, the tick): it sees the same
-        state (nothing runs between the tick and its done), but the simulator no longer waits
-        for it. Work runs in the order it was left. What it raises is kept as a callback's
+        For what only records the tick: it sees the same state (nothing runs between the tick
+        and its done), but the simulator no longer waits for it. Work runs in the order it was
+        left. What it raises is kept as a callback's
         error is (the node's ``note_error``), not raised into the executor.
         """
         if self._after_done is None:
