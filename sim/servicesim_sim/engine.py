@@ -385,14 +385,15 @@ class SimEngine:
 
     def _check_guest(self) -> None:
         """The original's order (``FollowActorPlugin.cc``): a guest more than 4 m behind stops
-        following ("too fast"); else a drift fires at a scheduled world time whatever the
-        distance, or, when armed by the ``drift`` service, once the guest is more than 1.2 m
-        from the robot. A scheduled drift nobody follows for is skipped."""
+        following ("too fast"); else a drift fires whatever the distance while a scheduled
+        world time is within 0.5 s (either side: a guest picked up again inside that second
+        drifts again, as the original keeps its times), or, when armed by the ``drift``
+        service, once the guest is more than 1.2 m from the robot. A scheduled drift whose
+        second passes with nobody following is skipped."""
         guest = self.guest
-        due = False
-        while self._drifts and self.sim_time >= self._drifts[0] - DRIFT_TIME_TOLERANCE:
-            self._drifts.pop(0)
-            due = True
+        while self._drifts and self.sim_time > self._drifts[0] + DRIFT_TIME_TOLERANCE:
+            self._drifts.pop(0)  # its second is over
+        due = bool(self._drifts) and self.sim_time >= self._drifts[0] - DRIFT_TIME_TOLERANCE
         if not guest.following:
             return
         distance = guest.distance_to(self.robot.x, self.robot.y)

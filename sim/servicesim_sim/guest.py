@@ -30,8 +30,8 @@ from enum import Enum
 FOLLOW_SPEED = 0.8  # m/s
 STOP_DISTANCE = 1.2  # m from the robot
 LOST_DISTANCE = 4.0  # m: the robot is "too fast" beyond this
-DRIFT_TIME_TOLERANCE = 0.5  # s: a drift is due this long before its time (FollowActorPlugin.cc
-# 80, 294-307: the first update within 0.5 s of it)
+DRIFT_TIME_TOLERANCE = 0.5  # s: a drift is due this long either side of its time
+# (FollowActorPlugin.cc 80, 294-307: any update within 0.5 s of it while the guest follows)
 TRAIL_SPACING = 0.05  # m between trail points
 YIELD_DISTANCE = 0.9  # m: closer than this, the guest steps out of the robot's way
 WALL_CLEARANCE = 0.3  # m: the guest keeps this far from walls when stepping aside

@@ -1,12 +1,13 @@
 """The office's other people: walkers on looping routes and idlers standing still.
 
 The original competition's rules (osrf/servicesim, ``servicesim_competition``): 10 walkers at
-0.9–1.2 m/s on looping routes, each stopping while anyone (the robot, the guest, an idler,
-another walker) is in a lane 1.5 m ahead and ±0.6 m wide, and waiting as long as it stays
-blocked (``src/TrajectoryActorPlugin.cc``); 30 idlers, each at a random point of one of the
-world's idling areas, facing the area's yaw ± 0.5 rad, at least 1 m from the others
-(``worlds/idling_humans.erb``). Every one of them is called ``human_NNNNN`` and is an obstacle;
-the engine decides what touching one costs, this module only says where they are.
+0.9–1.2 m/s on looping routes, each stopping while anyone (the robot, the guest, another
+walker; routes keep every idler out of the lanes) is in a lane 1.5 m ahead and ±0.6 m wide, and
+waiting as long as it stays blocked (``src/TrajectoryActorPlugin.cc``); 30 idlers, each at a
+random point of one of the world's idling areas, facing the area's yaw ± 0.5 rad, at least 1 m
+from the others (``worlds/idling_humans.erb``). Every one of them is called ``human_NNNNN``
+and is an obstacle; the engine decides what touching one costs, this module only says where
+they are.
 
 Design intent:
 

@@ -188,6 +188,64 @@ def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None
     assert sim.referee.current == 1
 
 
+def test_a_drift_is_due_for_the_whole_second_round_its_time_and_then_only() -> None:
+    # FollowActorPlugin.cc 294-307: a following guest drifts at any update within 0.5 s of a
+    # drift time, either side, and the times are kept: picked up inside that second, again
+    def picked_up_at(pick_up_at: float, *, until: float) -> str:
+        sim = engine()
+        sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
+        sim._drifts = list(sim.scenario.drift_times)
+        sim.new_task()
+        at_pick_up_beside_guest(sim)
+        while sim.sim_time < pick_up_at - 1e-9:
+            sim.step()
+        assert sim.pickup("human_20843", "servicebot")[0]
+        while sim.sim_time < until:
+            sim.step()
+        return sim.guest_state()
+
+    assert picked_up_at(5.8, until=5.9) == "drifted"  # within the second, before the time
+    assert picked_up_at(6.3, until=6.4) == "drifted"  # and after it
+    assert picked_up_at(6.6, until=8.0) == "following"  # its second is over
+    sim = engine()
+    sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
+    sim._drifts = list(sim.scenario.drift_times)
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    assert sim.pickup("human_20843", "servicebot")[0]
+    while sim.sim_time < 5.6:
+        sim.step()
+    assert sim.guest_state() == "drifted"
+    sim.guest.x, sim.guest.y = sim.robot.x + 1.0, sim.robot.y  # back within reach at once
+    assert sim.pickup("human_20843", "servicebot")[0]
+    sim.step()
+    assert sim.guest_state() == "drifted"  # picked up again inside the second: drifts again
+    while sim.sim_time < 6.6:
+        sim.step()
+    sim.guest.x, sim.guest.y = sim.robot.x + 1.0, sim.robot.y
+    assert sim.pickup("human_20843", "servicebot")[0]
+    while sim.sim_time < 8.0:
+        sim.step()
+    assert sim.guest_state() == "following"
+
+
+@pytest.mark.parametrize("seed", [3, 13, 33])
+def test_walkers_keep_off_the_tasks_area_centres_start_and_guest_spot(seed: int) -> None:
+    # their route cells are 2.25 m from each area's centre and 1.75 m from the two spots;
+    # the legs between cells may cut a corner by a little, and an area's edge may be near
+    sim = engine(seed=seed)
+    task, areas = sim.scenario.task, sim.world.areas
+    kept = [(*areas[name].centre, 2.0) for name in (task.pick_up, task.drop_off, task.start_area)]
+    kept += [(task.start_x, task.start_y, 1.5), (task.guest_x, task.guest_y, 1.5)]
+    walkers = [person for person in sim.crowd.people if person.role == "walker"]
+    assert walkers
+    for _ in range(1500):  # 30 sim s
+        sim.step()
+        for walker in walkers:
+            assert all(math.hypot(walker.x - x, walker.y - y) >= radius
+                       for x, y, radius in kept), (walker.x, walker.y)
+
+
 def test_a_pickup_or_drop_off_again_after_its_checkpoint_answers_true_for_free() -> None:
     sim = engine()
     sim.new_task()
