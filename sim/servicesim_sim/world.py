@@ -37,6 +37,7 @@ UNKNOWN = -1
 BLOCKED_FROM = 50  # cells of value 50..100 (and unknown) are obstacles; 0..49 are free
 MAP_MODES = ("trinary", "scale", "raw")
 DEFAULT_WORLD = Path(__file__).resolve().parent / "worlds" / "office" / "world.yaml"
+MAX_DRIFTS = 10_000  # drift.count: the original draws 30; a schedule is drawn one by one at start
 WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
               "targets")
 
@@ -666,7 +667,8 @@ def _check_drift(fields: _Fields, spec: DriftSpec) -> None:
         (spec.min_interval_s <= spec.max_interval_s,
          f"drift.min_interval_s ({spec.min_interval_s:g}) must not exceed drift.max_interval_s "
          f"({spec.max_interval_s:g})"),
-        (spec.count >= 0, f"drift.count must be 0 or more, not {spec.count}"),
+        (0 <= spec.count <= MAX_DRIFTS,
+         f"drift.count must be within 0..{MAX_DRIFTS}, not {spec.count}"),
     )
     for passed, problem in checks:
         if not passed:

@@ -469,6 +469,8 @@ BROKEN = [
      "drift.min_interval_s (7) must not exceed drift.max_interval_s (6)"),
     ("drift-boolean", replace("count: 2", "count: true"), "world.yaml",
      "drift.count must be a whole number, not the boolean true"),
+    ("drift-count-huge", replace("count: 2", "count: 1000000000"), "world.yaml",
+     "drift.count must be within 0..10000, not 1000000000"),
     ("drift-infinite", replace("start_s: 10.0", "start_s: .inf"), "world.yaml",
      "drift.start_s must be a finite number"),
     ("drift-times-not-a-list", replace("count: 2", "count: 2, times: 12"), "world.yaml",
