@@ -170,21 +170,31 @@ def test_the_shipped_task_plays_the_shipped_worlds_drift_times() -> None:
     assert hard == tuple(time * 0.25 for time in times)
 
 
-def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None:
+def drift_at_6_s(*, task_at: float = 0.0) -> SimEngine:
+    """The shipped task with drifts at 6 and 500 s, started at ``task_at``, the robot at the
+    pick-up beside the guest."""
     sim = engine()
     sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
     sim._drifts = list(sim.scenario.drift_times)
-    while sim.sim_time < 3.0:
+    while sim.sim_time < task_at:
         sim.step()
     sim.new_task()
     at_pick_up_beside_guest(sim)
-    assert sim.pickup("human_20843", "servicebot")[0]
-    while sim.sim_time < 5.45:
+    return sim
+
+
+def step_until(sim: SimEngine, sim_time: float) -> None:
+    while sim.sim_time < sim_time - 1e-9:
         sim.step()
+
+
+def test_a_drift_fires_at_its_world_time_however_late_the_task_started() -> None:
+    sim = drift_at_6_s(task_at=3.0)
+    assert sim.pickup("human_20843", "servicebot")[0]
+    step_until(sim, 5.45)
     assert sim.guest_state() == "following"
-    while sim.sim_time < 5.55:  # 3 s after new_task, not 6, and 0.5 s early as the original's
-        sim.step()  # (FollowActorPlugin.cc 294-307: the first update within 0.5 s of the time)
-    assert sim.guest_state() == "drifted"
+    step_until(sim, 5.55)  # 3 s after new_task, not 6, and from 0.5 s early as the original's
+    assert sim.guest_state() == "drifted"  # (FollowActorPlugin.cc 294-307)
     assert sim.referee.current == 1
 
 
@@ -192,40 +202,27 @@ def test_a_drift_is_due_for_the_whole_second_round_its_time_and_then_only() -> N
     # FollowActorPlugin.cc 294-307: a following guest drifts at any update within 0.5 s of a
     # drift time, either side, and the times are kept: picked up inside that second, again
     def picked_up_at(pick_up_at: float, *, until: float) -> str:
-        sim = engine()
-        sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
-        sim._drifts = list(sim.scenario.drift_times)
-        sim.new_task()
-        at_pick_up_beside_guest(sim)
-        while sim.sim_time < pick_up_at - 1e-9:
-            sim.step()
+        sim = drift_at_6_s()
+        step_until(sim, pick_up_at)
         assert sim.pickup("human_20843", "servicebot")[0]
-        while sim.sim_time < until:
-            sim.step()
+        step_until(sim, until)
         return sim.guest_state()
 
     assert picked_up_at(5.8, until=5.9) == "drifted"  # within the second, before the time
     assert picked_up_at(6.3, until=6.4) == "drifted"  # and after it
     assert picked_up_at(6.6, until=8.0) == "following"  # its second is over
-    sim = engine()
-    sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
-    sim._drifts = list(sim.scenario.drift_times)
-    sim.new_task()
-    at_pick_up_beside_guest(sim)
+    sim = drift_at_6_s()
     assert sim.pickup("human_20843", "servicebot")[0]
-    while sim.sim_time < 5.6:
-        sim.step()
+    step_until(sim, 5.6)
     assert sim.guest_state() == "drifted"
     sim.guest.x, sim.guest.y = sim.robot.x + 1.0, sim.robot.y  # back within reach at once
     assert sim.pickup("human_20843", "servicebot")[0]
     sim.step()
     assert sim.guest_state() == "drifted"  # picked up again inside the second: drifts again
-    while sim.sim_time < 6.6:
-        sim.step()
+    step_until(sim, 6.6)
     sim.guest.x, sim.guest.y = sim.robot.x + 1.0, sim.robot.y
     assert sim.pickup("human_20843", "servicebot")[0]
-    while sim.sim_time < 8.0:
-        sim.step()
+    step_until(sim, 8.0)
     assert sim.guest_state() == "following"
 
 
