@@ -153,6 +153,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
     tree = _tree(args.tree, executives)
     reproducibility = _figures("--reproducibility", args.reproducibility, load_reproducibility)
     throughput = _figures("--throughput", args.throughput, load_throughput)
+    _docs_place(args.docs)  # last: every other check passed
     return EvaluationSettings(
         episodes=args.episodes, scenarios=scenarios, executives=executives, jobs=args.jobs,
         seed=args.seed, out=args.out, speed=args.speed, episode_timeout_s=args.episode_timeout,
@@ -161,6 +162,18 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         resume=args.resume, cold=args.cold, reproducibility=reproducibility,
         throughput=throughput, tree=tree,
     )
+
+
+def _docs_place(docs: Path | None) -> None:
+    """Make ``--docs`` (and its ``images``) now: a place results.md cannot be written to is one
+    line before the episodes, not a traceback after them."""
+    if docs is None:
+        return
+    try:
+        (docs / "images").mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--docs {docs}: cannot make it a directory: "
+                         f"{error.strerror or error}") from error
 
 
 def _figures(flag: str, path: Path | None, load: Callable[[Path], Figures]) -> Figures | None:

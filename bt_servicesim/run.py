@@ -134,6 +134,8 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
                          "sim time")
     if groot is not None and args.executive != "bt":
         raise UsageError(f"--groot shows a behaviour tree; the {args.executive} executive has none")
+    if args.executive != "bt" and args.tree != DEFAULT_TREE:
+        raise UsageError(f"--tree {args.tree}: only the bt executive plays a tree")
     return RunSettings(
         world=args.world, seed=args.seed, speed=speed, tree=args.tree,
         out=_run_directory(args.out, overwrite=args.overwrite),

@@ -412,7 +412,7 @@ def _read_image(path: Path) -> Pixels:
             pixels = _pixels(image)
     except FileNotFoundError:
         raise WorldError(f"{path}: no such image file") from None
-    except (UnidentifiedImageError, OSError, ValueError) as error:
+    except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as error:
         raise WorldError(f"{path}: cannot read the map image: {_one_line(str(error))}") from None
     if pixels.colour.size == 0:
         raise WorldError(f"{path}: the map image is empty")

@@ -252,6 +252,8 @@ BAD_INPUT = [
     ("bt_servicesim.run", ["--attach", "--seed", "3"], "--attach starts no simulator: --seed"),
     ("bt_servicesim.run", ["--clock", "system"], "--clock system: only with --attach"),
     ("bt_servicesim.run", ["--tree", "{retry}"], 'num_failures="abc" is not an int'),
+    ("bt_servicesim.run", ["--executive", "baseline", "--tree", "{retry}"],
+     "only the bt executive plays a tree"),
     ("bt_servicesim.run", ["--tree", "{port}"], "the required input port actors_in_range"),
     ("bt_servicesim.dump", ["--tree", "{retry}"], 'num_failures="abc" is not an int'),
     ("bt_servicesim.dump", ["--format", "svg", "--out", "{tmp}/x.png"], "a .png name for"),

@@ -411,6 +411,7 @@ def alive(pid: int) -> bool:
         (["--time-limit", "inf"], "--time-limit"),
         (["--time-limit", "1e7"], "--time-limit"),
         (["--frobnicate"], "--frobnicate"),
+        (["--docs", "/proc/no-such-place"], "--docs /proc/no-such-place: cannot make it"),
     ],
 )
 def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[str],

@@ -415,6 +415,8 @@ BROKEN = [
     ("no-image", remove("map.pgm"), "map.pgm", "no such image file"),
     ("unreadable-image", write("map.pgm", b"P5 this is not an image"), "map.pgm",
      "cannot read the map image"),
+    ("image-bomb", write("map.pgm", b"P5\n100000 100000\n255\n\0"), "map.pgm",
+     "cannot read the map image: Image size (10000000000 pixels) exceeds limit"),
     ("area-not-a-mapping", replace("Hall: {min: [0.5, 0.5], max: [1.5, 1.5]}", "Hall: 3"),
      "world.yaml", "areas.Hall must be a mapping"),
     ("area-no-max", replace(", max: [1.5, 1.5]}", "}"), "world.yaml",
