@@ -338,8 +338,8 @@ class LockstepClient:
 
         For what only records the tick: it sees the same state (nothing runs between the tick
         and its done), but the simulator no longer waits for it. Work runs in the order it was
-        left. What it raises is kept as a callback's
-        error is (the node's ``note_error``), not raised into the executor.
+        left; what it raises is kept as a callback's error is (the node's ``note_error``), not
+        raised into the executor.
         """
         if self._after_done is None:
             work()
