@@ -77,7 +77,7 @@ class RobotTopics:
     def publish(self) -> None:
         """The period's clock, odometry, transforms, scan and RFID reading."""
         self._clock_message = self._clock_bytes.encode(stamp_ns=stamp_ns(self.engine.sim_time))
-        self.repeat_clock()
+        self._send(self._clock, self._clock_message)
         self._publish_odom()
         self._publish_localisation()
         self._publish_scan()
