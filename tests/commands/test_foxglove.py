@@ -36,6 +36,9 @@ from rosbags.highlevel import AnyReader
 from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 from tests.fakes import run_module
 
+#: One run serves the whole module: its tests go to one pytest-xdist worker (``make test``'s
+#: ``--dist loadgroup``), or each worker given some of them would start a run of its own.
+pytestmark = pytest.mark.xdist_group("foxglove_run")
 LIVE_TOPICS = ("/tf", "/servicesim/markers", "/servicesim/markers/areas")
 URL = re.compile(r"ws://127\.0\.0\.1:\d+")
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
