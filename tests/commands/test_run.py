@@ -38,6 +38,15 @@ def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[s
     assert not (tmp_path / "runs").exists(), "nothing is started or written on bad input"
 
 
+WAIT = "<BehaviorTree ID='W'><SimWait name='W' seconds='1'/></BehaviorTree>"
+
+
+def tree(body: str, others: str = "") -> str:
+    """A tree file whose main tree is ``body``, with the trees ``others`` beside it."""
+    return (f"<root main_tree_to_execute='M'><BehaviorTree ID='M'>{body}</BehaviorTree>"
+            f"{others}</root>")
+
+
 @pytest.mark.parametrize(
     ("content", "problem"),
     [
@@ -53,6 +62,23 @@ def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[s
         ("<root main_tree_to_execute='M'><BehaviorTree ID='M'><SubTree ID='W'/></BehaviorTree>"
          "<BehaviorTree ID='W'><SimWait name='W' seconds='1'/></BehaviorTree></root>",
          "a SubTree needs a name"),
+        (tree("<SimWait name='W' seconds='nan'/>"), 'seconds="nan" is not a finite number'),
+        (tree("<Retry name='R' num_failures='-3'><SimWait name='W' seconds='1'/></Retry>"),
+         'num_failures="-3" is negative'),
+        (tree("<RobotInArea name='A' margin='nan' box='{b}' robot_pose='{p}'/>"),
+         'margin="nan" is not a finite number'),
+        (tree("<GuestApproachGoal name='G' sighting_gap='-1' guest_name='{g}' "
+              "rfid_history='{h}' occupancy='{o}' robot_pose='{p}' goal='{x}'/>"),
+         'sighting_gap="-1" is negative'),
+        (tree("<SubTree ID='W' name='S'/>", WAIT + WAIT), 'two <BehaviorTree ID="W">'),
+        (tree("<SimWait name='W' seconds='1'><SimWait name='X' seconds='1'/></SimWait>"),
+         "a leaf takes no child elements; it has <SimWait>"),
+        ("<root main_tree_to_execute='A'><BehaviorTree ID='A'><SubTree ID='B' name='b'/>"
+         "</BehaviorTree><BehaviorTree ID='B'><SubTree ID='A' name='a'/></BehaviorTree></root>",
+         "a SubTree cycle: A -> B -> A"),
+        ("<root><BehaviorTree ID='M'><SubTree ID='W' name='S'/></BehaviorTree>" + WAIT
+         + "</root>", "2 trees and no main_tree_to_execute"),
+        (tree("<SubTree name='S'/>", WAIT), "a SubTree needs an ID"),
     ],
 )
 def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content: str,
