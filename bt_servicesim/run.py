@@ -176,7 +176,8 @@ def groot_address(argument: str) -> tuple[str, int]:
 def _check_backend(args: argparse.Namespace) -> None:
     """The simulator's options: a world that exists, none of them with --attach."""
     if args.world is not None and not args.world.is_file():
-        raise UsageError(f"--world {args.world}: no such file")
+        what = "is a directory, not a world file" if args.world.is_dir() else "no such file"
+        raise UsageError(f"--world {args.world}: {what}")
     for arg in args.sim_arg:
         option = arg.split("=", 1)[0]
         if option in RUN_OWNED_SIM_OPTIONS:
@@ -200,6 +201,9 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
     out = Path(argument)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
+    existing = next(parent for parent in out.parents if parent.exists())
+    if not existing.is_dir():
+        raise UsageError(f"--out {out}: {existing} is not a directory to make it in")
     if (out / REPORT_NAME).exists() and not overwrite:
         raise UsageError(f"--out {out}: holds an earlier run (its {REPORT_NAME}); "
                          "choose another directory or add --overwrite")

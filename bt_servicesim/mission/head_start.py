@@ -21,6 +21,7 @@ import os
 from pathlib import Path
 from types import TracebackType
 
+from bt_servicesim.cli import UsageError
 from bt_servicesim.mission.settings import RunSettings
 from bt_servicesim.mission.simulator_process import SIMULATOR_LOG_NAME, SimulatorProcess
 from bt_servicesim.ros.domain import DomainClaim, claim_domain
@@ -51,7 +52,7 @@ class HeadStart:
         """Make the run directory; unless the run attaches, claim a domain (not the user's:
         the run only ever talks to its own simulator) and start the simulator in it.
 
-        Raises OSError (the directory) or NoFreeDomainError; what was made by then stays
+        Raises UsageError (the directory) or NoFreeDomainError; what was made by then stays
         for :meth:`abandon`.
         """
         self._make_directory(self.settings.out)
@@ -94,9 +95,15 @@ class HeadStart:
         self._release()
 
     def _make_directory(self, path: Path) -> None:
+        """Make ``path`` and its missing parents; :class:`UsageError` naming ``--out`` if it
+        cannot be made (what was made by then stays for :meth:`abandon`)."""
         missing = [parent for parent in (path, *path.parents) if not parent.exists()]
-        path.mkdir(parents=True, exist_ok=True)
         self._made = list(reversed(missing))  # outermost first
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise UsageError(f"--out {path}: cannot make the run directory there "
+                             f"({error.strerror or error})") from None
 
     def _release(self) -> None:
         if self._claim is not None:

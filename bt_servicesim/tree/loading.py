@@ -48,7 +48,8 @@ def load_mission_tree(
     ``main_tree`` names the tree to play instead of the file's ``main_tree_to_execute``."""
     tree_file = Path(path)
     if not tree_file.is_file():
-        raise MissionTreeError(f"{tree_file}: no such tree file")
+        what = "is a directory, not a tree file" if tree_file.is_dir() else "no such tree file"
+        raise MissionTreeError(f"{tree_file}: {what}")
     top = _check_xml(tree_file)
     registry = node_registry()
     problems = chain(structure_problems(top, registry, main_tree=main_tree),
