@@ -110,3 +110,31 @@ def test_a_refused_tree_keeps_the_earlier_run_it_was_to_overwrite(tmp_path: Path
     assert result.returncode == 2 and "broken.xml" in result.stderr
     assert sorted(path.name for path in earlier.iterdir()) == ["report.json", "sim.log"]
     assert (earlier / "sim.log").read_text() == "the earlier run's simulator\n"
+
+
+@pytest.mark.parametrize(("arguments", "problem"), [
+    pytest.param(["--world", "missing_map.yaml"],
+                 "missing_map.yaml: map nowhere.yaml: no such file", id="world"),
+    pytest.param(["--sim-arg=--frobnicate"], "unrecognized arguments: --frobnicate",
+                 id="sim-arg"),
+])
+def test_input_the_simulator_refuses_writes_nothing_and_keeps_an_earlier_run(
+        tmp_path: Path, arguments: list[str], problem: str) -> None:
+    """The simulator checks the world (and its own arguments) before the run takes its
+    directory: a refusal leaves an earlier run as it was, and makes no fresh directory."""
+    (tmp_path / "missing_map.yaml").write_text("name: broken\nmap: nowhere.yaml\n")
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    kept = {"report.json": '{"status": "completed"}', "sim.log": "the earlier simulator\n",
+            "run.mcap": "earlier", "tree_log.jsonl": "earlier", "final_tree.txt": "earlier",
+            "trajectory.png": "earlier"}
+    for name, text in kept.items():
+        (earlier / name).write_text(text)
+    result = run(*arguments, "--out", str(earlier), "--overwrite", cwd=tmp_path)
+    assert result.returncode == 2
+    (line,) = result.stderr.strip().splitlines()
+    assert problem in line
+    assert {path.name: path.read_text() for path in earlier.iterdir()} == kept
+    fresh = run(*arguments, "--out", "fresh/run", cwd=tmp_path)
+    assert fresh.returncode == 2 and problem in fresh.stderr
+    assert not (tmp_path / "fresh").exists(), "exit 2: nothing was started, nothing written"
