@@ -5,13 +5,13 @@ only touched once the world has loaded and been set in motion (its task drawn, i
 placed), so a world that loads but cannot be played is one line too. With ``--checked-fd FD``
 it then writes one line to that file descriptor and closes it: the run that started it waits
 for that word (or the exit) before it takes its run directory, so a refused world leaves an
-earlier run's files as they were. The arguments are
-:mod:`servicesim_sim.arguments`'s, which the reset service takes as well.
+earlier run's files as they were. The arguments are :mod:`servicesim_sim.arguments`'s, which
+the reset service takes as well.
 
-A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator with status 0
-(:func:`servicesim_sim.ros.node.run_simulator`); one that comes while it is still starting (its
-imports, the world, ROS) ends it in one line with 128 + the signal, as an interrupted command.
-One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
+A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator cleanly with 128 + the signal
+(:func:`servicesim_sim.ros.node.run_simulator`), as any command a signal ends; one that comes
+while it is still starting (its imports, the world, ROS) ends it in one line with the same
+status. One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
 """
 
 from __future__ import annotations
