@@ -69,7 +69,7 @@ from tf2_msgs.msg import TFMessage
 
 from servicesim_sim.lockstep.server import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.model.engine import NavigationState, SimEngine
-from servicesim_sim.model.localisation import Pose
+from servicesim_sim.model.localisation import Pose, initial_pose_problem
 from servicesim_sim.model.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.model.scenario import make_scenario
 from servicesim_sim.navigation.goals import GoalPose, GoalRefusal, goal_in_map
@@ -450,12 +450,17 @@ class SimulatorNode:
         return feedback
 
     def _on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
-        """AMCL's initialpose: taken in the global frame only, as Nav2's AMCL does."""
-        if message.header.frame_id != MAP_FRAME:
-            self.node.get_logger().warning(
-                f"initial pose ignored: frame {message.header.frame_id!r}, must be {MAP_FRAME!r}")
-            return
+        """AMCL's initialpose: taken in the global frame only and with finite numbers, as Nav2's
+        AMCL takes it; any other is ignored with a warning."""
         pose = message.pose.pose
+        position, turn = pose.position, pose.orientation
+        orientation = (turn.x, turn.y, turn.z, turn.w)
+        problem = initial_pose_problem(
+            frame_id=message.header.frame_id, global_frame=MAP_FRAME, orientation=orientation,
+            numbers=(position.x, position.y, position.z, *orientation, *message.pose.covariance))
+        if problem is not None:
+            self.node.get_logger().warning(f"initial pose ignored: {problem}")
+            return
         yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
         self.engine.set_initial_pose(pose.position.x, pose.position.y, yaw)
 
