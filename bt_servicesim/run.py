@@ -224,8 +224,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     imported, about a second here, and the simulator as long to come up. A tree, a monitor
     port or a Foxglove address refused after that takes the head start back, and so does a
     world or ``--sim-arg`` the simulator refused (the run waits for its word on them before it
-    takes the directory), so bad input still leaves nothing but its one-line error. One :class:`StopSignals` covers the whole
-    start-up, up to the run's own: a stop signal at any moment of it ends the run in one line.
+    takes the directory), so bad input still leaves nothing but its one-line error. One
+    :class:`StopSignals` covers the whole start-up, up to the run's own: a stop signal at any
+    moment of it ends the run in one line.
     """
     args = build_parser().parse_args(argv)
     try:
