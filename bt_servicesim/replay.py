@@ -8,7 +8,7 @@ one, ``q`` quits. It reads whole lines, so it works as well with a script piped 
 a terminal; at a terminal each step redraws the screen.
 
 Exit status: 0, or 2 with one line on stderr for a missing or unreadable log or a moment before
-the first record.
+the first record or after the last.
 """
 
 from __future__ import annotations
@@ -111,6 +111,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.time is not None and not math.isfinite(args.time):
             raise TreeLogError(f"--time {args.time}: must be a finite number of sim seconds")
         history = read_tree_log(path)
+        history.check_within(tick=args.tick, sim_time_s=args.time)
         start = state_index(history, tick=args.tick, time=args.time)
     except TreeLogError as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)

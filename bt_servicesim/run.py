@@ -24,7 +24,13 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_servicesim.cli import OneLineArgumentParser, UsageError, error_line
+from bt_servicesim.cli import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    OneLineArgumentParser,
+    UsageError,
+    error_line,
+)
 from bt_servicesim.mission.head_start import HeadStart
 from bt_servicesim.mission.settings import (
     CLOCKS,
@@ -176,7 +182,8 @@ def groot_address(argument: str) -> tuple[str, int]:
 def _check_backend(args: argparse.Namespace) -> None:
     """The simulator's options: a world that exists, none of them with --attach."""
     if args.world is not None and not args.world.is_file():
-        raise UsageError(f"--world {args.world}: no such file")
+        what = "is a directory, not a world file" if args.world.is_dir() else "no such file"
+        raise UsageError(f"--world {args.world}: {what}")
     for arg in args.sim_arg:
         option = arg.split("=", 1)[0]
         if option in RUN_OWNED_SIM_OPTIONS:
@@ -200,6 +207,9 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
     out = Path(argument)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a directory")
+    existing = next(parent for parent in out.parents if parent.exists())
+    if not existing.is_dir():
+        raise UsageError(f"--out {out}: {existing} is not a directory to make it in")
     if (out / REPORT_NAME).exists() and not overwrite:
         raise UsageError(f"--out {out}: holds an earlier run (its {REPORT_NAME}); "
                          "choose another directory or add --overwrite")
@@ -212,9 +222,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     What needs only the arguments is checked first. The simulator then gets a head start
     (:mod:`bt_servicesim.mission.head_start`): the tree needs every behaviour and its libraries
     imported, about a second here, and the simulator as long to come up. A tree, a monitor
-    port or a Foxglove address refused after that takes the head start back, so bad input
-    still leaves nothing but its one-line error. One :class:`StopSignals` covers the whole
-    start-up, up to the run's own: a stop signal at any moment of it ends the run in one line.
+    port or a Foxglove address refused after that takes the head start back, and so does a
+    world or ``--sim-arg`` the simulator refused (the run waits for its word on them before it
+    takes the directory), so bad input still leaves nothing but its one-line error. One
+    :class:`StopSignals` covers the whole start-up, up to the run's own: a stop signal at any
+    moment of it ends the run in one line.
     """
     args = build_parser().parse_args(argv)
     try:
@@ -255,18 +267,21 @@ def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Names
             live = open_live_server(settings.foxglove) if settings.foxglove else None
         except (MissionTreeError, LiveServerError) as error:
             raise UsageError(str(error)) from error
-        from bt_servicesim.mission.run import MissionRun  # rclpy only once the input is good
+        from bt_servicesim.mission.run import MissionRun  # rclpy once the tree is good
+
+        _check_simulator(head_start)  # meanwhile the simulator checked the world
 
         mission = MissionRun(
             settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
             monitor=monitor, live_server=live, simulator=head_start.hand_over())
         stops.hold()
         return mission, monitor, live
-    except (UsageError, OSError, NoFreeDomainError) as error:
+    except (UsageError, OSError, NoFreeDomainError, SimulatorDiedError) as error:
         stops.hold()
         _close_servers(monitor, live)
         head_start.abandon()
-        return error_line(PROG, error)
+        status = error_line(PROG, error)
+        return EXIT_FAILED if isinstance(error, SimulatorDiedError) else status
     except (KeyboardInterrupt, Terminated) as stop:
         stops.hold(stop)
         _close_servers(monitor, live)
@@ -274,6 +289,19 @@ def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Names
         print(f"{PROG}: stopped by {signal.Signals(signal_of(stop)).name} while starting",
               file=sys.stderr)
         return exit_code_for(stop)
+
+
+class SimulatorDiedError(RuntimeError):
+    """The run's simulator ended before it had checked its input, not refusing it."""
+
+
+def _check_simulator(head_start: HeadStart) -> None:
+    """Wait for the simulator's word on its input: :class:`UsageError` if it refused it (its
+    exit status 2), :class:`SimulatorDiedError` if it ended otherwise."""
+    refusal = head_start.simulator_refusal()
+    if refusal is not None:
+        code, how = refusal
+        raise (UsageError if code == EXIT_BAD_INPUT else SimulatorDiedError)(how)
 
 
 def _close_servers(monitor: Groot2Server | None, live: LiveServer | None) -> None:

@@ -1,7 +1,10 @@
 """``python -m bt_servicesim.trajectory DIR``: draw a recorded run's trajectory picture again.
 
 The picture is drawn from the run's ``run.mcap`` (and the target areas from its tree log) by
-:mod:`bt_servicesim.records.trajectory`, exactly as the run drew it when it ended.
+:mod:`bt_servicesim.records.trajectory`, exactly as the run drew it when it ended. A recording
+cut short (the run was killed before it closed it) is drawn up to the cut, with a warning line
+that says so; one with nothing before the cut, or no recording at all, is one error line and
+exit 2.
 """
 
 from __future__ import annotations
@@ -10,9 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-from mcap.exceptions import McapError
-
-from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_OK, OneLineArgumentParser, interruptible
+from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, UsageError, error_line, interruptible
 from bt_servicesim.records.mcap import MCAP_NAME
 from bt_servicesim.records.trajectory import (
     TRAJECTORY_NAME,
@@ -21,6 +22,8 @@ from bt_servicesim.records.trajectory import (
     trace_from_recording,
 )
 from bt_servicesim.records.tree_log import LOG_NAME, TreeLogError
+
+PROG = "python -m bt_servicesim.trajectory"
 
 
 def _title_from_report(run: Path) -> str:
@@ -36,25 +39,43 @@ def _title_from_report(run: Path) -> str:
 def main(argv: list[str] | None = None) -> int:
     """``python -m bt_servicesim.trajectory DIR [--out FILE]``: redraw a recorded run."""
     parser = OneLineArgumentParser(
-        prog="python -m bt_servicesim.trajectory",
+        prog=PROG,
         description="Draw a recorded run's trajectory picture again, from its run.mcap.")
     parser.add_argument("run", type=Path, help="run directory (with run.mcap)")
     parser.add_argument("--out", type=Path, help="PNG to write (default DIR/trajectory.png)")
     args = parser.parse_args(argv)
-    prog = parser.prog
     recording, tree_log = args.run / MCAP_NAME, args.run / LOG_NAME
+    out = args.out or args.run / TRAJECTORY_NAME
     try:
+        _check_out(args.out)
         if not recording.is_file():
             raise ValueError(f"{args.run}: no {MCAP_NAME} here (was the run given --out?)")
         trace = trace_from_recording(recording)
         boxes = boxes_from_tree_log(tree_log) if tree_log.is_file() else {}
-    except (ValueError, McapError, TreeLogError) as error:
-        print(f"{prog}: error: {' '.join(str(error).split())}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    render_trajectory(trace, path=args.out or args.run / TRAJECTORY_NAME, boxes=boxes,
-                      title=_title_from_report(args.run))
+        if trace.cut_short is not None and trace.map_image is None and not trace.robot:
+            raise ValueError(f"{trace.cut_short}: nothing to draw")
+    except (ValueError, TreeLogError) as error:
+        return error_line(PROG, error)
+    try:
+        render_trajectory(trace, path=out, boxes=boxes, title=_title_from_report(args.run))
+    except OSError as error:
+        where = f"--out {args.out}" if args.out else str(out)
+        return error_line(PROG, f"{where}: {error.strerror or error}")
+    if trace.cut_short is not None:
+        print(f"{PROG}: warning: {trace.cut_short}; {out} shows the run up to the cut",
+              file=sys.stderr)
     return EXIT_OK
 
 
+def _check_out(out: Path | None) -> None:
+    """``--out`` names a file that can be made: not a directory, in a directory that exists."""
+    if out is None:
+        return
+    if out.is_dir():
+        raise UsageError(f"--out {out}: is a directory; name the PNG file to write")
+    if not out.parent.is_dir():
+        raise UsageError(f"--out {out}: no directory {out.parent} to write it in")
+
+
 if __name__ == "__main__":
-    sys.exit(interruptible("python -m bt_servicesim.trajectory", main))
+    sys.exit(interruptible(PROG, main))

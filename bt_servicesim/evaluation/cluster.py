@@ -45,7 +45,6 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from distributed import Client, Event, Future, Variable, get_client, get_worker
-from distributed.comm import connect as comm_connect
 
 from bt_servicesim.cli import UsageError
 from bt_servicesim.evaluation.episodes import (
@@ -57,6 +56,7 @@ from bt_servicesim.evaluation.episodes import (
     run_command,
 )
 from bt_servicesim.evaluation.progress import Progress
+from bt_servicesim.evaluation.scheduler_probe import ProbeError, server_kind
 from bt_servicesim.evaluation.settings import (
     EPISODE_NAME,
     INTERRUPTED,
@@ -108,24 +108,30 @@ def connect(address: str) -> Client:
     """A client of the scheduler at ``address`` with at least one worker, within
     :data:`CONNECT_TIMEOUT_S` each; :class:`ClusterError` otherwise, with nothing started.
 
-    The server is asked who it is before a client is made: what answers may be no scheduler
-    (a worker, or no Dask server at all), and a client that fails to start leaves noise behind.
+    The server is asked who it is before a client is made, bounded in time and size
+    (:mod:`~bt_servicesim.evaluation.scheduler_probe`): what answers may be no scheduler (a
+    worker, a listener that never replies, no Dask server at all), and a client that fails to
+    start leaves noise behind.
     """
     quiet = logging.getLogger("distributed")
     level = quiet.level
     quiet.setLevel(logging.CRITICAL)  # the one line of the ClusterError says it all
     try:
-        kind = asyncio.run(_server_kind(address))
+        kind = asyncio.run(server_kind(address, timeout_s=CONNECT_TIMEOUT_S))
         if kind != "Scheduler":
             raise ClusterError(f"--cluster {address}: the server there is a Dask {kind}, not "
                                "a scheduler")
         client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except (OSError, TimeoutError) as error:
+    except TimeoutError:
         raise ClusterError(f"--cluster {address}: no Dask scheduler answered within "
-                           f"{CONNECT_TIMEOUT_S:g} s ({' '.join(str(error).split())})") from None
-    except (ValueError, TypeError, KeyError, MemoryError) as error:  # another protocol
+                           f"{CONNECT_TIMEOUT_S:g} s (something accepted the connection and "
+                           "said nothing)") from None
+    except OSError as error:
+        raise ClusterError(f"--cluster {address}: no Dask scheduler answered: nothing "
+                           f"listens there ({error.strerror or error})") from None
+    except ProbeError as error:  # another protocol
         raise ClusterError(f"--cluster {address}: what answers there does not speak Dask's "
-                           f"protocol ({type(error).__name__} on its answer)") from None
+                           f"protocol: {error}") from None
     finally:
         quiet.setLevel(level)
     try:
@@ -137,17 +143,6 @@ def connect(address: str) -> Client:
                            f"{address}`)") from None
     logging.getLogger("distributed.client").setLevel(logging.CRITICAL)  # a lost scheduler:
     return client  # the evaluation's rows and its one line say so
-
-
-async def _server_kind(address: str) -> str:
-    """What the Dask server at ``address`` says it is: ``Scheduler``, ``Worker``, ..."""
-    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S)
-    try:
-        await comm.write({"op": "identity", "reply": True})
-        identity = await asyncio.wait_for(comm.read(), timeout=CONNECT_TIMEOUT_S)
-    finally:
-        await comm.close()
-    return str(identity.get("type", "server of unknown kind"))
 
 
 def run_on_cluster(settings: EvaluationSettings, episodes: Iterable[Episode], client: Client,

@@ -7,11 +7,14 @@ each. So the run command checks what it can check cheaply, starts the simulator,
 imports the behaviours and loads the tree (:func:`bt_servicesim.run.main`).
 
 The input is not all checked when the simulator starts: the tree file is checked while it
-comes up. A refused tree must still leave nothing behind, so :class:`HeadStart` keeps track
-of what it made -- the run directory and its parents, the simulator's log, the process, the
-claimed ROS domain -- and :meth:`HeadStart.abandon` takes all of it back: the one-line error
-is then the only trace. Until the checks pass the log is written under a temporary name, so
-that an earlier run's ``sim.log`` in a directory reused with ``--overwrite`` is kept too.
+comes up, and the simulator checks its own (the world file, ``--sim-arg``) meanwhile, saying so
+down a pipe before it brings up ROS (:meth:`HeadStart.simulator_refusal`). The run hands the
+directory over only once both passed. A refused tree or world must still leave nothing behind,
+so :class:`HeadStart` keeps track of what it made -- the run directory and its parents, the
+simulator's log, the process, the claimed ROS domain -- and :meth:`HeadStart.abandon` takes all
+of it back: the one-line error is then the only trace. Until the checks pass the log is written
+under a temporary name, so that an earlier run's files in a directory reused with
+``--overwrite`` are kept as they were, its ``sim.log`` too.
 """
 
 from __future__ import annotations
@@ -21,7 +24,8 @@ import os
 from pathlib import Path
 from types import TracebackType
 
-from bt_servicesim.mission.settings import RunSettings
+from bt_servicesim.cli import UsageError
+from bt_servicesim.mission.settings import STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.simulator_process import SIMULATOR_LOG_NAME, SimulatorProcess
 from bt_servicesim.ros.domain import DomainClaim, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
@@ -51,7 +55,7 @@ class HeadStart:
         """Make the run directory; unless the run attaches, claim a domain (not the user's:
         the run only ever talks to its own simulator) and start the simulator in it.
 
-        Raises OSError (the directory) or NoFreeDomainError; what was made by then stays
+        Raises UsageError (the directory) or NoFreeDomainError; what was made by then stays
         for :meth:`abandon`.
         """
         self._make_directory(self.settings.out)
@@ -62,7 +66,17 @@ class HeadStart:
         os.environ["ROS_DOMAIN_ID"] = str(self._claim.domain_id)
         self.simulator = SimulatorProcess.for_run(
             self.settings, self.sim_args, log_path=self.settings.out / STARTING_LOG_NAME)
-        self.simulator.start()
+        self.simulator.start(announce_checks=True)
+
+    def simulator_refusal(self) -> tuple[int, str] | None:
+        """The simulator's exit status and how it ended, if it refused its input (a world
+        file, a ``--sim-arg``); None once it has checked its input, or if the run started none.
+        Waits for its word up to the run's start-up limit."""
+        if self.simulator is None:
+            return None
+        refusal = self.simulator.input_refusal(timeout_s=STARTUP_LIMIT_S)
+        code = self.simulator.exit_code()
+        return None if refusal is None or code is None else (code, refusal)
 
     def hand_over(self) -> SimulatorProcess | None:
         """The input is good: the log takes its own name, and the run owns the simulator."""
@@ -94,9 +108,15 @@ class HeadStart:
         self._release()
 
     def _make_directory(self, path: Path) -> None:
+        """Make ``path`` and its missing parents; :class:`UsageError` naming ``--out`` if it
+        cannot be made (what was made by then stays for :meth:`abandon`)."""
         missing = [parent for parent in (path, *path.parents) if not parent.exists()]
-        path.mkdir(parents=True, exist_ok=True)
         self._made = list(reversed(missing))  # outermost first
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise UsageError(f"--out {path}: cannot make the run directory there "
+                             f"({error.strerror or error})") from None
 
     def _release(self) -> None:
         if self._claim is not None:

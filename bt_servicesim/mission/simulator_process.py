@@ -5,6 +5,14 @@ The executive never imports the simulator: the run command starts it as its own 
 else. Its output goes to a log file in the run directory; when it refuses its input (a broken
 world file, say) its last error line is what the user sees, and when it dies the run says how.
 
+A run must know that the simulator took its input (the world, ``--sim-arg``) before it takes
+its run directory: a refused world must leave an earlier run's files as they were, and a fresh
+directory empty. :meth:`SimulatorProcess.start` with ``announce_checks`` hands the simulator the
+write end of a pipe (``--checked-fd FD``); the simulator writes one line to it once its
+arguments and its world are checked, before it brings up ROS, and the run waits for that line
+(:meth:`SimulatorProcess.input_refusal`) while it has loaded its tree meanwhile. A simulator that
+refuses its input exits with the pipe unwritten, and its exit is the refusal.
+
 The simulator never outlives the run. The run stops it on every way out it sees; for the one
 it cannot see, a SIGKILL of the run, the simulator is started with Linux's parent-death signal
 (``PR_SET_PDEATHSIG``): the kernel sends it SIGTERM the moment the run is gone.
@@ -12,7 +20,9 @@ it cannot see, a SIGKILL of the run, the simulator is started with Linux's paren
 
 from __future__ import annotations
 
+import contextlib
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -22,6 +32,10 @@ from bt_servicesim.mission.settings import STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.stopping import parent_death_signal
 
 SIMULATOR_MODULE = "servicesim_sim"
+CHECKED_FD_OPTION = "--checked-fd"
+"""The simulator's option naming the pipe it writes to once its input is checked."""
+EXIT_WAIT_S = 5.0
+"""Wall seconds a simulator that closed its pipe unwritten is given to exit."""
 SIMULATOR_LOG_NAME = "sim.log"
 """The simulator's output, in the run directory."""
 
@@ -55,6 +69,7 @@ class SimulatorProcess:
         self.log_path = log_path
         self._process: subprocess.Popen[bytes] | None = None
         self._asked = False  # SIGINT sent by ask_to_stop
+        self._checks: int | None = None  # the read end of the simulator's checked-fd pipe
 
     @classmethod
     def for_run(cls, settings: RunSettings, sim_args: tuple[str, ...], *,
@@ -74,17 +89,44 @@ class SimulatorProcess:
         os.replace(self.log_path, path)
         self.log_path = path
 
-    def start(self) -> None:
-        """Start the process (once: a started simulator is not started again)."""
+    def start(self, *, announce_checks: bool = False) -> None:
+        """Start the process (once: a started simulator is not started again); with
+        ``announce_checks`` it says when it has checked its input (:meth:`input_refusal`)."""
         if self._process is not None:
             return
         parent = os.getpid()
-        with self.log_path.open("wb") as log:
-            self._process = subprocess.Popen(
-                self.command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                env=os.environ.copy(), start_new_session=True,
-                preexec_fn=parent_death_signal(parent),
-            )
+        command, passed = self.command, ()
+        if announce_checks:
+            self._checks, write_end = os.pipe()
+            command, passed = [*self.command, CHECKED_FD_OPTION, str(write_end)], (write_end,)
+        try:
+            with self.log_path.open("wb") as log:
+                self._process = subprocess.Popen(
+                    command, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                    env=os.environ.copy(), start_new_session=True, pass_fds=passed,
+                    preexec_fn=parent_death_signal(parent),
+                )
+        finally:
+            for write_end in passed:  # the simulator's now: its exit closes the pipe
+                os.close(write_end)
+
+    def input_refusal(self, *, timeout_s: float) -> str | None:
+        """How the simulator ended if it refused its input (:meth:`describe_exit`), or None once
+        it said its input is good, or after ``timeout_s`` (the run's own wait for it then
+        decides). Only for a simulator started with ``announce_checks``."""
+        if self._checks is None or self._process is None:
+            return None
+        try:
+            ready, _, _ = select.select([self._checks], [], [], timeout_s)
+            said = os.read(self._checks, 64) if ready else b"checked"
+        finally:
+            os.close(self._checks)
+            self._checks = None
+        if said:
+            return None
+        with contextlib.suppress(subprocess.TimeoutExpired):  # closed as it exits
+            self._process.wait(timeout=EXIT_WAIT_S)
+        return self.describe_exit()
 
     @property
     def pid(self) -> int | None:
@@ -98,6 +140,9 @@ class SimulatorProcess:
             return "the simulator is still running"
         if code < 0:
             return f"the simulator was killed by {signal.Signals(-code).name}"
+        stopped_by = _signal_name(code - 128)
+        if stopped_by is not None:  # it caught the signal and ended as commands do: 128 + N
+            return f"the simulator was stopped by {stopped_by} (exit status {code})"
         return f"the simulator exited with code {code}: {self.last_error()}"
 
     def exit_code(self) -> int | None:
@@ -122,6 +167,9 @@ class SimulatorProcess:
     def stop(self, *, grace_s: float = 5.0) -> None:
         """SIGINT (unless :meth:`ask_to_stop` sent it), then SIGKILL if it does not exit within
         ``grace_s``."""
+        if self._checks is not None:  # never asked whether its input was good
+            os.close(self._checks)
+            self._checks = None
         if self._process is None or self._process.poll() is not None:
             return
         if not self._asked:
@@ -131,3 +179,11 @@ class SimulatorProcess:
         except subprocess.TimeoutExpired:
             self._process.kill()
             self._process.wait()
+
+
+def _signal_name(number: int) -> str | None:
+    """``SIGTERM`` for 15; None for a number that is no signal."""
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return None

@@ -35,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from mcap.reader import make_reader
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -45,6 +44,7 @@ from std_msgs.msg import String
 
 from bt_servicesim.planning.geometry import Box
 from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, RECORDED_TOPICS, TREE_TOPIC
+from bt_servicesim.records.recording import RecordingCutShortError, recorded_messages
 from bt_servicesim.records.tree_log import read_tree_log
 from bt_servicesim.ros.planar_cdr import odometry_pose
 
@@ -148,6 +148,8 @@ class RunTrace:
     people: dict[str, list[Point2D]] = field(default_factory=dict)
     events: list[RunEvent] = field(default_factory=list)
     start: Point2D | None = None
+    cut_short: str | None = None
+    """Why the trace ends early, when it was read from a recording cut short."""
 
 
 class TraceBuilder:
@@ -398,7 +400,9 @@ def trace_from_recording(mcap_path: Path,
     """The trace rebuilt from a run's ``run.mcap``, messages in the order they arrived.
 
     The mission's phases come from ``phases`` ((sim time, phase) in time order, as the run
-    noted them) when given, else from the recorded tree snapshots.
+    noted them) when given, else from the recorded tree snapshots. A recording cut short gives
+    the trace up to the cut, with :attr:`RunTrace.cut_short` saying so; one that cannot be read
+    at all raises :class:`~bt_servicesim.records.recording.RecordingError`.
     """
     types = {topic.name: topic.message_type for topic in RECORDED_TOPICS}
     now_ns = [0]
@@ -409,9 +413,8 @@ def trace_from_recording(mcap_path: Path,
         "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
     }
     topics = [*handlers, *([TREE_TOPIC] if phases is None else [])]
-    with mcap_path.open("rb") as stream:  # in the order written, which is the order of arrival
-        for _schema, channel, message in make_reader(stream).iter_messages(
-                topics=topics, log_time_order=False):
+    try:  # in the order written, which is the order of arrival
+        for channel, message in recorded_messages(mcap_path, topics=topics):
             while noted and noted[0][0] * 1e9 < message.log_time:  # ties: message first
                 when, phase = noted.popleft()
                 now_ns[0] = round(when * 1e9)
@@ -424,6 +427,8 @@ def trace_from_recording(mcap_path: Path,
             elif channel.topic == TREE_TOPIC and phases is None:
                 snapshot = json.loads(deserialize_message(message.data, String).data)
                 builder.note_phase(str(snapshot.get("phase", "-")))
+    except RecordingCutShortError as error:  # what was read before the cut is drawn
+        builder.trace.cut_short = str(error)
     for when, phase in noted:  # noted after the last message
         now_ns[0] = round(when * 1e9)
         builder.note_phase(phase)

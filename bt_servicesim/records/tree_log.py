@@ -283,6 +283,22 @@ class TreeHistory:
                                f"{first.tick} at {first.sim_time_s:.1f} s sim")
         return position
 
+    def check_within(self, *, tick: int | None = None, sim_time_s: float | None = None) -> None:
+        """:class:`TreeLogError` for a moment after the log's last record: the run had ended
+        (its last tick changed something: the root's status, at least) and nothing was
+        logged then, so no state can be shown for it."""
+        if not self.states:
+            return
+        last = self.states[-1]
+        if tick is not None and tick > last.tick:
+            when = f"tick {tick}"
+        elif sim_time_s is not None and sim_time_s > last.sim_time_s:
+            when = f"sim time {sim_time_s:g} s"
+        else:
+            return
+        raise TreeLogError(f"nothing logged at {when}: the run's last record is tick "
+                           f"{last.tick} at {last.sim_time_s:.1f} s sim")
+
 
 def read_tree_log(path: Path) -> TreeHistory:
     """Read ``tree_log.jsonl``; every problem is a :class:`TreeLogError` naming the file."""

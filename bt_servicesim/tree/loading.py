@@ -16,6 +16,7 @@ refused when it loads, rather than showing no phases later.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ElementTree
+from itertools import chain
 from pathlib import Path
 
 import py_trees
@@ -24,6 +25,7 @@ from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from bt_servicesim.behaviours import node_registry
 from bt_servicesim.tree.files import DEFAULT_TREE
 from bt_servicesim.tree.shape import short_label
+from bt_servicesim.tree.structure import main_tree_id, structure_problems
 from bt_servicesim.tree.validation import tree_file_problems
 
 PHASES_ATTRIBUTE = "phases"
@@ -40,32 +42,36 @@ def load_mission_tree(
     path: str | Path = DEFAULT_TREE,
     *,
     time_limit_s: float | None = None,
-    main_tree_id: str | None = None,
+    main_tree: str | None = None,
 ) -> py_trees.behaviour.Behaviour:
-    """Parse ``path`` into a py_trees root; ``time_limit_s`` overrides the tree's own default."""
+    """Parse ``path`` into a py_trees root; ``time_limit_s`` overrides the tree's own default,
+    ``main_tree`` names the tree to play instead of the file's ``main_tree_to_execute``."""
     tree_file = Path(path)
     if not tree_file.is_file():
-        raise MissionTreeError(f"{tree_file}: no such tree file")
-    _check_xml(tree_file)
+        what = "is a directory, not a tree file" if tree_file.is_dir() else "no such tree file"
+        raise MissionTreeError(f"{tree_file}: {what}")
+    top = _check_xml(tree_file)
     registry = node_registry()
-    for problem in tree_file_problems(ElementTree.parse(tree_file).getroot(), registry):
+    problems = chain(structure_problems(top, registry, main_tree=main_tree),
+                     tree_file_problems(top, registry))
+    for problem in problems:
         raise MissionTreeError(f"{tree_file}: {problem}")
     overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
     try:
         root = parse_behaviour_tree_xml(
-            str(tree_file), main_tree_id=main_tree_id, node_registry=registry,
-            input_mappings=overrides,
+            str(tree_file), main_tree_id=main_tree_id(top, main_tree),
+            node_registry=registry, input_mappings=overrides,
         )
     except Exception as error:  # the parser raises many kinds; the user needs one line
         raise MissionTreeError(f"{tree_file}: {_one_line(error)}") from error
-    _check_phases(tree_file, root, main_tree_id)
+    _check_phases(tree_file, root, main_tree)
     return root
 
 
-def phases_of(path: str | Path = DEFAULT_TREE, *, main_tree_id: str | None = None) -> str:
+def phases_of(path: str | Path = DEFAULT_TREE, *, main_tree: str | None = None) -> str:
     """The name of the composite whose children are the mission's phases, as the tree says."""
     root = ElementTree.parse(path).getroot()
-    main = main_tree_id or root.get("main_tree_to_execute")
+    main = main_tree_id(root, main_tree)
     for tree in root.findall("BehaviorTree"):
         if main is None or tree.get("ID") == main:
             return tree.get(PHASES_ATTRIBUTE, DEFAULT_PHASES)
@@ -73,12 +79,12 @@ def phases_of(path: str | Path = DEFAULT_TREE, *, main_tree_id: str | None = Non
 
 
 def _check_phases(tree_file: Path, root: py_trees.behaviour.Behaviour,
-                  main_tree_id: str | None) -> None:
+                  main_tree: str | None) -> None:
     declared = ElementTree.parse(tree_file).getroot().find(
         f"BehaviorTree[@{PHASES_ATTRIBUTE}]")
     if declared is None:
         return
-    phases = phases_of(tree_file, main_tree_id=main_tree_id)
+    phases = phases_of(tree_file, main_tree=main_tree)
     if not any(short_label(node.name) == phases and isinstance(node, py_trees.composites.Composite)
                for node in root.iterate()):
         raise MissionTreeError(
@@ -86,7 +92,8 @@ def _check_phases(tree_file: Path, root: py_trees.behaviour.Behaviour,
 
 
 
-def _check_xml(tree_file: Path) -> None:
+def _check_xml(tree_file: Path) -> ElementTree.Element:
+    """The file's top element, if it is well-formed XML, a ``<root>`` with a tree in it."""
     try:
         root = ElementTree.parse(tree_file).getroot()
     except ElementTree.ParseError as error:
@@ -95,6 +102,7 @@ def _check_xml(tree_file: Path) -> None:
         raise MissionTreeError(f"{tree_file}: the top element is <{root.tag}>, expected <root>")
     if root.find("BehaviorTree") is None:
         raise MissionTreeError(f"{tree_file}: no <BehaviorTree> element")
+    return root
 
 
 def _one_line(error: BaseException) -> str:

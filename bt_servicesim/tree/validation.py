@@ -8,7 +8,13 @@ node and the attribute:
 
 - every required input port without a default of this project's nodes is given;
 - a constructor argument given as a constant (``num_failures="3"``, ``seconds="2.0"``) converts
-  to the type the constructor declares (int, float or bool);
+  to the type the constructor declares (int, float or bool), and so does a constant given to an
+  input port declared int or float (``sighting_gap="4.0"``);
+- every such number is finite and 0 or more (:func:`number_problem`): each one a tree file
+  gives is a time, a distance, a count or a seed. ``nan`` would make every comparison false
+  (``<SimWait seconds="nan">`` never ends, ``<RobotInArea margin="nan">`` never holds) and a
+  negative count or time ends a node before it starts. The one exception is py_trees' own:
+  ``<Repeat num_success="-1">`` repeats for ever (:data:`LOWEST`);
 - ``memory`` of a Sequence or Fallback is ``true`` or ``false``; ``policy`` of a Parallel is one
   py_trees knows.
 
@@ -26,6 +32,8 @@ next, since a seed has to replay the same mission:
 from __future__ import annotations
 
 import inspect
+import math
+import types
 import typing
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Iterator, Mapping
@@ -33,14 +41,17 @@ from collections.abc import Iterator, Mapping
 import py_trees
 from py_trees.ports import PortsMixin
 
-__all__ = ["tree_file_problems"]
+from bt_servicesim.tree.structure import SUBTREE_TAGS, element_label
+
+__all__ = ["LOWEST", "number_problem", "tree_file_problems"]
 
 PARALLEL_POLICIES = ("success_on_all", "success_on_one", "success_on_selected")
 WALL_CLOCK_NODES = {"Timeout": "SimTimeout", "Timer": "SimWait"}
 """py_trees' nodes that read the wall clock, each with this project's node on sim time to use
 instead. Of what py_trees' XML parser builds, only the ``Timeout`` decorator reads it; its
 ``Timer`` leaf is refused by name too, in case it is ever registered."""
-SUBTREE_TAGS = ("subtree", "subtreeplus")
+LOWEST = {("repeat", "num_success"): -1}
+"""(lower-case tag, attribute): the lowest number it takes, where that is not 0."""
 _NOT_ARGUMENTS = {"name", "child", "children", "behaviour_class_name"}
 
 
@@ -50,7 +61,7 @@ def tree_file_problems(root: ElementTree.Element,
     decorators = _py_trees_decorators()
     for tree in root.findall("BehaviorTree"):
         for element in tree.iter():
-            yield from (f"{_where(element)}: {problem}" for problem
+            yield from (f"{element_label(element)}: {problem}" for problem
                         in _element_problems(element, registry=registry, decorators=decorators))
 
 
@@ -77,13 +88,6 @@ def _element_problems(element: ElementTree.Element, *, registry: Mapping[str, ty
             yield f'policy="{policy}" is not one of {", ".join(PARALLEL_POLICIES)}'
 
 
-def _where(element: ElementTree.Element) -> str:
-    """The element by its name, or when it has none by all its attributes."""
-    shown = {"name": element.attrib["name"]} if "name" in element.attrib else element.attrib
-    attributes = "".join(f' {key}="{value}"' for key, value in shown.items())
-    return f"<{element.tag}{attributes}>"
-
-
 def _wall_clock_node(tag: str, *, registry: Mapping[str, type]) -> str | None:
     """py_trees' wall-clock node that ``tag`` builds (its parser matches decorators in any
     case), or None; a node of this project's registry under that tag is this project's."""
@@ -102,14 +106,33 @@ def _node_problems(element: ElementTree.Element, cls: type) -> Iterator[str]:
         for name, info in cls.input_ports().items():
             if info.required and info.default_value is None and name not in element.attrib:
                 yield f"the required input port {name} is not given"
-    hints = _constructor_hints(cls)
+    hints = {name: hint for name, hint in _constructor_hints(cls).items() if name not in ports}
+    hints.update(_port_hints(cls.input_ports() if ports else {}))
     for attribute, value in element.attrib.items():
-        if attribute in ports or attribute in _NOT_ARGUMENTS or _is_key(value):
-            continue
         expected = hints.get(attribute)
-        if expected is not None and not _converts(value, expected):
-            article = "an" if expected.__name__[0] in "aeiou" else "a"
-            yield f'{attribute}="{value}" is not {article} {expected.__name__}'
+        if attribute in _NOT_ARGUMENTS or _is_key(value) or expected is None:
+            continue
+        problem = number_problem(value, expected,
+                                 lowest=LOWEST.get((element.tag.lower(), attribute), 0))
+        if problem is not None:
+            yield f'{attribute}="{value}" {problem}'
+
+
+def number_problem(value: str, expected: type, *, lowest: int = 0) -> str | None:
+    """What is wrong with ``value`` as a tree file's ``expected`` (int, float or bool), or None:
+    it does not convert, or it is a number that is not finite or below ``lowest``."""
+    if not _converts(value, expected):
+        article = "an" if expected.__name__[0] in "aeiou" else "a"
+        return f"is not {article} {expected.__name__}"
+    if expected is bool:
+        return None
+    number = expected(value)
+    if not math.isfinite(number):
+        return "is not a finite number"
+    if number < lowest:
+        below = "negative" if lowest == 0 else f"less than {lowest}"
+        return f"is {below}: it must be {lowest} or more"
+    return None
 
 
 def _constructor_hints(cls: type) -> dict[str, type]:
@@ -119,8 +142,22 @@ def _constructor_hints(cls: type) -> dict[str, type]:
     except (NameError, TypeError):  # hints that do not resolve: nothing to check against
         return {}
     parameters = inspect.signature(cls.__init__).parameters
-    return {name: hint for name, hint in hints.items()
-            if name in parameters and hint in (int, float, bool)}
+    return {name: plain for name, hint in hints.items()
+            if name in parameters and (plain := _plain_type(hint)) is not None}
+
+
+def _port_hints(ports: Mapping[str, typing.Any]) -> dict[str, type]:
+    """The input ports declared int, float or bool, by name: a constant given them is one."""
+    return {name: plain for name, info in ports.items()
+            if (plain := _plain_type(info.data_type)) is not None}
+
+
+def _plain_type(hint: object) -> type | None:
+    """int, float or bool for a hint that is one of them (or one of them or None), else None."""
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        others = [arg for arg in typing.get_args(hint) if arg is not type(None)]
+        hint = others[0] if len(others) == 1 else None
+    return hint if hint in (int, float, bool) else None
 
 
 def _seeds_from_name(cls: type) -> bool:

@@ -2,13 +2,16 @@
 
 Bad arguments and broken world files give one line on stderr and exit status 2; the ROS graph is
 only touched once the world has loaded and been set in motion (its task drawn, its people
-placed), so a world that loads but cannot be played is one line too. The arguments are
-:mod:`servicesim_sim.arguments`'s, which the reset service takes as well.
+placed), so a world that loads but cannot be played is one line too. With ``--checked-fd FD``
+it then writes one line to that file descriptor and closes it: the run that started it waits
+for that word (or the exit) before it takes its run directory, so a refused world leaves an
+earlier run's files as they were. The arguments are :mod:`servicesim_sim.arguments`'s, which
+the reset service takes as well.
 
-A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator with status 0
-(:func:`servicesim_sim.ros.simulator.run_simulator`); one that comes while it is still starting (its
-imports, the world, ROS) ends it in one line with 128 + the signal, as an interrupted command.
-One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
+A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator cleanly with 128 + the signal
+(:func:`servicesim_sim.ros.simulator.run_simulator`), as any command a signal ends; one that comes
+while it is still starting (its imports, the world, ROS) ends it in one line with the same
+status. One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
 """
 
 from __future__ import annotations
@@ -37,7 +40,12 @@ def _stopped_while_starting(signal_number: int, _frame: FrameType | None) -> Non
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    parser.add_argument("--checked-fd", type=int, metavar="FD",
+                        help="write one line to this file descriptor, and close it, once the "
+                        "arguments and the world are checked (before ROS is brought up): a "
+                        "run waits for it before it takes its run directory")
+    args = parser.parse_args(argv)
     note_ignored_at_start()
     for number in handled():  # until run_simulator puts its own in place
         signal.signal(number, _stopped_while_starting)
@@ -57,6 +65,14 @@ def _play(args: argparse.Namespace) -> int:
     except SettingsError as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if args.checked_fd is not None:
+        try:
+            os.write(args.checked_fd, b"checked\n")
+            os.close(args.checked_fd)
+        except OSError as error:
+            print(f"{PROG}: error: --checked-fd {args.checked_fd}: {error.strerror or error}",
+                  file=sys.stderr)
+            return EXIT_BAD_INPUT
     if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     from servicesim_sim.process.environment import apply_environment_defaults

@@ -102,6 +102,8 @@ def test_running_only_collapses_branches_that_are_not_running(
     (["--tick", "0"], "nothing logged at tick 0"),
     (["--time", "1.0"], "nothing logged at sim time 1 s"),
     (["--tick", "-3"], "--tick -3: must be 0 or more"),
+    (["--time", "99999"], "nothing logged at sim time 99999 s: the run's last record is tick"),
+    (["--tick", "99999"], "nothing logged at tick 99999: the run's last record is tick"),
 ])
 def test_a_moment_outside_the_run_is_one_line_and_exit_2(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str],

@@ -23,6 +23,10 @@ def run(*arguments: str, cwd: Path) -> subprocess.CompletedProcess[str]:
         (["--speed", "-1"], "--speed"),
         (["--time-limit", "0"], "--time-limit"),
         (["--tree", "no_such_tree.xml"], "no_such_tree.xml"),
+        (["--tree", "."], ".: is a directory, not a tree file"),
+        (["--world", "."], "--world .: is a directory, not a world file"),
+        (["--out", "/proc/x/run"], "--out /proc/x/run: cannot make the run directory there"),
+        (["--out", "/dev/null/run"], "--out /dev/null/run: /dev/null is not a directory"),
         (["--executive", "magic"], "--executive"),
         (["--trajectory", "sometimes"], "--trajectory"),
         (["--frobnicate"], "--frobnicate"),
@@ -36,6 +40,15 @@ def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[s
     assert len(lines) == 1, result.stderr
     assert named in lines[0]
     assert not (tmp_path / "runs").exists(), "nothing is started or written on bad input"
+
+
+WAIT = "<BehaviorTree ID='W'><SimWait name='W' seconds='1'/></BehaviorTree>"
+
+
+def tree(body: str, others: str = "") -> str:
+    """A tree file whose main tree is ``body``, with the trees ``others`` beside it."""
+    return (f"<root main_tree_to_execute='M'><BehaviorTree ID='M'>{body}</BehaviorTree>"
+            f"{others}</root>")
 
 
 @pytest.mark.parametrize(
@@ -53,6 +66,23 @@ def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[s
         ("<root main_tree_to_execute='M'><BehaviorTree ID='M'><SubTree ID='W'/></BehaviorTree>"
          "<BehaviorTree ID='W'><SimWait name='W' seconds='1'/></BehaviorTree></root>",
          "a SubTree needs a name"),
+        (tree("<SimWait name='W' seconds='nan'/>"), 'seconds="nan" is not a finite number'),
+        (tree("<Retry name='R' num_failures='-3'><SimWait name='W' seconds='1'/></Retry>"),
+         'num_failures="-3" is negative'),
+        (tree("<RobotInArea name='A' margin='nan' box='{b}' robot_pose='{p}'/>"),
+         'margin="nan" is not a finite number'),
+        (tree("<GuestApproachGoal name='G' sighting_gap='-1' guest_name='{g}' "
+              "rfid_history='{h}' occupancy='{o}' robot_pose='{p}' goal='{x}'/>"),
+         'sighting_gap="-1" is negative'),
+        (tree("<SubTree ID='W' name='S'/>", WAIT + WAIT), 'two <BehaviorTree ID="W">'),
+        (tree("<SimWait name='W' seconds='1'><SimWait name='X' seconds='1'/></SimWait>"),
+         "a leaf takes no child elements; it has <SimWait>"),
+        ("<root main_tree_to_execute='A'><BehaviorTree ID='A'><SubTree ID='B' name='b'/>"
+         "</BehaviorTree><BehaviorTree ID='B'><SubTree ID='A' name='a'/></BehaviorTree></root>",
+         "a SubTree cycle: A -> B -> A"),
+        ("<root><BehaviorTree ID='M'><SubTree ID='W' name='S'/></BehaviorTree>" + WAIT
+         + "</root>", "2 trees and no main_tree_to_execute"),
+        (tree("<SubTree name='S'/>", WAIT), "a SubTree needs an ID"),
     ],
 )
 def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content: str,
@@ -80,3 +110,31 @@ def test_a_refused_tree_keeps_the_earlier_run_it_was_to_overwrite(tmp_path: Path
     assert result.returncode == 2 and "broken.xml" in result.stderr
     assert sorted(path.name for path in earlier.iterdir()) == ["report.json", "sim.log"]
     assert (earlier / "sim.log").read_text() == "the earlier run's simulator\n"
+
+
+@pytest.mark.parametrize(("arguments", "problem"), [
+    pytest.param(["--world", "missing_map.yaml"],
+                 "missing_map.yaml: map nowhere.yaml: no such file", id="world"),
+    pytest.param(["--sim-arg=--frobnicate"], "unrecognized arguments: --frobnicate",
+                 id="sim-arg"),
+])
+def test_input_the_simulator_refuses_writes_nothing_and_keeps_an_earlier_run(
+        tmp_path: Path, arguments: list[str], problem: str) -> None:
+    """The simulator checks the world (and its own arguments) before the run takes its
+    directory: a refusal leaves an earlier run as it was, and makes no fresh directory."""
+    (tmp_path / "missing_map.yaml").write_text("name: broken\nmap: nowhere.yaml\n")
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    kept = {"report.json": '{"status": "completed"}', "sim.log": "the earlier simulator\n",
+            "run.mcap": "earlier", "tree_log.jsonl": "earlier", "final_tree.txt": "earlier",
+            "trajectory.png": "earlier"}
+    for name, text in kept.items():
+        (earlier / name).write_text(text)
+    result = run(*arguments, "--out", str(earlier), "--overwrite", cwd=tmp_path)
+    assert result.returncode == 2
+    (line,) = result.stderr.strip().splitlines()
+    assert problem in line
+    assert {path.name: path.read_text() for path in earlier.iterdir()} == kept
+    fresh = run(*arguments, "--out", "fresh/run", cwd=tmp_path)
+    assert fresh.returncode == 2 and problem in fresh.stderr
+    assert not (tmp_path / "fresh").exists(), "exit 2: nothing was started, nothing written"

@@ -12,8 +12,10 @@ outright; and bad addresses are refused before anything starts.
 from __future__ import annotations
 
 import json
+import re
 import signal
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -238,7 +240,7 @@ def test_an_address_that_is_no_scheduler_address_is_refused(address: str) -> Non
 
 
 @pytest.mark.parametrize(("address", "problem"), [
-    ("tcp://127.0.0.1:9", "no Dask scheduler answered within 10 s"),
+    ("tcp://127.0.0.1:9", "no Dask scheduler answered: nothing listens there"),
     ("127.0.0.1:9", "not a scheduler address"),
 ])
 def test_a_bad_cluster_gives_one_line_and_starts_nothing(
@@ -252,17 +254,44 @@ def test_a_bad_cluster_gives_one_line_and_starts_nothing(
     assert not out.exists(), "nothing started"
 
 
-def test_a_server_that_is_no_dask_scheduler_is_refused_in_one_line() -> None:
+SILENT = b""
+"""A listener that accepts and never answers."""
+
+
+@pytest.mark.parametrize(("answer", "problem"), [
+    pytest.param(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 3,
+                 "does not speak Dask's protocol: it announced an answer of", id="http"),
+    pytest.param(struct.pack("<Q", 3 * 10**9) + b"x" * 64,
+                 "does not speak Dask's protocol: it announced an answer of 3000000000 bytes",
+                 id="plausible-length"),
+    pytest.param(struct.pack("<Q", 16) + b"\xff" * 16,
+                 "does not speak Dask's protocol: its answer is not Dask's framing",
+                 id="garbage-frames"),
+    pytest.param(b"\x00\x01", "does not speak Dask's protocol: it closed the connection",
+                 id="closed"),
+    pytest.param(SILENT, "no Dask scheduler answered within 1 s", id="silent"),
+])
+def test_a_server_that_is_no_dask_scheduler_is_refused_in_one_line(
+        monkeypatch: pytest.MonkeyPatch, answer: bytes, problem: str) -> None:
+    monkeypatch.setattr("bt_servicesim.evaluation.cluster.CONNECT_TIMEOUT_S", 1.0)
+    done = threading.Event()
     with socket.create_server(("127.0.0.1", 0)) as server:
-        def answer_in_http() -> None:
+        def answer_once() -> None:
             connection, _ = server.accept()
             with connection:
-                connection.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 3)
+                connection.recv(4096)
+                if answer:
+                    connection.sendall(answer)
+                    return
+                done.wait(timeout=30)  # silent until the client has given up
 
-        threading.Thread(target=answer_in_http, daemon=True).start()
+        threading.Thread(target=answer_once, daemon=True).start()
         address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
-        with pytest.raises(ClusterError, match="does not speak Dask's protocol") as refused:
-            connect(address)
+        try:
+            with pytest.raises(ClusterError, match=re.escape(problem)) as refused:
+                connect(address)
+        finally:
+            done.set()
     assert "\n" not in str(refused.value)
 
 

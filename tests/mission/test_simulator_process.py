@@ -56,3 +56,49 @@ def test_a_process_stopped_without_asking_is_signalled_and_waited_for(tmp_path: 
     process.stop()
     assert process.exit_code() == 0
     assert process.last_error() == "SIGINTs: 1"
+
+
+CHECKING = """
+import os, sys, time
+fd = int(sys.argv[sys.argv.index("--checked-fd") + 1])
+if "--world" in sys.argv:
+    print("python -m servicesim_sim: error: --world x.yaml: no such map", flush=True)
+    sys.exit(2)
+os.write(fd, b"checked\\n")
+os.close(fd)
+time.sleep(30)
+"""
+
+
+def checking_process(tmp_path: Path, *, refuses: bool) -> SimulatorProcess:
+    process = SimulatorProcess(world=None, seed=None, speed=0.0, log_path=tmp_path / "sim.log")
+    process.command = [sys.executable, "-c", CHECKING, *(["--world"] if refuses else [])]
+    process.start(announce_checks=True)
+    return process
+
+
+def test_a_simulator_that_refuses_its_input_says_so_through_its_exit(tmp_path: Path) -> None:
+    process = checking_process(tmp_path, refuses=True)
+    refusal = process.input_refusal(timeout_s=30.0)
+    assert process.exit_code() == 2
+    assert refusal == ("the simulator exited with code 2: python -m servicesim_sim: error: "
+                       "--world x.yaml: no such map")
+
+
+def test_a_simulator_that_checked_its_input_is_waited_for_no_longer(tmp_path: Path) -> None:
+    process = checking_process(tmp_path, refuses=False)
+    try:
+        assert process.input_refusal(timeout_s=30.0) is None
+        assert process.exit_code() is None
+    finally:
+        process.stop()
+
+
+def test_a_simulator_stopped_by_a_signal_it_caught_is_said_to_be(tmp_path: Path) -> None:
+    process = SimulatorProcess(world=None, seed=None, speed=0.0, log_path=tmp_path / "sim.log")
+    process.command = [sys.executable, "-c", "print('an unrelated line'); raise SystemExit(143)"]
+    process.start()
+    deadline = time.monotonic() + 30.0
+    while process.exit_code() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert process.describe_exit() == "the simulator was stopped by SIGTERM (exit status 143)"

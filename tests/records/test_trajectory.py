@@ -314,3 +314,69 @@ def test_the_map_is_cut_to_its_known_cells_and_the_frames_margin() -> None:
     unknown = MapImage(cells=np.full((4, 4), -1, dtype=np.int8), origin=(0.0, 0.0),
                        resolution=1.0)
     assert unknown.known_part(margin_m=1.0) is unknown
+
+
+def small_chunked_recording(path: Path, poses: int) -> None:
+    """A run.mcap of the map and ``poses`` ground-truth poses, in chunks of a few messages, so
+    that cutting its end off leaves whole chunks before the cut."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+
+    from bt_servicesim.records.mcap import complete_definition, type_name
+
+    with path.open("wb") as stream:
+        writer = Writer(stream, chunk_size=512)
+        writer.start(profile="ros2", library="test")
+        channels = {}
+        for topic, message_type in (("/servicebot/map", OccupancyGrid),
+                                    (GROUND_TRUTH_TOPIC, Odometry)):
+            name = type_name(message_type)
+            schema = writer.register_schema(name=name, encoding="ros2msg",
+                                            data=complete_definition(name).encode())
+            channels[topic] = writer.register_channel(topic=topic, message_encoding="cdr",
+                                                      schema_id=schema)
+        messages = [("/servicebot/map", office_map())]
+        messages += [(GROUND_TRUTH_TOPIC, odom_at(1.0 + 0.5 * step, 2.0)) for step in range(poses)]
+        for when, (topic, message) in enumerate(messages, start=1):
+            writer.add_message(channel_id=channels[topic], log_time=when * 10**8,
+                               publish_time=when * 10**8, data=serialize_message(message))
+        writer.finish()
+
+
+def test_a_recording_cut_short_is_drawn_up_to_the_cut_with_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    recording = tmp_path / "run.mcap"
+    small_chunked_recording(recording, poses=40)
+    whole = trace_from_recording(recording)
+    assert whole.cut_short is None and len(whole.robot) == 40
+    recording.write_bytes(recording.read_bytes()[:recording.stat().st_size // 4])
+    cut = trace_from_recording(recording)
+    assert cut.cut_short is not None and "cut short" in cut.cut_short
+    assert cut.map_image is not None and 0 < len(cut.robot) < 40
+    assert cut.robot == whole.robot[:len(cut.robot)]
+    assert trajectory.main([str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "warning" in err and f"{recording} is cut short" in err
+    assert (tmp_path / "trajectory.png").is_file()
+
+
+@pytest.mark.parametrize(("content", "out", "problem"), [
+    pytest.param(b"", None, "run.mcap is empty", id="empty"),
+    pytest.param(b"PK\x03\x04 a zip file", None, "not an MCAP recording", id="not-mcap"),
+    pytest.param(b"\x89MCAP0\r\n\x01\x02", None, "cut short", id="cut-before-any-message"),
+    pytest.param(None, ".", "--out", id="out-is-a-directory"),
+    pytest.param(None, "no/such/dir/picture.png", "--out", id="out-in-no-directory"),
+])
+def test_a_recording_or_out_that_cannot_be_drawn_is_one_line_and_exit_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], content: bytes | None,
+        out: str | None, problem: str) -> None:
+    recording = tmp_path / "run.mcap"
+    if content is None:
+        small_chunked_recording(recording, poses=3)
+    else:
+        recording.write_bytes(content)
+    arguments = [str(tmp_path)] + ([] if out is None else ["--out", str(tmp_path / out)])
+    assert trajectory.main(arguments) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error: " in err and problem in err
+    assert not (tmp_path / "trajectory.png").exists()

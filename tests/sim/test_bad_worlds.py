@@ -103,7 +103,8 @@ def test_more_idlers_than_the_map_holds_fails_at_once(tmp_path: Path) -> None:
              "  BathroomA: {min: [6.75, 3.0], max: [9.75, 4.5]}\n"
              "  BathroomB: {min: [9.85, 3.0], max: [12.85, 4.5]}\n")
     world = world_file(tmp_path, areas + "people: {walkers: 10, idlers: 5000}\n")
-    assert_one_line_exit_2(simulator("--world", str(world)), str(world), "5000 idlers")
+    assert_one_line_exit_2(simulator("--world", str(world)), str(world),
+                           "people.idlers must be within 0..400, not 5000")
 
 
 @pytest.mark.parametrize(

@@ -52,8 +52,8 @@ def test_a_broken_world_file_is_named_in_one_line(tmp_path: Path) -> None:
 @pytest.mark.parametrize("stops", [[signal.SIGHUP], [signal.SIGTERM] * 4, [signal.SIGINT]])
 def test_stop_signals_end_the_simulator_cleanly_even_when_repeated(
         tmp_path: Path, stops: list[signal.Signals]) -> None:
-    """A stop signal ends it with status 0; the ones after it (a dying run sends one per
-    thread) do not cut its shut-down short."""
+    """A stop signal ends it with 128 + its number, as any command; the ones after it (a dying
+    run sends one per thread) do not cut its shut-down short."""
     log = tmp_path / "sim.log"
     with log.open("wb") as stream:
         process = subprocess.Popen([sys.executable, "-m", "servicesim_sim", "--speed", "1"],
@@ -65,7 +65,8 @@ def test_stop_signals_end_the_simulator_cleanly_even_when_repeated(
             time.sleep(0.1)
         for stop in stops:
             process.send_signal(stop)
-        assert process.wait(timeout=30) == 0, log.read_text()[-2000:]
+        assert process.wait(timeout=30) == 128 + stops[0], log.read_text()[-2000:]
+        assert "Traceback" not in log.read_text()
     finally:
         if process.poll() is None:
             process.kill()
@@ -102,6 +103,29 @@ def test_a_stop_signal_while_starting_is_one_line_and_128_plus_the_signal(
         f"python -m servicesim_sim: stopped by {stop.name} while starting"]
 
 
+def test_a_stop_that_pybind11_turned_into_a_type_error_ends_the_simulator_cleanly() -> None:
+    """A stop signal that lands inside a pybind11 call returning a value (rclpy's
+    process_cancel_request) comes out of it as ``TypeError: Unable to convert function return
+    value to a Python type!``: it is the stop, not a crash."""
+    script = (
+        "import os, signal, sys\n"
+        "from servicesim_sim.ros import node\n"
+        "def run(self, executor):\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        while True:\n"
+        "            pass\n"
+        "    except KeyboardInterrupt:\n"
+        "        raise TypeError('Unable to convert function return value to a Python type!')\n"
+        "node.SimulatorNode.run = run\n"
+        "from servicesim_sim.__main__ import main\n"
+        "sys.exit(main(['--speed', '0']))\n")
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 128 + signal.SIGTERM, result.stderr[-2000:]
+    assert "Traceback" not in result.stderr and "TypeError" not in result.stderr
+
+
 def test_guest_path_straight_reaches_the_guest_and_trail_is_the_default() -> None:
     from servicesim_sim.__main__ import build_parser
     from servicesim_sim.settings import difficulty_from
@@ -134,7 +158,7 @@ def test_a_stop_signal_the_simulator_was_started_with_ignored_stays_ignored(
         time.sleep(1.0)
         assert process.poll() is None, log.read_text()[-2000:]
         process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=30) == 0, log.read_text()[-2000:]
+        assert process.wait(timeout=30) == 128 + signal.SIGINT, log.read_text()[-2000:]
     finally:
         if process.poll() is None:
             process.kill()

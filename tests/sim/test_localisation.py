@@ -274,6 +274,37 @@ def test_an_initial_pose_outside_the_map_frame_is_ignored_as_amcl_ignores_it(
     assert close(simulator.engine.estimated_pose() or (), SPAWN)
 
 
+def broken(field: str, value: float) -> Any:
+    """The spawn's initial pose with one number replaced: ``x``, ``yaw_w`` (the quaternion's
+    w), ``covariance``, or ``quaternion`` (all four set to ``value``)."""
+    message = initial_pose(SPAWN)
+    pose = message.pose.pose
+    if field == "x":
+        pose.position.x = value
+    elif field == "yaw_w":
+        pose.orientation.w = value
+    elif field == "quaternion":
+        pose.orientation.x = pose.orientation.y = pose.orientation.z = value
+        pose.orientation.w = value
+    else:
+        message.pose.covariance[0] = value
+    return message
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("x", math.nan), ("x", math.inf), ("yaw_w", math.nan), ("covariance", math.nan),
+    ("quaternion", 0.0)])
+def test_an_initial_pose_with_a_number_that_is_not_finite_is_ignored_as_amcl_ignores_it(
+        simulator: SimulatorNode, field: str, value: float) -> None:
+    """Nav2's AMCL rejects a malformed initialpose; taken, a NaN would have made every
+    estimate after it NaN, and every goal abort as "not a finite pose"."""
+    simulator._on_initial_pose(broken(field, value))
+    assert simulator.engine.estimated_pose() is None
+    simulator._on_initial_pose(initial_pose(SPAWN))
+    simulator._on_initial_pose(broken(field, value))
+    assert close(simulator.engine.estimated_pose() or (), SPAWN)
+
+
 def test_navigation_feedback_gives_the_estimate_not_the_truth(simulator: SimulatorNode) -> None:
     guess = (SPAWN[0] + 0.5, SPAWN[1], SPAWN[2])  # off by half a metre: not converged yet
     simulator.inputs.on_initial_pose(initial_pose(guess))

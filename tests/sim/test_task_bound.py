@@ -216,6 +216,21 @@ def test_a_bad_episodes_file_is_one_line_naming_the_episode(
     one_line_error(capsys, exit_code(["--episodes", str(episodes)]), *named)
 
 
+@pytest.mark.parametrize(("change", "named"), [
+    (("walkers: 0", "walkers: 1000000000"), "people.walkers must be within 0..200"),
+    (("idlers: 0}", "idlers: 0}\nidling_areas:\n  - {min: [-0.5, -0.5], max: [-0.45, 2.0], "
+                    "yaw: 0.0}"), "idling_areas[0] has no free map cell"),
+])
+def test_a_world_the_simulator_refuses_is_refused_by_the_bound_too(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], change: tuple[str, str],
+        named: str) -> None:
+    """The bound reads worlds with the simulator's own loader: what one refuses, both do."""
+    world = tmp_path / "world.yaml"
+    write_corridor_world(tmp_path, world)
+    world.write_text(world.read_text().replace(*change))
+    one_line_error(capsys, exit_code(["--world", str(world), "--seed", "1"]), str(world), named)
+
+
 def test_episodes_and_a_seed_on_the_command_line_are_refused(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     episodes = tmp_path / "episodes.json"

@@ -351,6 +351,13 @@ def test_tiny_world_loads(tmp_path: Path) -> None:
     assert world.people.walker_patience_s == math.inf  # the original's: waits while blocked
 
 
+def test_a_number_written_with_an_exponent_is_a_number(tmp_path: Path) -> None:
+    """YAML 1.2 reads ``1e3`` as a number; PyYAML's YAML 1.1 resolver read it as text."""
+    path = tiny_world(tmp_path)
+    path.write_text(WORLD.replace("idlers: 3}", "idlers: 3, walker_patience_s: 1e3}"))
+    assert load_world(path).people.walker_patience_s == 1000.0
+
+
 def test_world_defaults_when_optional_parts_are_left_out(tmp_path: Path) -> None:
     path = tiny_world(tmp_path)
     path.write_text(WORLD.split("task:")[0])
@@ -424,7 +431,9 @@ BROKEN = [
     ("area-point-text", replace("min: [0.5, 0.5]", "min: [a, 0.5]"), "world.yaml",
      "areas.Hall.min must be a number"),
     ("area-point-short", replace("min: [0.5, 0.5]", "min: [0.5]"), "world.yaml",
-     "areas.Hall.min must be a list [x, y]"),
+     "areas.Hall.min must be a list [x, y], not a list of 1 item"),
+    ("area-point-long", replace("min: [0.5, 0.5]", "min: [0.5, 0.5, 0.5]"), "world.yaml",
+     "areas.Hall.min must be a list [x, y], not a list of 3 items"),
     ("area-min-above-max", replace("min: [2.5, 2.5]", "min: [3.5, 2.5]"), "world.yaml",
      "areas.Kitchen: min (3.5, 2.5) must be below max"),
     ("area-off-the-map", replace("max: [3.5, 3.5]}\n  Study", "max: [4.5, 3.5]}\n  Study"),
@@ -448,7 +457,14 @@ BROKEN = [
      "task.start (3, 3) lies outside its area 'Study'"),
     ("guest-no-name", replace("name: human_12345", "name: ''"), "world.yaml",
      "task.guest.name must be a non-empty string"),
-    ("people-negative", replace("walkers: 2", "walkers: -1"), "world.yaml", "must be 0 or more"),
+    ("people-negative", replace("walkers: 2", "walkers: -1"), "world.yaml",
+     "people.walkers must be within 0..200, not -1"),
+    ("people-walkers-huge", replace("walkers: 2", "walkers: 1000000000"), "world.yaml",
+     "people.walkers must be within 0..200, not 1000000000"),
+    ("people-idlers-huge", replace("idlers: 3", "idlers: 5000"), "world.yaml",
+     "people.idlers must be within 0..400, not 5000"),
+    ("people-exponent", replace("walkers: 2", "walkers: 1e9"), "world.yaml",
+     "people.walkers must be a whole number, not float 1000000000.0"),
     ("people-text", replace("idlers: 3", "idlers: many"), "world.yaml",
      "people.idlers must be a whole number"),
     ("people-unknown", replace("walkers: 2", "runners: 2"), "world.yaml",
@@ -465,6 +481,9 @@ BROKEN = [
      "idling_areas[0]: min (3.6, 0.5) must not exceed max (3.5, 0.5)"),
     ("idling-area-off-the-map", replace("max: [3.5, 0.5]", "max: [4.5, 0.5]"), "world.yaml",
      "idling_areas[0] lies outside the map"),
+    ("idling-area-no-free-cell", replace("min: [2.5, 0.5], max: [3.5, 0.5]",
+                                         "min: [0.0, 0.5], max: [0.05, 3.5]"), "world.yaml",
+     "idling_areas[0] has no free map cell for an idler to stand on"),
     ("idling-area-unknown-key", replace("yaw: 1.5708}", "yaw: 1.5708, count: 2}"),
      "world.yaml", "unknown key 'idling_areas[0].count'"),
     ("drift-interval-order", replace("min_interval_s: 5.0", "min_interval_s: 7.0"), "world.yaml",
@@ -475,6 +494,8 @@ BROKEN = [
      "drift.count must be within 0..10000, not 1000000000"),
     ("drift-infinite", replace("start_s: 10.0", "start_s: .inf"), "world.yaml",
      "drift.start_s must be a finite number"),
+    ("drift-exponent-infinite", replace("start_s: 10.0", "start_s: 1e999"), "world.yaml",
+     "drift.start_s must be a finite number, not inf"),
     ("drift-times-not-a-list", replace("count: 2", "count: 2, times: 12"), "world.yaml",
      "drift.times must be a list of sim times in seconds, not int 12"),
     ("drift-times-falling", replace("count: 2", "count: 2, times: [20, 12]"), "world.yaml",
@@ -482,7 +503,9 @@ BROKEN = [
     ("drift-times-negative", replace("count: 2", "count: 2, times: [-1, 12]"), "world.yaml",
      "drift.times must rise, from 0 or more"),
     ("drift-times-boolean", replace("count: 2", "count: 2, times: [true]"), "world.yaml",
-     "drift.times must be a list of sim times in seconds"),
+     "drift.times[0] must be a number, not the boolean true"),
+    ("drift-times-nan", replace("count: 2", "count: 2, times: [12, .nan]"), "world.yaml",
+     "drift.times[1] must be a finite number, not nan"),
     ("targets-unknown", replace("[Hall, Kitchen, Study]", "[Hall, Attic]"), "world.yaml",
      "targets names an unknown area 'Attic'"),
     ("targets-twice", replace("[Hall, Kitchen, Study]", "[Hall, Hall]"), "world.yaml",

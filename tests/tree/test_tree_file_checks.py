@@ -103,3 +103,19 @@ def test_every_mission_tree_shipped_passes_the_checks() -> None:
     assert DEFAULT_TREE in missions
     for path in missions:
         load_mission_tree(path)
+
+
+def test_a_file_of_one_tree_needs_no_main_tree_to_execute(tmp_path: Path) -> None:
+    """As BehaviorTree.CPP: the only tree of a file is its main tree."""
+    path = tmp_path / "tree.xml"
+    path.write_text('<root BTCPP_format="4"><BehaviorTree ID="M">'
+                    '<SimWait name="Pause" seconds="1.0"/></BehaviorTree></root>')
+    assert load_mission_tree(path).name == "Pause"
+
+
+def test_repeat_for_ever_is_the_one_negative_number_a_tree_file_takes(tmp_path: Path) -> None:
+    body = '<Repeat name="Again" num_success="{n}"><SimWait name="W" seconds="1.0"/></Repeat>'
+    again = load_mission_tree(tree_file(tmp_path, body.format(n=-1)))
+    assert isinstance(again, py_trees.decorators.Repeat) and again.num_success == -1
+    with pytest.raises(MissionTreeError, match=r'num_success="-2" is less than -1'):
+        load_mission_tree(tree_file(tmp_path, body.format(n=-2)))

@@ -29,15 +29,22 @@ a known, static map, which is all a client can observe:
   estimate keeps following odometry from the wrong start, as a lost AMCL does;
 * every update publishes the estimate (``amcl_pose``) and moves map -> odom.
 
-A new initial pose starts over. Poses are (x, y, yaw) tuples: metres and radians.
+A new initial pose starts over. Poses are (x, y, yaw) tuples: metres and radians. An initial
+pose AMCL would ignore is ignored (:func:`initial_pose_problem`): one in a frame other than
+``map`` (AMCL takes it in its global frame only), and one with a number that is not finite or
+a quaternion of no length (Nav2's AMCL rejects such a message as malformed, with
+``nav2_util::validateMsg``), which would otherwise put NaN in every estimate after it.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from servicesim_sim.navigation.goals import MIN_QUATERNION_NORM
 
 Pose = tuple[float, float, float]
 
@@ -157,3 +164,18 @@ class AmclModel:
         self.map_to_odom = compose(pose, inverse(odom))
         self.estimate = estimate
         self._updated_at = odom
+
+
+def initial_pose_problem(*, frame_id: str, global_frame: str,
+                         numbers: Sequence[float],
+                         orientation: tuple[float, float, float, float]) -> str | None:
+    """Why AMCL would ignore this initial pose, or None: a frame that is not ``global_frame``,
+    a number that is not finite among ``numbers`` (the position, the orientation and the
+    covariance), an orientation of no length."""
+    if frame_id != global_frame:
+        return f"frame {frame_id!r}, must be {global_frame!r}"
+    if not all(math.isfinite(number) for number in numbers):
+        return "a number in it is not finite"
+    if math.hypot(*orientation) < MIN_QUATERNION_NORM:
+        return "its orientation is a quaternion of no length"
+    return None

@@ -15,6 +15,7 @@ from rclpy.node import Node
 
 from servicesim_sim.lockstep.server import LockstepServer
 from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.localisation import initial_pose_problem
 from servicesim_sim.ros.publishing import LATCHED, NO_SUBSCRIPTION_EVENTS
 from servicesim_sim.ros.robot_topics import MAP_FRAME
 
@@ -39,12 +40,17 @@ class RobotInputs:
                                  callback_group=lockstep.callback_group)
 
     def on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
-        """AMCL's initialpose: taken in the global frame only, as Nav2's AMCL does."""
-        if message.header.frame_id != MAP_FRAME:
-            self.node.get_logger().warning(
-                f"initial pose ignored: frame {message.header.frame_id!r}, must be {MAP_FRAME!r}")
-            return
+        """AMCL's initialpose: taken in the global frame only and with finite numbers, as Nav2's
+        AMCL takes it; any other is ignored with a warning."""
         pose = message.pose.pose
+        position, turn = pose.position, pose.orientation
+        orientation = (turn.x, turn.y, turn.z, turn.w)
+        problem = initial_pose_problem(
+            frame_id=message.header.frame_id, global_frame=MAP_FRAME, orientation=orientation,
+            numbers=(position.x, position.y, position.z, *orientation, *message.pose.covariance))
+        if problem is not None:
+            self.node.get_logger().warning(f"initial pose ignored: {problem}")
+            return
         yaw = 2.0 * math.atan2(pose.orientation.z, pose.orientation.w)
         self.engine.set_initial_pose(pose.position.x, pose.position.y, yaw)
 

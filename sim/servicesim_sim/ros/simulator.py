@@ -35,7 +35,8 @@ def simulator_ros_node(name: str = "servicesim") -> Node:
 
 
 def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> int:
-    """Run until Ctrl-C, SIGTERM or SIGHUP; returns the process exit status.
+    """Run until Ctrl-C, SIGTERM or SIGHUP; returns the process exit status: 128 + the stop
+    signal's number, as a command a signal ends (130 for Ctrl-C, 143 for SIGTERM).
 
     The first stop signal ends the loop; from then on further ones are ignored, so that the
     shut-down (which deletes the DDS participant and its shared-memory segment) is not cut
@@ -71,7 +72,9 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
                 settings, engine = episode.settings, episode.engine
     except KeyboardInterrupt:
         pass
-    except RuntimeError:  # the stop raised inside a pybind11 call, which turns it into this
+    except (RuntimeError, TypeError):
+        # the stop raised inside a pybind11 call, which turns it into one of these: TypeError
+        # where the call returns a value (rclpy's process_cancel_request)
         if not stopped:
             raise
     finally:
@@ -84,7 +87,7 @@ def run_simulator(settings: SimSettings, *, engine: SimEngine | None = None) -> 
         if resets is not None:
             resets.node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    return 128 + stopped[0] if stopped else 0
 
 
 def _start_episode(settings: SimSettings, engine: SimEngine | None,

@@ -1,10 +1,11 @@
 """World files: the map, the named target areas and the task a simulated world is made of.
 
-A world file is a small YAML document (the format is described in ``docs/reference/worlds.md``). It names
-a standard ROS map_server map (a map YAML beside an image), the target areas the referee's
-``room_info`` service answers for, and optionally a fixed task, the people counts, the drift
-schedule and which areas a random task may use. :func:`load_world` reads and checks all of it
-and returns a :class:`World`, an immutable value the engine, navigation and people share.
+A world file is a small YAML document (the format is described in
+``docs/reference/worlds.md``). It names a standard ROS map_server map (a map YAML beside an
+image), the target areas the referee's ``room_info`` service answers for, and optionally a
+fixed task, the people counts, the drift schedule and which areas a random task may use.
+:func:`load_world` reads and checks all of it and returns a :class:`World`, an immutable value
+the engine, navigation and people share.
 
 Design intent:
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -38,6 +40,16 @@ BLOCKED_FROM = 50  # cells of value 50..100 (and unknown) are obstacles; 0..49 a
 MAP_MODES = ("trinary", "scale", "raw")
 DEFAULT_WORLD = Path(__file__).resolve().parents[1] / "worlds" / "office" / "world.yaml"
 MAX_DRIFTS = 10_000  # drift.count: the original draws 30; a schedule is drawn one by one at start
+MAX_WALKERS = 200
+"""people.walkers at most: each walker's routes are planned at start, so the count sets how
+long the simulator takes to come up. Setting the office in motion took 12.6 s with 200
+walkers and 31.6 s with 400 on the project's 2-core machine under a load average of 20
+(``make_scenario`` and ``SimEngine``, seed 1; 1.6 s with the shipped 10), where a run gives its
+simulator 60 s to come up: 200 keeps it within a fifth of that, with room for the idlers."""
+MAX_IDLERS = 400
+"""people.idlers at most: 400 idlers took 8.2 s to place on the office (no idling areas, no
+walkers), measured as :data:`MAX_WALKERS` was; both at their bounds stay within half of the
+60 s a run gives its simulator to come up."""
 WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
               "targets")
 
@@ -236,6 +248,9 @@ def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode) 
 
 _UniqueKeyLoader.add_constructor(
     yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping)
+_UniqueKeyLoader.add_implicit_resolver(  # YAML 1.2's 1e300: YAML 1.1 (PyYAML) read it as text
+    "tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
 
 
 def _read_yaml(path: Path) -> Any:
@@ -339,7 +354,7 @@ def _kind(value: Any) -> str:
     if isinstance(value, dict):
         return "a mapping"
     if isinstance(value, list):
-        return "a list"
+        return f"a list of {len(value)} item{'' if len(value) == 1 else 's'}"
     return f"{type(value).__name__} {value!r}"
 
 
@@ -597,8 +612,10 @@ def _people(fields: _Fields) -> PeopleSpec:
                       idlers=people.integer("idlers", default=defaults.idlers),
                       walker_patience_s=people.number("walker_patience_s",
                                                       default=defaults.walker_patience_s))
-    if spec.walkers < 0 or spec.idlers < 0:
-        people.fail("people.walkers and people.idlers must be 0 or more")
+    for key, count, most in (("walkers", spec.walkers, MAX_WALKERS),
+                             ("idlers", spec.idlers, MAX_IDLERS)):
+        if not 0 <= count <= most:
+            people.fail(f"people.{key} must be within 0..{most}, not {count}")
     if not spec.walker_patience_s > 0.0:
         people.fail(f"people.walker_patience_s must be more than 0, not "
                     f"{spec.walker_patience_s:g}")
@@ -623,8 +640,21 @@ def _idling_area(fields: _Fields, occupancy: OccupancyMap) -> IdlingArea:
                     f"({max_x:g}, {max_y:g}) in x or y")
     if not _box_on_map(AreaBox(min_x, min_y, max_x, max_y), occupancy):
         fields.fail(f"{fields.where} lies outside the map")
+    if not _has_free_cell(occupancy, min_x=min_x, min_y=min_y, max_x=max_x, max_y=max_y):
+        fields.fail(f"{fields.where} has no free map cell for an idler to stand on")
     return IdlingArea(min_x=min_x, min_y=min_y, max_x=max_x, max_y=max_y,
                       yaw=fields.number("yaw"))
+
+
+def _has_free_cell(occupancy: OccupancyMap, *, min_x: float, min_y: float, max_x: float,
+                   max_y: float) -> bool:
+    """Whether a free cell of ``occupancy`` overlaps the box."""
+    low_row, low_col = occupancy.world_to_cell(min_x, min_y)
+    high_row, high_col = occupancy.world_to_cell(max_x, max_y)
+    rows = slice(max(low_row, 0), min(high_row, occupancy.height - 1) + 1)
+    cols = slice(max(low_col, 0), min(high_col, occupancy.width - 1) + 1)
+    cells = occupancy.grid[rows, cols]
+    return bool(((cells >= FREE) & (cells < BLOCKED_FROM)).any())
 
 
 def _drift(fields: _Fields) -> DriftSpec:
@@ -648,11 +678,10 @@ def _drift_times(drift: _Fields) -> tuple[float, ...] | None:
     if not drift.has("times"):
         return None
     value = drift.raw("times")
-    if not (isinstance(value, list) and all(
-            isinstance(t, int | float) and not isinstance(t, bool) and math.isfinite(t)
-            for t in value)):
+    if not isinstance(value, list):
         drift.fail(f"drift.times must be a list of sim times in seconds, not {_kind(value)}")
-    times = tuple(float(t) for t in value)
+    times = tuple(_as_number(time, drift, f"drift.times[{index}]")
+                  for index, time in enumerate(value))
     if any(later <= earlier for earlier, later in itertools.pairwise(times)) or (
             times and times[0] < 0.0):
         drift.fail("drift.times must rise, from 0 or more")
