@@ -298,10 +298,10 @@ def test_an_initial_pose_with_a_number_that_is_not_finite_is_ignored_as_amcl_ign
         simulator: SimulatorNode, field: str, value: float) -> None:
     """Nav2's AMCL rejects a malformed initialpose; taken, a NaN would have made every
     estimate after it NaN, and every goal abort as "not a finite pose"."""
-    simulator._on_initial_pose(broken(field, value))
+    simulator.inputs.on_initial_pose(broken(field, value))
     assert simulator.engine.estimated_pose() is None
-    simulator._on_initial_pose(initial_pose(SPAWN))
-    simulator._on_initial_pose(broken(field, value))
+    simulator.inputs.on_initial_pose(initial_pose(SPAWN))
+    simulator.inputs.on_initial_pose(broken(field, value))
     assert close(simulator.engine.estimated_pose() or (), SPAWN)
 
 
