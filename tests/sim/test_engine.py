@@ -414,8 +414,9 @@ def test_rfid_dropout_loses_readings() -> None:
     assert 120 < lost < 280
 
 
-def test_navigation_before_an_initial_pose_fails_with_tf_error() -> None:
-    sim = engine()
+def test_navigation_before_an_initial_pose_fails_with_tf_error_where_amcl_waits_for_one() -> None:
+    world = dataclasses.replace(office(), amcl_initial_pose=None)
+    sim = SimEngine(world=world, scenario=make_scenario(world))
     ticket = sim.navigate(0.0, 1.5, 0.0)
     state = sim.navigation_state(ticket)
     assert (state.status, state.error_code) == ("aborted", TF_ERROR)

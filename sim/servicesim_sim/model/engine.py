@@ -130,6 +130,8 @@ class SimEngine:
         self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
         self._ticket = 0
         self._localised = False
+        if world.amcl_initial_pose is not None:
+            self.set_initial_pose(*world.amcl_initial_pose)  # AMCL's launch pose, as ROS 1's
         self._refused: dict[int, NavigationState] = {}
         self._cmd_vel = (0.0, 0.0)
         self._nav_driving = False
@@ -277,8 +279,9 @@ class SimEngine:
 
         The one place that knows where odometry's origin lies; everything given in ``odom``
         (navigation goals) reaches ``map`` through it. It is the localisation's, as AMCL
-        broadcasts it; the identity before an initial pose (nothing is localised then, and
-        navigation refuses every goal).
+        broadcasts it: from the start at the world's ``amcl_initial_pose`` (the office: the
+        competitor's AMCL launch pose, as ROS 1 AMCL starts), else the identity until an initial
+        pose (nothing is localised then, and navigation refuses every goal, as Nav2's does).
         """
         return self.localisation.map_to_odom or IDENTITY
 

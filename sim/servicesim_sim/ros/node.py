@@ -450,8 +450,12 @@ class SimulatorNode:
         return feedback
 
     def _on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
-        """AMCL's initialpose: taken in the global frame only, as Nav2's AMCL does."""
-        if message.header.frame_id != MAP_FRAME:
+        """AMCL's initialpose: taken in the global frame only; an empty frame is taken as
+        the global one, with a warning, as ROS 1 AMCL does."""
+        if not message.header.frame_id:
+            self.node.get_logger().warning(
+                f"initial pose with an empty frame_id taken as {MAP_FRAME!r}")
+        elif message.header.frame_id != MAP_FRAME:
             self.node.get_logger().warning(
                 f"initial pose ignored: frame {message.header.frame_id!r}, must be {MAP_FRAME!r}")
             return

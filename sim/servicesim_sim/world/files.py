@@ -39,7 +39,8 @@ MAP_MODES = ("trinary", "scale", "raw")
 DEFAULT_WORLD = Path(__file__).resolve().parents[1] / "worlds" / "office" / "world.yaml"
 MAX_DRIFTS = 10_000  # drift.count: the original draws 30; a schedule is drawn one by one at start
 WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
-              "targets")
+              "targets", "amcl_initial_pose")
+AMCL_DEFAULT_INITIAL_POSE = (0.0, 0.0, 0.0)  # ROS 1 AMCL's initial_pose_x, _y, _a defaults
 
 
 class WorldError(ValueError):
@@ -212,6 +213,8 @@ class World:
     drift: DriftSpec = field(default_factory=DriftSpec)
     targets: tuple[str, ...] = ()
     idling_areas: tuple[IdlingArea, ...] = ()  # none: idlers stand anywhere free
+    # where AMCL starts before any initialpose, (x, y, yaw) in map; None: it waits for one
+    amcl_initial_pose: tuple[float, float, float] | None = AMCL_DEFAULT_INITIAL_POSE
 
 
 # --------------------------------------------------------------------------- reading YAML
@@ -484,6 +487,7 @@ def load_world(path: str | Path) -> World:
         name=fields.text("name", default=path.stem), path=path, map=occupancy, areas=areas,
         task=task, people=_people(fields), drift=_drift(fields),
         targets=_targets(fields, areas), idling_areas=_idling_areas(fields, occupancy),
+        amcl_initial_pose=_amcl_initial_pose(fields),
     )
 
 
@@ -538,6 +542,20 @@ def _area(fields: _Fields, occupancy: OccupancyMap | None) -> AreaBox:
         fields.fail(f"{fields.where} lies outside the map (x {low_x:g}..{high_x:g}, "
                     f"y {low_y:g}..{high_y:g})")
     return box
+
+
+def _amcl_initial_pose(fields: _Fields) -> tuple[float, float, float] | None:
+    """``amcl_initial_pose``: absent, ROS 1 AMCL's default (0, 0, 0); null, none (AMCL waits
+    for an initialpose, as Nav2's does by default); else ``[x, y, yaw]``."""
+    if "amcl_initial_pose" not in fields.data:
+        return AMCL_DEFAULT_INITIAL_POSE
+    value = fields.data["amcl_initial_pose"]
+    if value is None:
+        return None
+    if not isinstance(value, list) or len(value) != 3:
+        fields.fail(f"amcl_initial_pose must be a list [x, y, yaw] or null, not {_kind(value)}")
+    x, y, yaw = (_as_number(item, fields, "amcl_initial_pose") for item in value)
+    return x, y, yaw
 
 
 def _point(fields: _Fields, key: str) -> tuple[float, float]:

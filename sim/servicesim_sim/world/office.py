@@ -309,6 +309,7 @@ SHIPPED_PICK_UP, SHIPPED_DROP_OFF = "FrontElevator", "PrivateCubicle_32_1"
 SHIPPED_GUEST = {"name": "human_20843", "x": -0.043, "y": 1.512, "yaw": 1.5708}
 SHIPPED_START = {"area": "PublicBathroomB", "x": 10.975, "y": 3.75, "yaw": 3.14}
 PEOPLE = {"walkers": 10, "idlers": 30}
+AMCL_INITIAL_POSE = (-24.469, 6.278, 0.15)  # the competitor's AMCL launch file's initial pose
 SHIPPED_DRIFT_TIMES = (487, 654, 889, 1038, 1313, 1606, 1767, 1881, 2164, 2463, 2643, 2745, 2966,
                        3171, 3418, 3581, 3862, 3989, 4145, 4358, 4616, 4892, 5039, 5306, 5515,
                        5653, 5925, 6043, 6335, 6619)
@@ -424,6 +425,7 @@ def world_yaml(*, closed_doors: bool = False) -> str:
         *(f"  - {{min: [{low[0]!r}, {low[1]!r}], max: [{high[0]!r}, {high[1]!r}], "
           f"yaw: {round(yaw, 5)!r}}}" for low, high, yaw in IDLING_AREAS),
         f"drift: {_flow(DRIFT)}",
+        f"amcl_initial_pose: [{', '.join(repr(value) for value in AMCL_INITIAL_POSE)}]",
     ]
     return "\n".join(lines) + "\n"
 
