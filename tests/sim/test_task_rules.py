@@ -9,11 +9,11 @@ from __future__ import annotations
 import math
 from functools import cache
 
-from servicesim_sim import referee as rules
-from servicesim_sim.engine import RFID_RANGE_M, SimEngine
-from servicesim_sim.people import IDLER, WALKER
-from servicesim_sim.scenario import make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, World, load_world
+from servicesim_sim.model import referee as rules
+from servicesim_sim.model.engine import RFID_RANGE_M, SimEngine
+from servicesim_sim.model.people import IDLER, WALKER
+from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 
 
 @cache
