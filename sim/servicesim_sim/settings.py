@@ -93,6 +93,8 @@ def difficulty_from(args: argparse.Namespace) -> Difficulty:
         changes["guest_out_of_range"] = True
     if getattr(args, "guest_path", None):
         changes["guest_path"] = args.guest_path
+    if getattr(args, "walker_routes", None):
+        changes["walker_routes"] = args.walker_routes
     for argument, (field, lowest, highest) in _KNOBS.items():
         value = getattr(args, argument)
         if value is None:

@@ -51,7 +51,7 @@ from servicesim_sim.model.robot import BODY_RADIUS, Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
 from servicesim_sim.model.scenario import Scenario
 from servicesim_sim.navigation.navigator import Navigator
-from servicesim_sim.world.files import OccupancyMap, World
+from servicesim_sim.world.files import OccupancyMap, PlacedWalker, WalkerRoute, World
 
 PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
 ROBOT_NAME = "servicebot"
@@ -109,13 +109,15 @@ class SimEngine:
         self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,
                            yaw=task.guest_yaw, wall_clearance=walls.at,
                            path=scenario.difficulty.guest_path)
+        routes, placed = self._walker_routes()
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
                            taken_names={task.guest_name}, keep_clear=self._keep_clear(),
                            occupied=[(task.guest_x, task.guest_y, PERSON_BODY_RADIUS),
                                      (task.start_x, task.start_y, BODY_RADIUS)],
                            idling_areas=world.idling_areas,
-                           walker_patience_s=world.people.walker_patience_s)
+                           walker_patience_s=world.people.walker_patience_s,
+                           routes=routes, placed=placed)
         self._knobs = np.random.default_rng(scenario.knob_seed)
         difficulty = scenario.difficulty
         self.odometry = WheelOdometry(drift=difficulty.odom_drift,
@@ -141,6 +143,14 @@ class SimEngine:
         self._seen_revision = -1
         self._steps = 0
         self._nobody_near_until = -math.inf
+
+    def _walker_routes(self) -> tuple[tuple[WalkerRoute, ...], tuple[PlacedWalker, ...]]:
+        """The world's walker loops unless the knob asks for random ones (none: random), and
+        the fixed task's own walkers on them (the shipped world file's) when no seed draws."""
+        if self.scenario.difficulty.walker_routes == "random" or not self.world.walker_routes:
+            return (), ()
+        placed = self.world.walkers if self.scenario.seed is None else ()
+        return self.world.walker_routes, placed
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
         """Where walker routes do not go (idlers may stand there, as in the original)."""

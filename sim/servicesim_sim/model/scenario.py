@@ -11,7 +11,8 @@ placed beyond RFID range of the pick-up area's centre, earlier and more frequent
 navigation goals that abort, RFID messages that are lost, and slow referee services. It also
 carries ``guest_path``, the one deliberate difference of the guest from the original that can be
 switched back: ``trail`` (the default) follows the robot's trail, ``straight`` walks straight at
-the robot, through walls, as the original's guest did.
+the robot, through walls, as the original's guest did. ``walker_routes`` ``random`` gives every
+walker a random loop of ours instead of the world's (the office: the original's).
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ class Difficulty:
     odom_drift: float = 0.0  # encoder calibration error (std of the scale factors' offsets)
     localisation_noise: float = 0.0  # m (and rad): std of the noise on a converged estimate
     guest_path: str = "trail"  # how the guest follows: "trail" (ours) or "straight" (original)
+    walker_routes: str = "world"  # "world": the world's loops (the original's); "random": ours
 
     @classmethod
     def default(cls) -> Difficulty:

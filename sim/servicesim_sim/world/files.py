@@ -39,7 +39,7 @@ MAP_MODES = ("trinary", "scale", "raw")
 DEFAULT_WORLD = Path(__file__).resolve().parents[1] / "worlds" / "office" / "world.yaml"
 MAX_DRIFTS = 10_000  # drift.count: the original draws 30; a schedule is drawn one by one at start
 WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
-              "targets", "amcl_initial_pose")
+              "targets", "amcl_initial_pose", "walker_routes", "walkers")
 AMCL_DEFAULT_INITIAL_POSE = (0.0, 0.0, 0.0)  # ROS 1 AMCL's initial_pose_x, _y, _a defaults
 
 
@@ -175,6 +175,25 @@ class IdlingArea:
 
 
 @dataclass(frozen=True)
+class WalkerRoute:
+    """A loop walkers walk, one way, waypoint to waypoint and back to the first; ``weight``:
+    how many entries of the world's list of routes it is (a walker draws one entry)."""
+
+    name: str
+    weight: int
+    waypoints: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class PlacedWalker:
+    """A walker of the fixed task: its route, the waypoint it starts at and its speed."""
+
+    route: str
+    start: int
+    speed: float
+
+
+@dataclass(frozen=True)
 class PeopleSpec:
     """How many people share the building with the robot and the guest, and how walkers wait.
 
@@ -215,6 +234,8 @@ class World:
     idling_areas: tuple[IdlingArea, ...] = ()  # none: idlers stand anywhere free
     # where AMCL starts before any initialpose, (x, y, yaw) in map; None: it waits for one
     amcl_initial_pose: tuple[float, float, float] | None = AMCL_DEFAULT_INITIAL_POSE
+    walker_routes: tuple[WalkerRoute, ...] = ()  # none: each walker gets a random loop
+    walkers: tuple[PlacedWalker, ...] = ()  # the fixed task's walkers; none: drawn
 
 
 # --------------------------------------------------------------------------- reading YAML
@@ -487,7 +508,7 @@ def load_world(path: str | Path) -> World:
         name=fields.text("name", default=path.stem), path=path, map=occupancy, areas=areas,
         task=task, people=_people(fields), drift=_drift(fields),
         targets=_targets(fields, areas), idling_areas=_idling_areas(fields, occupancy),
-        amcl_initial_pose=_amcl_initial_pose(fields),
+        amcl_initial_pose=_amcl_initial_pose(fields), **_walkers(fields, occupancy),
     )
 
 
@@ -542,6 +563,75 @@ def _area(fields: _Fields, occupancy: OccupancyMap | None) -> AreaBox:
         fields.fail(f"{fields.where} lies outside the map (x {low_x:g}..{high_x:g}, "
                     f"y {low_y:g}..{high_y:g})")
     return box
+
+
+def _walkers(fields: _Fields, occupancy: OccupancyMap) -> dict[str, Any]:
+    """``walker_routes`` and the fixed task's ``walkers`` on them, checked together."""
+    routes = _walker_routes(fields, occupancy)
+    if not fields.has("walkers"):
+        return {"walker_routes": routes, "walkers": ()}
+    value = fields.raw("walkers")
+    if not routes:
+        fields.fail("walkers needs walker_routes to walk on")
+    if not isinstance(value, list) or len(value) != _people(fields).walkers:
+        fields.fail(f"walkers must be a list of people.walkers ({_people(fields).walkers}) "
+                    f"walkers, not {_kind(value)}")
+    by_name = {route.name: route for route in routes}
+    walkers = tuple(_placed_walker(_Fields(item, path=fields.path, where=f"walkers[{index}]"),
+                                   by_name) for index, item in enumerate(value))
+    return {"walker_routes": routes, "walkers": walkers}
+
+
+def _walker_routes(fields: _Fields, occupancy: OccupancyMap) -> tuple[WalkerRoute, ...]:
+    if not fields.has("walker_routes"):
+        return ()
+    value = fields.raw("walker_routes")
+    if not isinstance(value, list) or not value:
+        fields.fail(f"walker_routes must be a non-empty list, not {_kind(value)}")
+    routes = tuple(_walker_route(_Fields(item, path=fields.path, where=f"walker_routes[{index}]"),
+                                 occupancy) for index, item in enumerate(value))
+    names = [route.name for route in routes]
+    duplicates = sorted({name for name in names if names.count(name) > 1})
+    if duplicates:
+        fields.fail(f"walker_routes names {duplicates[0]!r} twice")
+    return routes
+
+
+def _walker_route(fields: _Fields, occupancy: OccupancyMap) -> WalkerRoute:
+    fields.reject_unknown(("name", "weight", "waypoints"))
+    name, weight = fields.text("name"), fields.integer("weight", default=1)
+    if weight < 1:
+        fields.fail(f"{fields.name('weight')} must be 1 or more, not {weight}")
+    value = fields.raw("waypoints")
+    if not isinstance(value, list) or len(value) < 2:
+        fields.fail(f"{fields.name('waypoints')} must be a list of at least two [x, y], "
+                    f"not {_kind(value)}")
+    waypoints = tuple(_waypoint(item, fields, f"{fields.name('waypoints')}[{index}]")
+                      for index, item in enumerate(value))
+    for x, y in waypoints:
+        if not occupancy.is_free(x, y):
+            fields.fail(f"{fields.where} waypoint ({x:g}, {y:g}) is not on a free map cell")
+    return WalkerRoute(name=name, weight=weight, waypoints=waypoints)
+
+
+def _waypoint(value: Any, fields: _Fields, name: str) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        fields.fail(f"{name} must be a list [x, y], not {_kind(value)}")
+    return _as_number(value[0], fields, name), _as_number(value[1], fields, name)
+
+
+def _placed_walker(fields: _Fields, routes: dict[str, WalkerRoute]) -> PlacedWalker:
+    fields.reject_unknown(("route", "start", "speed"))
+    name = fields.text("route")
+    if name not in routes:
+        fields.fail(f"{fields.name('route')} names an unknown walker route {name!r}")
+    start, speed = fields.integer("start"), fields.number("speed")
+    if not 0 <= start < len(routes[name].waypoints):
+        fields.fail(f"{fields.name('start')} must be a waypoint of {name!r}, 0.."
+                    f"{len(routes[name].waypoints) - 1}, not {start}")
+    if not speed > 0.0:
+        fields.fail(f"{fields.name('speed')} must be more than 0, not {speed:g}")
+    return PlacedWalker(route=name, start=start, speed=speed)
 
 
 def _amcl_initial_pose(fields: _Fields) -> tuple[float, float, float] | None:
