@@ -594,10 +594,12 @@ class NearPoints:
 
 
 def walkers_on_routes(names: list[str], routes: tuple[WalkerRoute, ...],
-                      rng: np.random.Generator, *,
-                      placed: tuple[PlacedWalker, ...] = ()) -> list[Walker]:
+                      rng: np.random.Generator, *, placed: tuple[PlacedWalker, ...] = (),
+                      occupied: Sequence[KeepClear] = ()) -> list[Walker]:
     """One walker per name on the world's loops, drawn as the original's generator drew them
-    (see the module docstring), or as ``placed`` names them; no two start at one waypoint."""
+    (see the module docstring), or as ``placed`` names them; no two start at one waypoint,
+    and a drawn walker starts at none within its stop distance of an ``occupied`` spot (a
+    random task's robot or guest: the original's fixed spots had no walker start on them)."""
     by_name = {route.name: route for route in routes}
     entries = [route for route in routes for _ in range(route.weight)]
     starts: set[tuple[float, float]] = set()
@@ -609,7 +611,8 @@ def walkers_on_routes(names: list[str], routes: tuple[WalkerRoute, ...],
         else:
             route = entries[int(rng.integers(len(entries)))]
             speed = float(rng.uniform(*WALKER_SPEED_RANGE))
-            first = _free_start(route, int(rng.integers(FIRST_WAYPOINT_DRAW)), starts)
+            first = _free_start(route, int(rng.integers(FIRST_WAYPOINT_DRAW)),
+                                taken=starts, occupied=occupied)
         starts.add(route.waypoints[first])
         loop = route.waypoints[first:] + route.waypoints[:first + 1]
         x, y = loop[0]
@@ -618,14 +621,18 @@ def walkers_on_routes(names: list[str], routes: tuple[WalkerRoute, ...],
     return walkers
 
 
-def _free_start(route: WalkerRoute, draw: int, taken: set[tuple[float, float]]) -> int:
-    """The waypoint ``draw`` round the loop, or the next one no walker starts at."""
+def _free_start(route: WalkerRoute, draw: int, *, taken: set[tuple[float, float]],
+                occupied: Sequence[KeepClear]) -> int:
+    """The waypoint ``draw`` round the loop, or the next one free to start at."""
     count = len(route.waypoints)
     for step in range(count):
         first = (draw + step) % count
-        if route.waypoints[first] not in taken:
+        x, y = route.waypoints[first]
+        if (route.waypoints[first] not in taken
+                and all(math.hypot(x - ox, y - oy) >= WALKER_STOP_DISTANCE + radius
+                        for ox, oy, radius in occupied)):
             return first
-    raise CrowdError(f"walker route {route.name!r}: every waypoint already starts a walker")
+    raise CrowdError(f"walker route {route.name!r}: no waypoint is free to start a walker at")
 
 
 def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:
@@ -677,7 +684,8 @@ class Crowd:
         # on the world's routes idlers may stand in a lane, and stop walkers as anyone does
         self._standing = [(x, y) for x, y, _ in poses] if routes else []
         if walkers and routes:
-            self._walkers = walkers_on_routes(names[:walkers], routes, rng, placed=placed)
+            self._walkers = walkers_on_routes(names[:walkers], routes, rng, placed=placed,
+                                              occupied=occupied)
         elif walkers:
             spots = [(x, y) for x, y, _ in poses]
             grid = RouteGrid(clearance, keep_clear=keep_clear, idlers=spots)
