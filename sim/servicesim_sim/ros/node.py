@@ -70,8 +70,8 @@ from tf2_msgs.msg import TFMessage
 from servicesim_sim.lockstep.server import CountingActionServer, LockstepServer, drain_completely
 from servicesim_sim.model.engine import NavigationState, SimEngine
 from servicesim_sim.model.localisation import Pose
+from servicesim_sim.model.playable import playable_engine
 from servicesim_sim.model.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
-from servicesim_sim.model.scenario import make_scenario
 from servicesim_sim.navigation.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.process.executor import DrainingExecutor
 from servicesim_sim.process.pacing import Pacer
@@ -159,9 +159,8 @@ class SimulatorNode:
         self.settings = settings
         self.node = node
         self.resets = resets
-        self.engine = engine or SimEngine(
-            world=settings.world, scenario=make_scenario(settings.world, seed=settings.seed,
-                                                         difficulty=settings.difficulty))
+        self.engine = engine or playable_engine(settings.world, seed=settings.seed,
+                                                difficulty=settings.difficulty)
         self.steps_per_io = max(1, round(IO_PERIOD_S / self.engine.dt))
         self._sleepers: list[tuple[float, Future]] = []
         self._active_goal: ServerGoalHandle | None = None
