@@ -278,7 +278,7 @@ class SimEngine:
         return self.odometry.pose
 
     def estimated_pose(self) -> Pose | None:
-        """The localisation's map pose now (map -> odom -> base), None before an initial pose."""
+        """The localisation's map pose now (map -> odom -> base); None, not localised."""
         return self.localisation.pose(self.odometry.pose)
 
     def new_estimate(self) -> Estimate | None:
