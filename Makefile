@@ -36,7 +36,7 @@ run: setup
 
 test: setup
 	$(VENV)/bin/lint-imports --no-cache
-	$(PY) -m pytest -n $(JOBS) $(TESTS)
+	$(PY) -m pytest -n $(JOBS) --dist loadgroup $(TESTS)
 
 lint: setup
 	$(VENV)/bin/ruff check .

@@ -2,8 +2,9 @@
 
 Every benchmark calls :func:`isolate` before it imports rclpy: DDS discovery stays on this
 machine unless the user set ``ROS_AUTOMATIC_DISCOVERY_RANGE``, and the benchmark gets a ROS
-domain of its own (from ``ROS_DOMAIN_ID`` if set, else from the process id), so a test run or an
-evaluation on the same machine cannot answer its requests. The simulator is started exactly as
+domain of its own (``ROS_DOMAIN_ID`` if set, else one it claims as a run claims one,
+``bt_servicesim/ros/domain.py``), so a test run, a run or an evaluation on the same machine
+cannot answer its requests. The simulator is started exactly as
 the run command starts it (``python -m servicesim_sim``), with its output in a temporary file;
 :func:`start_task` starts its task, since before one it never runs faster than real time.
 """
@@ -23,8 +24,10 @@ from typing import Any
 import numpy as np
 
 from bt_servicesim.mission.stopping import parent_death_signal
+from bt_servicesim.ros.domain import DomainClaim, claim_domain
 
 REPO = Path(__file__).resolve().parents[1]
+_claims: list[DomainClaim] = []  # held until the process ends
 
 
 def isolate() -> int:
@@ -32,7 +35,8 @@ def isolate() -> int:
     if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     if not os.environ.get("ROS_DOMAIN_ID", "").isdigit():
-        os.environ["ROS_DOMAIN_ID"] = str(1 + os.getpid() % 101)
+        _claims.append(claim_domain())
+        os.environ["ROS_DOMAIN_ID"] = str(_claims[-1].domain_id)
     return int(os.environ["ROS_DOMAIN_ID"])
 
 

@@ -6,7 +6,7 @@ placed), so a world that loads but cannot be played is one line too. The argumen
 :mod:`servicesim_sim.arguments`'s, which the reset service takes as well.
 
 A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator with status 0
-(:func:`servicesim_sim.ros.node.run_simulator`); one that comes while it is still starting (its
+(:func:`servicesim_sim.ros.simulator.run_simulator`); one that comes while it is still starting (its
 imports, the world, ROS) ends it in one line with 128 + the signal, as an interrupted command.
 One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
 """
@@ -61,7 +61,7 @@ def _play(args: argparse.Namespace) -> int:
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     from servicesim_sim.process.environment import apply_environment_defaults
     apply_environment_defaults()  # loopback by default; no shared memory left behind
-    from servicesim_sim.ros.node import run_simulator
+    from servicesim_sim.ros.simulator import run_simulator
 
     return run_simulator(settings, engine=engine)
 

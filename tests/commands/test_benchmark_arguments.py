@@ -1,5 +1,5 @@
-"""``benchmarks/sim_rtf.py`` and ``benchmarks/startup.py``: bad arguments are one line on stderr
-and exit status 2, before any process starts."""
+"""``benchmarks/sim_rtf.py``, ``startup.py`` and ``service_burst.py``: bad arguments are one
+line on stderr and exit status 2, before any process starts."""
 
 from __future__ import annotations
 
@@ -42,3 +42,14 @@ def refused_in_one_line(script: Path, arguments: list[str], named: str) -> None:
 def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                                  named: str) -> None:
     refused_in_one_line(STARTUP, arguments, named)
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--bursts", "1000,x"], "--bursts 1000,x: not a comma list of whole numbers"),
+    (["--bursts", "0"], "--bursts 0: every burst must be 1 request or more"),
+    (["--rounds", "0"], "--rounds 0: must be 1 or more"),
+    (["--wait", "nan"], "--wait nan: must be more than 0"),
+])
+def test_the_service_burst_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
+                                                                       named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("service_burst.py"), arguments, named)

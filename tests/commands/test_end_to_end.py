@@ -5,14 +5,21 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+import pytest
 
 from tests.fakes import run_module
 from tests.mission_script import matches
 
-#: Ten times real time: fast, yet slow enough that an executive sharing two busy cores with
-#: the simulator (and another test's pair) keeps up with sim time. benchmarks/ measure flat out.
-RUN = ["--headless", "--speed", "10"]
+if TYPE_CHECKING:
+    from tests.commands.conftest import FinishedRun
+
+SHIPPED_TASK_GROUP = "shipped_task_run"
+
+#: Flat out: a run joins the simulator's lockstep, so the executive never falls behind sim time
+#: and the speed changes nothing but the wall time.
+RUN = ["--headless", "--speed", "0"]
 WALL_LIMIT_S = 300
 
 
@@ -56,8 +63,9 @@ def assert_completed(code: int, report: dict[str, Any]) -> None:
     assert report["penalties"]["contact"] == 0.0
 
 
-def test_the_default_shipped_task_completes(tmp_path: Path) -> None:
-    code, report = mission(tmp_path)
+@pytest.mark.xdist_group(SHIPPED_TASK_GROUP)
+def test_the_default_shipped_task_completes(shipped_task_run: FinishedRun) -> None:
+    tmp_path, code, report = shipped_task_run.out, shipped_task_run.code, shipped_task_run.report
     assert_completed(code, report)
     assert (report["seed"], report["world"], report["executive"]) == (None, "default", "bt")
     assert report["penalties"]["failed_pickup"] == 0
@@ -121,7 +129,9 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
 
 
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
-    code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed")
+    # paced: what the run waits for in wall time after the end shows as sim time
+    code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed",
+                           "--speed", "10")
     assert code == 1
     assert (tmp_path / "trajectory.png").is_file(), "a mission that failed is drawn"
     assert report["completed"] is False

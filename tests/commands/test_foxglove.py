@@ -36,6 +36,9 @@ from rosbags.highlevel import AnyReader
 from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 from tests.fakes import run_module
 
+#: One run serves the whole module: its tests go to one pytest-xdist worker (``make test``'s
+#: ``--dist loadgroup``), or each worker given some of them would start a run of its own.
+pytestmark = pytest.mark.xdist_group("foxglove_run")
 LIVE_TOPICS = ("/tf", "/servicesim/markers", "/servicesim/markers/areas")
 URL = re.compile(r"ws://127\.0\.0\.1:\d+")
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
@@ -43,6 +46,10 @@ BINARY_MESSAGE_DATA = 0x01
 WAIT_LIMIT_S = 120.0  # wall seconds any one wait may take on a loaded machine
 ADD, DELETE, DELETEALL, TEXT_VIEW_FACING = 0, 2, 3, 9
 FULL_PERIOD_NS = 5_000_000_000  # everyone is sent every 5 sim s, those who moved in between
+#: The run is paced, for the viewer to subscribe while it goes on: its WebSocket client starts
+#: after the run printed the server's URL, and must then see full marker messages (one every
+#: FULL_PERIOD_NS). 40 sim s at 5x is 8 wall s, seven full messages after the first.
+SPEED, TIME_LIMIT_S = 5, 40
 
 
 # ------------------------------------------------------------------------------ the run
@@ -65,8 +72,8 @@ def watched_run(tmp_path_factory: pytest.TempPathFactory) -> WatchedRun:
     log = out.with_name("stdout.txt")
     with log.open("w") as stdout:
         process = subprocess.Popen(
-            [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", "10",
-             "--time-limit", "20", "--out", str(out), "--foxglove", "0"],
+            [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", str(SPEED),
+             "--time-limit", str(TIME_LIMIT_S), "--out", str(out), "--foxglove", "0"],
             stdout=stdout, stderr=subprocess.STDOUT, text=True)
     try:
         url = _wait_for_url(log, process)

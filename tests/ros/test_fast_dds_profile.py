@@ -1,5 +1,6 @@
-"""The Fast DDS profile both processes default to on loopback: two shorter periods and nothing
-else, never in place of a profile the user chose.
+"""The Fast DDS profile both processes default to on loopback: two shorter periods and a longer
+wait of a service's reply for its client, nothing else, never in place of a profile the user
+chose.
 
 The executive and the simulator each ship a copy (they share no code), so every check here runs
 on both.
@@ -26,12 +27,15 @@ JUDGES: dict[str, Callable[..., bool]] = {
     "executive": executive_environment.uses_the_projects_profile,
     "simulator": simulator_environment.reads_the_simulators_profile,
 }
-PERIODS = {"/participant/rtps/builtin/discovery_config/leaseAnnouncement": "500000000",
-           "/data_writer/times/heartbeat_period": "100000000"}  # ns
+PERIODS = {"/participant/rtps/builtin/discovery_config/leaseAnnouncement": (0, 500_000_000),
+           "/data_writer/times/heartbeat_period": (0, 100_000_000),
+           "/data_writer[service]/times/heartbeat_period": (0, 100_000_000),
+           "/data_writer[service]/qos/reliability/max_blocking_time": (2, 0)}  # s, ns
 
 
 def _settings(path: Path) -> dict[str, str]:
-    """Every leaf of the profile, by its path of tags: what it sets."""
+    """Every leaf of the profile, by its path of tags: what it sets. A profile that is nobody's
+    default is named in its path, as rmw_fastrtps looks it up (``data_writer[service]``)."""
     leaves: dict[str, str] = {}
 
     def walk(element: ElementTree.Element, trail: str) -> None:
@@ -39,18 +43,21 @@ def _settings(path: Path) -> dict[str, str]:
         if not children:
             leaves[trail] = (element.text or "").strip()
         for child in children:
-            walk(child, f"{trail}/{child.tag.removeprefix(NAMESPACE)}")
+            tag = child.tag.removeprefix(NAMESPACE)
+            if child.get("profile_name") and child.get("is_default_profile") != "true":
+                tag += f"[{child.get('profile_name')}]"
+            walk(child, f"{trail}/{tag}")
 
     walk(ElementTree.parse(path).getroot(), "")
     return leaves
 
 
 @pytest.mark.parametrize("process", PROFILES)
-def test_the_profile_sets_only_the_announcement_and_heartbeat_periods(process: str) -> None:
+def test_the_profile_sets_only_the_periods_and_the_replys_wait(process: str) -> None:
     """Nothing about transports or addresses: rmw_fastrtps keeps traffic on loopback."""
     assert _settings(PROFILES[process]) == {
-        f"{where}/{unit}": value for where, nanoseconds in PERIODS.items()
-        for unit, value in (("sec", "0"), ("nanosec", nanoseconds))}
+        f"{where}/{unit}": str(value) for where, duration in PERIODS.items()
+        for unit, value in zip(("sec", "nanosec"), duration, strict=True)}
 
 
 @pytest.mark.parametrize("process", PROFILES)

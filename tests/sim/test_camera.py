@@ -197,11 +197,11 @@ def test_the_node_renders_the_originals_24_frames_a_sim_second_only_for_a_subscr
     node = Node("servicesim_camera", context=ros_context)
     simulator = SimulatorNode(settings, node=node)
     run_for(simulator, sim_seconds=1.0)
-    assert simulator._frames == []  # nobody subscribes: nothing rendered
+    assert simulator.camera.frames == []  # nobody subscribes: nothing rendered
     viewer = Node("viewer", context=ros_context)
     viewer.create_subscription(Image, "/servicebot/camera_front/image_raw", lambda _: None, 50)
     deadline = time.monotonic() + 20.0
-    while simulator._camera.get_subscription_count() == 0:
+    while simulator.camera.publisher.get_subscription_count() == 0:
         assert time.monotonic() < deadline, "the viewer was never discovered"
         time.sleep(0.05)
     start = simulator.engine.sim_time
@@ -210,16 +210,16 @@ def test_the_node_renders_the_originals_24_frames_a_sim_second_only_for_a_subscr
     gaps = np.round(np.diff(stamps), 6)
     assert set(gaps) <= {0.04, 0.06}
     assert start < stamps[0] and stamps[-1] <= start + 2.0 + 1e-9
-    simulator._publish_camera()
-    assert simulator._frames == []
+    simulator.camera.publish()
+    assert simulator.camera.frames == []
     viewer.destroy_node()
     node.destroy_node()
 
 
 def run_for(simulator: SimulatorNode, *, sim_seconds: float) -> list[float]:
     """Step the simulator's engine as its loop does, capturing frames; their stamps."""
-    simulator._frames.clear()
+    simulator.camera.frames.clear()
     for _ in range(round(sim_seconds / simulator.engine.dt)):
         simulator.engine.step()
-        simulator._capture_camera()
-    return [when for when, _ in simulator._frames]
+        simulator.camera.capture()
+    return [when for when, _ in simulator.camera.frames]

@@ -32,7 +32,8 @@ from servicesim_sim.model.localisation import (
 )
 from servicesim_sim.model.scan import LidarSpec, Scanner
 from servicesim_sim.model.scenario import Difficulty, make_scenario
-from servicesim_sim.ros.node import LATCHED, SimulatorNode
+from servicesim_sim.ros.node import SimulatorNode
+from servicesim_sim.ros.publishing import LATCHED
 from servicesim_sim.settings import SimSettings
 from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 from tests.sim.test_node import Graph
@@ -293,22 +294,22 @@ def simulator(ros_context: Context) -> Iterator[SimulatorNode]:
 
 def test_an_initial_pose_outside_the_map_frame_is_ignored_as_amcl_ignores_it(
         simulator: SimulatorNode) -> None:
-    simulator._on_initial_pose(initial_pose(SPAWN, frame="odom"))
+    simulator.inputs.on_initial_pose(initial_pose(SPAWN, frame="odom"))
     assert close(simulator.engine.estimated_pose() or (), LAUNCH_POSE)
-    simulator._on_initial_pose(initial_pose(SPAWN))
+    simulator.inputs.on_initial_pose(initial_pose(SPAWN))
     assert close(simulator.engine.estimated_pose() or (), SPAWN)
 
 
 def test_an_initial_pose_with_an_empty_frame_is_taken_as_ros_1_amcl_takes_it(
         simulator: SimulatorNode) -> None:
-    simulator._on_initial_pose(initial_pose(SPAWN, frame=""))
+    simulator.inputs.on_initial_pose(initial_pose(SPAWN, frame=""))
     assert close(simulator.engine.estimated_pose() or (), SPAWN)
 
 
 def test_navigation_feedback_gives_the_estimate_not_the_truth(simulator: SimulatorNode) -> None:
     guess = (SPAWN[0] + 0.5, SPAWN[1], SPAWN[2])  # off by half a metre: not converged yet
-    simulator._on_initial_pose(initial_pose(guess))
-    feedback = simulator._feedback(NavigationState(status="running"), started=0.0)
+    simulator.inputs.on_initial_pose(initial_pose(guess))
+    feedback = simulator.navigation.feedback(NavigationState(status="running"), started=0.0)
     position = feedback.current_pose.pose.position
     assert feedback.current_pose.header.frame_id == "map"
     assert (position.x, position.y) == pytest.approx(guess[:2])

@@ -28,7 +28,8 @@ from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, Ta
 from servicesim_sim.model.scenario import Difficulty
 from servicesim_sim.navigation.costmap import PersonMark
 from servicesim_sim.process.executor import DrainingExecutor
-from servicesim_sim.ros.node import GLOBAL_COSTMAP_TOPIC, SimulatorNode
+from servicesim_sim.ros.node import SimulatorNode
+from servicesim_sim.ros.world_topics import GLOBAL_COSTMAP_TOPIC
 from servicesim_sim.settings import SimSettings
 from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 
@@ -226,7 +227,7 @@ def test_navigation_succeeds_aborts_without_a_path_and_cancels(graph: Graph) -> 
 
 def test_a_message_dds_refuses_is_dropped_with_a_warning_and_the_loop_goes_on(
         ros_context: Context) -> None:
-    from servicesim_sim.ros.node import RCLError
+    from servicesim_sim.ros.publishing import RCLError
 
     settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=0.0,
                            difficulty=Difficulty.default(), camera_rate_hz=0.0)
@@ -239,10 +240,10 @@ def test_a_message_dds_refuses_is_dropped_with_a_warning_and_the_loop_goes_on(
         def publish(self, message: Any) -> None:
             raise RCLError("Failed to publish: cannot publish data")
 
-    simulator._actors = Refusing()
+    simulator.world_topics.actors = Refusing()
     for _ in range(15):
         simulator._publish_io()  # the people go out every fifth period
-    assert simulator._dropped == 3
+    assert simulator.publishing.dropped == 3
     node.destroy_node()
 
 

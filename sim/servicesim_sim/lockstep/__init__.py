@@ -4,5 +4,5 @@ Design intent: a seed replays only if the world's history does not depend on how
 processes run, so a joined client holds the simulator to its ticks. The rule
 (:mod:`~servicesim_sim.lockstep.gate`) is free of ROS and tested directly; the server
 (:mod:`~servicesim_sim.lockstep.server`) wires it to the node. The protocol is described in
-``docs/simulator.md#lockstep``.
+``docs/reference/simulator.md#lockstep``.
 """

@@ -1,22 +1,15 @@
-"""Lockstep with the simulator's clients: the simulator's side of the extension protocol.
+"""The lockstep server: the simulator's side of the lockstep extension, on its ROS node.
 
-An extension beside the competition's interfaces (docs/simulator.md, "Lockstep"): a client
-joins with ``/servicesim/lockstep/join``; after each period the simulator announces on
-``/servicesim/lockstep/period`` how many messages it has published on each topic and how many
-answers it has sent on each endpoint so far; a joined client says on
-``/servicesim/lockstep/done`` that it finished its tick for a period and how many requests it
-has sent. The rule (:mod:`servicesim_sim.lockstep.gate`) decides when the simulator may step
-on and in which order the period's requests are served: one period ahead of the clients
-(:data:`~servicesim_sim.lockstep.gate.PIPELINE_LAG`), so that the simulator steps period
-*k*+1 while a client ticks on *k*, and serves the requests of tick *k* after period *k*+1.
+:class:`LockstepServer` counts what the node publishes and answers, announces each period, and
+wraps the node's request handlers so that, while a client is joined, a request is served only
+when the gate (:mod:`servicesim_sim.lockstep.gate`) admits it: one at a time, in the gate's
+order, each run to its first wait before the next starts. :class:`CountingActionServer` does
+the same for the navigation action's goal, cancel and result requests, which rclpy would
+answer as it takes them. With nobody joined every handler runs at once, ungated: a client that
+never joins (a ``ros2`` command, an executive that runs free) sees no difference.
 
-:class:`LockstepServer` counts what the node publishes and answers, and wraps the node's
-request handlers so that, while a client is joined, a request taken is served only when the
-gate admits it -- one at a time, in the gate's order, each run to its first wait before the
-next starts; the navigation action's goal, cancel and result requests too
-(:class:`CountingActionServer`), which rclpy would answer as it takes them. With nobody
-joined every handler runs as it always did: a backend client that never joins (a ``ros2``
-command, an executive that runs free) sees no difference.
+The protocol (join, period announcements, done messages) is described in
+``docs/reference/simulator.md#lockstep``.
 """
 
 from __future__ import annotations
@@ -64,7 +57,7 @@ request; at least this often it looks for other work (a join, a request from out
 
 LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
 """For measuring only (``benchmarks/sim_rtf.py --lockstep-lag``): 0 makes the simulator wait
-for each tick before it steps on, as before the pipeline; unset, the pipeline's lag."""
+for each tick before it steps on, with no pipelining; unset, the pipeline's lag."""
 
 
 def pipeline_lag() -> int:

@@ -16,9 +16,9 @@ deleted, so the ids are stable and nothing is ever left behind:
   its own (``guest``, the colour of the shirt the camera shows) with its name above it. Only
   who moved is sent again, except that every :data:`FULL_EVERY`-th update sends everyone: a
   viewer that joined late, or seeks in a recording, has the whole crowd within that many
-  updates. Thirty of the office's forty people stand still, and building and serialising a
-  marker with rclpy cost the simulator about 45 µs (2-4 µs serialised by hand now,
-  :mod:`servicesim_sim.wire.marker_messages`);
+  updates. Thirty of the office's forty people stand still, and a marker costs the simulator
+  about 45 µs built and serialised with rclpy, 2-4 µs serialised by hand
+  (:mod:`servicesim_sim.wire.marker_messages`);
 * the robot's planned path is one line strip (``plan``, id 0), sent again only when the plan
   changed and deleted when no goal runs.
 

@@ -125,7 +125,7 @@ def drift_schedule(spec: DriftSpec, *, rng: np.random.Generator,
 
     Like Ruby's ``rand(min..max)`` in the template (``worlds/service.world.erb`` 360-363), an
     interval between whole numbers of seconds is a whole number of seconds, each as likely
-    (the floor of a uniform draw over min..max + 1: one draw an interval, as before)."""
+    (the floor of a uniform draw over min..max + 1: one draw an interval)."""
     whole = spec.min_interval_s.is_integer() and spec.max_interval_s.is_integer()
     times, now = [], spec.start_s
     for _ in range(spec.count):

@@ -18,7 +18,7 @@ Design intent:
   ``1 + cost_weight * cost / 252`` and a lethal cell cannot be entered. The static layer's
   weights are worked out once; on a costmap change only the steps onto the cells whose cost
   differs from it (a few hundred around the people marks) are weighed again: 0.8 ms rather
-  than 3.1 ms for the office's 600 000 steps (measured 2026-11-28). The graph's index arrays
+  than 3.1 ms for the office's 600 000 steps. The graph's index arrays
   are int32, the type scipy works in, which spares a copy of them at every search.
 * A start in lethal cost (the robot pressed against a wall or a person) first escapes to the
   nearest non-lethal cell; a lethal goal snaps to the nearest non-lethal cell close enough that

@@ -14,11 +14,11 @@ the simulator's own copy of what the executive's ``bt_servicesim/ros/environment
 * Fast DDS publishes synchronously (``RMW_FASTRTPS_PUBLICATION_MODE=SYNCHRONOUS``, whatever the
   user set): lockstep counts every message the simulator publishes, and a latched topic's
   writer keeps one message. Published asynchronously, a message waits in that one-deep history
-  for Fast DDS's own thread to send it, and the next one published on the topic replaced it
-  unsent: the referee's state of one period never reached the client, which waited for it 10 s
-  before the simulator dropped it (4 of 14 runs with the user's setting ``ASYNCHRONOUS``, at
-  the join or later). Sent within ``publish``, a message is in the reader's queue before the
-  next replaces it;
+  for Fast DDS's own thread to send it, and the next one published on the topic can replace it
+  unsent: a client then never gets (say) the referee's state of one period, and lockstep waits
+  for it 10 s before it drops the client (4 of 14 runs with the user's setting
+  ``ASYNCHRONOUS``, at the join or later). Sent within ``publish``, a message is in the
+  reader's queue before the next replaces it;
 * the Fast DDS shared-memory segments that dead participants of this user left in ``/dev/shm``
   (``fastdds_<16 hex digits>`` and its lock file ``…_el``) are removed: a participant holds an
   exclusive ``flock`` on its lock file while it lives, so a segment whose lock this process can

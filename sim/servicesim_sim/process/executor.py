@@ -5,10 +5,10 @@ arrived, and with a speed factor waits for the wall clock. Two things make rclpy
 ``SingleThreadedExecutor`` a poor fit for that loop as it stands:
 
 * it yields every unfinished coroutine task before it waits. A navigation goal's result
-  coroutine stays unfinished for the whole goal, so ``spin_once(timeout)`` resumed it and
-  returned at once instead of waiting: a simulator pacing itself at speed 5 kept a core busy
-  for as long as the robot drove, and two such simulators (an evaluation at ``--jobs 2``)
-  left their executives none;
+  coroutine stays unfinished for the whole goal, so ``spin_once(timeout)`` resumes it and
+  returns at once instead of waiting: a simulator pacing itself at speed 5 would keep a core
+  busy for as long as the robot drives, and two such simulators (an evaluation at
+  ``--jobs 2``) would leave their executives none;
 * each pass also resumes that coroutine once more and sorts every entity through callback
   groups and task lists before it waits: about 210 µs per I/O period in a driven mission,
   mostly to find nothing new.
@@ -26,8 +26,8 @@ A burst must be served whole, and a flood must not stop the world: one pass of r
 (one wait) takes at most *one* request from each service and the action server, so a drain
 repeats passes for as long as an entity still has work, until nothing is left or it has spent
 :data:`DRAIN_BUDGET_S` of wall time; the rest waits for the next drain, after the loop has
-stepped. A drain that ended after its first pass served one request per service per I/O
-period: 50 waiting requests took 50 drains.
+stepped (a drain of a single pass would serve one request per service per I/O period: 50
+waiting requests would take 50 drains).
 """
 
 from __future__ import annotations

@@ -4,13 +4,13 @@ Design intent: at speed *s* the simulator should advance *s* sim seconds per wal
 never faster. A loop that only computes "when is this sim time due" from a fixed anchor races
 after any stretch where it fell behind (a slow planning step, a busy machine): it then runs
 flat out until it has caught up, and a client ticking on ``/clock`` sees seconds of sim time
-go by in a few milliseconds with no chance to react. Measured with two episodes at once at
-speed 20 on two cores, the executive went 4–22 sim s without a single tick while one episode
-alone never went 1 sim s. So a simulator that falls more than :data:`MAX_LAG_WALL_S` of wall
-time (at least :data:`MIN_LAG_SIM_S`) behind *slips*: it re-anchors at the present and
-carries on at its speed, giving up the lost wall time, as Gazebo does when it cannot hold its
-real-time factor. The average speed then drops below the factor asked for, which is the truth
-about the machine, and the benchmark reports it.
+go by in a few milliseconds with no chance to react: with two episodes at once at speed 20 on
+two cores, such a loop lets the executive go 4–22 sim s without a single tick, where one
+episode alone stays under 1 sim s. So a simulator that falls more than
+:data:`MAX_LAG_WALL_S` of wall time (at least :data:`MIN_LAG_SIM_S`) behind *slips*: it
+re-anchors at the present and carries on at its speed, giving up the lost wall time, as
+Gazebo does when it cannot hold its real-time factor. The average speed then drops below the
+factor asked for, which is the truth about the machine, and the benchmark reports it.
 """
 
 from __future__ import annotations
@@ -22,8 +22,9 @@ from collections.abc import Callable
 #: that size is scheduling noise (a full-map plan takes 15-20 ms, a core is briefly taken) and
 #: is made up by running faster than the speed factor, only as much faster as the machine
 #: allows; a longer one means the machine cannot hold the speed. Allowed as sim time, it grows
-#: with the speed: 2 sim s at speed 50, 0.8 at speed 20. At speed 50 a fixed 0.2 sim s (4 ms)
-#: made every plan a slip, and 1 sim s still 15 in a mission: the simulator held 46-47x.
+#: with the speed: 2 sim s at speed 50, 0.8 at speed 20. A fixed allowance does not fit every
+#: speed: at speed 50, 0.2 sim s (4 ms) makes every plan a slip, and 1 sim s still 15 slips in
+#: a mission (the simulator holds 46-47x).
 MAX_LAG_WALL_S = 0.04
 #: The least lag allowed in sim seconds (two I/O periods), whatever the speed.
 MIN_LAG_SIM_S = 0.2

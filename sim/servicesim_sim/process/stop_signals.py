@@ -1,8 +1,9 @@
 """The signals that stop the simulator: Ctrl-C's (SIGINT), a process manager's (SIGTERM) and a
 closed terminal's (SIGHUP).
 
-Kept apart from :mod:`servicesim_sim.ros.node`, which imports rclpy, so that the command can take
-them over first thing (:mod:`servicesim_sim.__main__`) and a stop while it starts is one line.
+Kept apart from :mod:`servicesim_sim.ros.simulator`, which imports rclpy, so that the command
+can take them over first thing (:mod:`servicesim_sim.__main__`) and a stop while it starts is
+one line.
 
 A stop signal the command was started with ignored stays ignored, as Unix programs keep it:
 ``nohup python -m servicesim_sim`` outlives its terminal (SIGHUP), and a shell's background job

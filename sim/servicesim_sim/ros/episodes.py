@@ -1,6 +1,6 @@
 """Episode resets: a running simulator starts a new episode on request, as a cold start would.
 
-An extension beside the competition's interfaces (docs/simulator.md, "Episode reset"), for
+An extension beside the competition's interfaces (docs/reference/simulator.md, "Episode reset"), for
 tools that play many episodes in a row (the evaluation's warm episodes): starting a simulator
 costs an interpreter, its imports and DDS discovery, seconds that a short mission does not.
 ``/servicesim/reset`` (``servicesim_competition/srv/ResetEpisode``) carries the simulator's

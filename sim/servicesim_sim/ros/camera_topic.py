@@ -1,0 +1,56 @@
+"""The front camera's topic: frames rendered on the camera's own schedule, sent each period.
+
+Design intent: the camera's rate (24 Hz) is not a multiple of the I/O period's, so frames are
+rendered after the physics step they fall due in and held until the period's end, when they
+go out with its ``/clock``; nothing is rendered while nobody subscribes (a frame is the
+costliest thing the simulator makes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sensor_msgs.msg import Image
+
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.ros.publishing import Publishing, stamp
+
+CAMERA_TOPIC = "/servicebot/camera_front/image_raw"
+
+
+class CameraTopic:
+    """Renders the robot's front camera when a frame is due and publishes the frames."""
+
+    def __init__(self, *, engine: SimEngine, rate_hz: float, publishing: Publishing) -> None:
+        self.engine = engine
+        self.rate_hz = rate_hz
+        self._send = publishing.send
+        # a period sends up to three frames at once (at most 30 a sim second): keep them all
+        self.publisher = publishing.publisher(Image, CAMERA_TOPIC, 4)
+        self.frames: list[tuple[float, np.ndarray]] = []
+        """Frames captured and not yet sent: (sim time, pixels)."""
+        self._next = 0.0
+
+    def capture(self) -> None:
+        """Render a frame when one is due, after a physics step, while someone subscribes.
+
+        Frames fall due every 1 / rate sim s on a fixed schedule (at 24 Hz and 50 Hz physics:
+        0.04 and 0.06 s apart, 24 a sim second), so the rate is kept between I/O periods;
+        :meth:`publish` sends them with the period's /clock.
+        """
+        rate, now = self.rate_hz, self.engine.sim_time
+        if rate <= 0.0 or now < self._next - 1e-9:
+            return
+        self._next = max(self._next + 1.0 / rate, now)
+        if self.publisher.get_subscription_count() == 0:
+            return
+        self.frames.append((now, self.engine.camera_image()))
+
+    def publish(self) -> None:
+        for when, pixels in self.frames:
+            image = Image(height=pixels.shape[0], width=pixels.shape[1], encoding="rgb8",
+                          is_bigendian=0, step=pixels.shape[1] * 3)
+            image.header.stamp = stamp(when)
+            image.header.frame_id = "camera_front"
+            image.data = pixels.tobytes()
+            self._send(self.publisher, image)
+        self.frames.clear()
