@@ -28,9 +28,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrow, Patch, Rectangle
 
-from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import CrowdError
-from servicesim_sim.model.scenario import ScenarioError, make_scenario
+from servicesim_sim.model.playable import playable_engine
+from servicesim_sim.model.scenario import ScenarioError
 from servicesim_sim.world.files import (
     DEFAULT_WORLD,
     AreaBox,
@@ -178,9 +178,8 @@ def title(world: World, task: TaskSpec | None) -> str:
 def task_and_people(world: World, *, seed: int | None
                     ) -> tuple[TaskSpec, list[tuple[str, str, float, float]]]:
     """The task and people a simulator run on ``world`` starts with."""
-    scenario = make_scenario(world, seed=seed)
-    engine = SimEngine(world=world, scenario=scenario)
-    return scenario.task, engine.people_states()
+    engine = playable_engine(world, seed=seed)
+    return engine.scenario.task, engine.people_states()
 
 
 # --------------------------------------------------------------------------- command line

@@ -5,9 +5,11 @@ factor and the difficulty knobs. Every problem is a :class:`SettingsError` whose
 one line the user sees (a broken world file names the file and what is wrong with it).
 
 A world can load and still be unplayable: too few target areas for a random task, no free spot
-in an area, no room for its people. :func:`playable_engine` finds that out by building the
-engine (the task drawn, the people placed) before ROS is touched, so it is one line and exit
-status 2 like any broken world file, never a traceback from inside a running node.
+in an area, no room for its people, a fixed task whose areas navigation cannot reach from the
+start. :func:`playable_engine` finds that out by building the engine (the task drawn, the
+people placed, a draw idlers cut off drawn again: :mod:`servicesim_sim.model.playable`) before
+ROS is touched, so it is one line and exit status 2 like any broken world file, never a
+traceback from inside a running node.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from pathlib import Path
 
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import CrowdError
-from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
+from servicesim_sim.model.playable import playable_engine as playable_engine_of
+from servicesim_sim.model.scenario import Difficulty, ScenarioError
 from servicesim_sim.world.files import DEFAULT_WORLD, World, WorldError, load_world
 
 
@@ -77,9 +80,8 @@ def settings_from_arguments(args: argparse.Namespace, *,
 def playable_engine(settings: SimSettings) -> SimEngine:
     """The world set in motion for these settings, or a :class:`SettingsError` saying why not."""
     try:
-        scenario = make_scenario(settings.world, seed=settings.seed,
-                                 difficulty=settings.difficulty)
-        return SimEngine(world=settings.world, scenario=scenario)
+        return playable_engine_of(settings.world, seed=settings.seed,
+                                  difficulty=settings.difficulty)
     except ScenarioError as error:  # its message names the world file
         raise SettingsError(str(error)) from error
     except CrowdError as error:
@@ -93,6 +95,8 @@ def difficulty_from(args: argparse.Namespace) -> Difficulty:
         changes["guest_out_of_range"] = True
     if getattr(args, "guest_path", None):
         changes["guest_path"] = args.guest_path
+    if getattr(args, "walker_routes", None):
+        changes["walker_routes"] = args.walker_routes
     for argument, (field, lowest, highest) in _KNOBS.items():
         value = getattr(args, argument)
         if value is None:

@@ -4,7 +4,7 @@ Design intent: an evaluation asks how far each mission ran from the physical lim
 is the task sim time no executive can beat: the shortest route that meets the rules, driven at
 the robot's top speed (:data:`servicesim_sim.model.robot.MAX_SPEED`), plus the waits the rules
 force. It is computed from the same scenario the simulator plays for the same (world, seed,
-sim args) (:func:`servicesim_sim.model.scenario.make_scenario`), with the simulator's own
+sim args) (:func:`servicesim_sim.model.playable.playable_engine`), with the simulator's own
 constants, so it needs nothing the executive may know and never runs the simulator.
 
 The route, checkpoint by checkpoint (the referee's rules, :mod:`servicesim_sim.model.engine`):
@@ -263,13 +263,12 @@ class Bounder:
         return self._worlds[resolved]
 
     def bound(self, args: argparse.Namespace) -> dict[str, Any]:
-        from servicesim_sim.model.scenario import ScenarioError, make_scenario
-        from servicesim_sim.settings import SettingsError, settings_from_arguments
+        from servicesim_sim.model.scenario import ScenarioError
+        from servicesim_sim.settings import SettingsError, playable_engine, settings_from_arguments
 
         try:
             settings = settings_from_arguments(args, load=self._load)
-            scenario = make_scenario(settings.world, seed=settings.seed,
-                                     difficulty=settings.difficulty)
+            scenario = playable_engine(settings).scenario  # the task the simulator would play
         except (SettingsError, ScenarioError) as error:
             raise BoundInputError(str(error)) from error
         world = settings.world

@@ -7,6 +7,7 @@ and unknown space outside.
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 import re
 from collections.abc import Callable
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import (
     IDLER,
     WALKER,
@@ -25,7 +27,17 @@ from servicesim_sim.model.people import (
     Person,
     Walker,
 )
-from servicesim_sim.world.files import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
+from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.world.files import (
+    DEFAULT_WORLD,
+    IdlingArea,
+    OccupancyMap,
+    PlacedWalker,
+    WalkerRoute,
+    World,
+    load_world,
+)
+from servicesim_sim.world.office import SHIPPED_WALKERS
 
 RESOLUTION = 0.05
 ORIGIN = (-2.0, -2.0)
@@ -516,3 +528,83 @@ def test_the_near_points_kept_between_draws_hold_everyone_within_the_stop_distan
                 wanted = {int(i) for i in np.flatnonzero(gaps < WALKER_STOP_DISTANCE)}
                 assert wanted - {count + walker} <= set(indices)
                 assert count + walker not in indices
+
+
+# ----------------------------------------------------------------- the world's walker routes
+def office_engine(seed: int | None) -> SimEngine:
+    office = load_world(DEFAULT_WORLD)
+    return SimEngine(world=office, scenario=make_scenario(office, seed=seed))
+
+
+def first_waypoint_and_route(walker: Walker, routes: tuple[WalkerRoute, ...]) -> tuple[str, int]:
+    """Which of the world's loops the walker walks, from which waypoint, one way round."""
+    points = [tuple(point) for point in walker.route.tolist()]
+    for route in routes:
+        for first in range(len(route.waypoints)):
+            loop = route.waypoints[first:] + route.waypoints[:first + 1]
+            if points == [tuple(point) for point in loop]:
+                return route.name, first
+    raise AssertionError(f"{walker.person.name} walks none of the world's loops")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_office_walkers_draw_the_originals_loops_speeds_and_first_waypoints(seed: int) -> None:
+    sim = office_engine(seed)
+    routes = sim.world.walker_routes
+    assert sum(route.weight for route in routes) == 12 and len(routes) == 9
+    starts = []
+    for walker in sim.crowd.walkers:
+        name, first = first_waypoint_and_route(walker, routes)
+        starts.append(dict((r.name, r) for r in routes)[name].waypoints[first])
+        assert 0.9 <= walker.speed <= 1.2 and walker.direction == 1
+    assert len(set(starts)) == len(starts)  # no two walkers start at one waypoint
+
+
+def test_the_shipped_task_plays_the_shipped_worlds_walkers_three_passing_the_start() -> None:
+    sim = office_engine(None)
+    walkers = sim.crowd.walkers
+    assert [(*first_waypoint_and_route(w, sim.world.walker_routes), round(w.speed, 4))
+            for w in walkers] == [tuple(entry) for entry in SHIPPED_WALKERS]
+    task = sim.scenario.task
+    passing = [w for w in walkers
+               if min(math.hypot(x - task.start_x, y - task.start_y)
+                      for x, y in dense(w.route)) <= 0.55]
+    assert len(passing) == 3
+
+
+def dense(route: np.ndarray) -> list[tuple[float, float]]:
+    """Points every 5 cm along a polyline."""
+    points = []
+    for (x0, y0), (x1, y1) in itertools.pairwise(route.tolist()):
+        steps = max(1, int(math.hypot(x1 - x0, y1 - y0) / 0.05))
+        points += [(x0 + (x1 - x0) * i / steps, y0 + (y1 - y0) * i / steps)
+                   for i in range(steps)]
+    return points
+
+
+def test_on_the_worlds_routes_an_idler_in_the_lane_stops_a_walker_for_good() -> None:
+    route = WalkerRoute(name="hall", weight=1, waypoints=((1.0, 6.0), (18.0, 6.0), (18.0, 10.0),
+                                                          (1.0, 10.0)))
+    spot = IdlingArea(min_x=9.0, min_y=6.0, max_x=9.0, max_y=6.0, yaw=0.0)
+    people = Crowd(office_map(), rng=np.random.default_rng(0), walkers=1, idlers=1,
+                   taken_names=set(), keep_clear=[], idling_areas=(spot,), routes=(route,),
+                   placed=(PlacedWalker(route="hall", start=0, speed=1.0),))
+    walker = people.walkers[0]
+    for _ in range(600):  # 60 s
+        people.step(0.1, robot=FAR_AWAY)
+    assert 7.4 <= walker.person.x < 9.0 and walker.person.y == 6.0  # stopped short of the idler
+    assert walker.direction == 1 and walker.waited > 50.0  # it never turns back
+
+
+def test_on_the_worlds_routes_walkers_meeting_head_on_wait_for_each_other_for_good() -> None:
+    east = WalkerRoute(name="east", weight=1, waypoints=((1.0, 6.0), (18.0, 6.0)))
+    west = WalkerRoute(name="west", weight=1, waypoints=((18.0, 6.0), (1.0, 6.0)))
+    people = Crowd(office_map(), rng=np.random.default_rng(0), walkers=2, idlers=0,
+                   taken_names=set(), keep_clear=[], routes=(east, west),
+                   placed=(PlacedWalker(route="east", start=0, speed=1.0),
+                           PlacedWalker(route="west", start=0, speed=1.0)))
+    for _ in range(600):  # 60 s
+        people.step(0.1, robot=FAR_AWAY)
+    one, other = people.walkers
+    assert 1.0 < other.person.x - one.person.x < 1.5  # face to face, in each other's lane
+    assert (one.direction, other.direction) == (1, 1) and min(one.waited, other.waited) > 40.0

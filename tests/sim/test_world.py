@@ -367,6 +367,15 @@ def test_world_defaults_when_optional_parts_are_left_out(tmp_path: Path) -> None
     assert (world.people.walkers, world.people.idlers) == (10, 30)
     assert (world.drift.start_s, world.drift.count) == (200.0, 30)
     assert world.idling_areas == ()
+    assert world.amcl_initial_pose == (0.0, 0.0, 0.0)  # ROS 1 AMCL's default initial pose
+
+
+def test_an_amcl_initial_pose_is_read_and_null_means_none(tmp_path: Path) -> None:
+    path = tiny_world(tmp_path)
+    path.write_text(WORLD + "amcl_initial_pose: [1.0, 2.0, 0.5]\n")
+    assert load_world(path).amcl_initial_pose == (1.0, 2.0, 0.5)
+    path.write_text(WORLD + "amcl_initial_pose: null\n")
+    assert load_world(path).amcl_initial_pose is None
 
 
 Breakage = Callable[[Path], None]
@@ -512,6 +521,24 @@ BROKEN = [
      "targets names 'Hall' twice"),
     ("targets-empty", replace("[Hall, Kitchen, Study]", "[]"), "world.yaml",
      "targets must be a non-empty list"),
+    ("walker-route-one-waypoint",
+     replace("targets:", "walker_routes: [{name: a, waypoints: [[1.0, 1.0]]}]\ntargets:"),
+     "world.yaml", "walker_routes[0].waypoints must be a list of at least two [x, y]"),
+    ("walker-route-in-a-wall", replace(
+        "targets:", "walker_routes: [{name: a, waypoints: [[1.1, 1.3], [3.0, 1.0]]}]\ntargets:"),
+     "world.yaml", "walker_routes[0] waypoint (1.1, 1.3) is not on a free map cell"),
+    ("walkers-unknown-route", replace(
+        "targets:", "walker_routes: [{name: a, waypoints: [[0.7, 1.0], [3.0, 1.0]]}]\n"
+        "walkers: [{route: b, start: 0, speed: 1.0}, {route: a, start: 0, speed: 1.0}]\n"
+        "targets:"), "world.yaml", "walkers[0].route names an unknown walker route 'b'"),
+    ("walkers-too-few", replace(
+        "targets:", "walker_routes: [{name: a, waypoints: [[0.7, 1.0], [3.0, 1.0]]}]\n"
+        "walkers: [{route: a, start: 0, speed: 1.0}]\ntargets:"),
+     "world.yaml", "walkers must be a list of people.walkers (2) walkers"),
+    ("amcl-pose-two-numbers", replace("targets:", "amcl_initial_pose: [1.0, 2.0]\ntargets:"),
+     "world.yaml", "amcl_initial_pose must be a list [x, y, yaw] or null, not a list"),
+    ("amcl-pose-text", replace("targets:", "amcl_initial_pose: [1.0, 2.0, yaw]\ntargets:"),
+     "world.yaml", "amcl_initial_pose must be a number, not the text 'yaw'"),
 ]
 
 

@@ -47,11 +47,12 @@ from servicesim_sim.model.localisation import (
 )
 from servicesim_sim.model.people import Crowd
 from servicesim_sim.model.referee import Referee
-from servicesim_sim.model.robot import BODY_RADIUS, Robot, WallClearance
+from servicesim_sim.model.robot import Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
 from servicesim_sim.model.scenario import Scenario
 from servicesim_sim.navigation.navigator import Navigator
-from servicesim_sim.world.files import OccupancyMap, World
+from servicesim_sim.world.files import OccupancyMap, PlacedWalker, WalkerRoute, World
+from servicesim_sim.world.footprint import CIRCUMSCRIBED_RADIUS
 
 PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
 ROBOT_NAME = "servicebot"
@@ -109,13 +110,15 @@ class SimEngine:
         self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,
                            yaw=task.guest_yaw, wall_clearance=walls.at,
                            path=scenario.difficulty.guest_path)
+        routes, placed = self._walker_routes()
         self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
                            walkers=world.people.walkers, idlers=world.people.idlers,
                            taken_names={task.guest_name}, keep_clear=self._keep_clear(),
                            occupied=[(task.guest_x, task.guest_y, PERSON_BODY_RADIUS),
-                                     (task.start_x, task.start_y, BODY_RADIUS)],
+                                     (task.start_x, task.start_y, CIRCUMSCRIBED_RADIUS)],
                            idling_areas=world.idling_areas,
-                           walker_patience_s=world.people.walker_patience_s)
+                           walker_patience_s=world.people.walker_patience_s,
+                           routes=routes, placed=placed)
         self._knobs = np.random.default_rng(scenario.knob_seed)
         difficulty = scenario.difficulty
         self.odometry = WheelOdometry(drift=difficulty.odom_drift,
@@ -127,9 +130,12 @@ class SimEngine:
             walls.grid, origin=(world.map.origin_x, world.map.origin_y),
             resolution=world.map.resolution), person_radius=PERSON_BODY_RADIUS)
         self._scan_noise = np.random.default_rng([scenario.knob_seed, 4])
-        self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
+        self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1),
+                                   body=self.robot.footprint)
         self._ticket = 0
         self._localised = False
+        if world.amcl_initial_pose is not None:
+            self.set_initial_pose(*world.amcl_initial_pose)  # AMCL's launch pose, as ROS 1's
         self._refused: dict[int, NavigationState] = {}
         self._cmd_vel = (0.0, 0.0)
         self._nav_driving = False
@@ -139,6 +145,14 @@ class SimEngine:
         self._seen_revision = -1
         self._steps = 0
         self._nobody_near_until = -math.inf
+
+    def _walker_routes(self) -> tuple[tuple[WalkerRoute, ...], tuple[PlacedWalker, ...]]:
+        """The world's walker loops unless the knob asks for random ones (none: random), and
+        the fixed task's own walkers on them (the shipped world file's) when no seed draws."""
+        if self.scenario.difficulty.walker_routes == "random" or not self.world.walker_routes:
+            return (), ()
+        placed = self.world.walkers if self.scenario.seed is None else ()
+        return self.world.walker_routes, placed
 
     def _keep_clear(self) -> list[tuple[float, float, float]]:
         """Where walker routes do not go (idlers may stand there, as in the original)."""
@@ -264,7 +278,7 @@ class SimEngine:
         return self.odometry.pose
 
     def estimated_pose(self) -> Pose | None:
-        """The localisation's map pose now (map -> odom -> base), None before an initial pose."""
+        """The localisation's map pose now (map -> odom -> base); None, not localised."""
         return self.localisation.pose(self.odometry.pose)
 
     def new_estimate(self) -> Estimate | None:
@@ -277,8 +291,9 @@ class SimEngine:
 
         The one place that knows where odometry's origin lies; everything given in ``odom``
         (navigation goals) reaches ``map`` through it. It is the localisation's, as AMCL
-        broadcasts it; the identity before an initial pose (nothing is localised then, and
-        navigation refuses every goal).
+        broadcasts it: from the start at the world's ``amcl_initial_pose`` (the office: the
+        competitor's AMCL launch pose, as ROS 1 AMCL starts), else the identity until an initial
+        pose (nothing is localised then, and navigation refuses every goal, as Nav2's does).
         """
         return self.localisation.map_to_odom or IDENTITY
 
@@ -409,18 +424,23 @@ class SimEngine:
 
         Approximation: the depth of a ghost cylinder centred on the base (0.75 m for people,
         0.35 m for objects) into each person's body and into the nearest wall. Contact: the
-        depth of the robot's body into them. Booked from the start of the world.
+        depth of the robot's 0.4 x 0.5 m body into each person's body and into walls and
+        furniture, as :mod:`servicesim_sim.world.footprint` measures them. Booked from the start of
+        the world.
         """
-        clearance = self.robot.walls.at(self.robot.x, self.robot.y)  # centre to nearest wall
-        if clearance >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
+        robot = self.robot
+        clearance = robot.walls.at(robot.x, robot.y)  # centre to nearest wall
+        if (clearance >= OBJECT_APPROXIMATION_M and robot.wall_depth == 0.0
+                and not self._anyone_may_be_near()):
             return  # nobody and nothing near: the common case, nothing to book
-        distances = self._person_distances()
+        xs, ys = self._person_positions()
+        distances = np.hypot(xs - robot.x, ys - robot.y)
         # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
         # constant minus a distance), without np.clip's wrappers, every step someone is near;
         # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
-        touching = np.maximum(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0)
+        touching = robot.footprint.person_depths(robot.pose, xs, ys, radius=PERSON_BODY_RADIUS)
         self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
-                             object_depth=max(0.0, BODY_RADIUS - clearance), dt=dt)
+                             object_depth=robot.wall_depth, dt=dt)
         approach = np.minimum(
             np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
             PERSON_APPROXIMATION_M)
@@ -453,11 +473,11 @@ class SimEngine:
         nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
         return math.sqrt(nearest)
 
-    def _person_distances(self) -> np.ndarray:
-        """Distance from the robot's origin to each person's origin."""
+    def _person_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """Everyone's origin, the guest last."""
         xs = [person.x for person in self.crowd.people] + [self.guest.x]
         ys = [person.y for person in self.crowd.people] + [self.guest.y]
-        return np.hypot(np.asarray(xs) - self.robot.x, np.asarray(ys) - self.robot.y)
+        return np.asarray(xs), np.asarray(ys)
 
     # ------------------------------------------------------------------ sensors
     def rfid_names(self) -> list[str] | None:

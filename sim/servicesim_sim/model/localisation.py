@@ -16,8 +16,9 @@ so odometry wanders off the true pose as the robot drives, as real odometry does
 :class:`AmclModel` is not a particle filter; it models what AMCL does with this robot's lidar on
 a known, static map, which is all a client can observe:
 
-* nothing (no estimate, no map -> odom) until an initial pose arrives;
-* on the initial pose, the estimate is that pose, published at once;
+* nothing (no estimate, no map -> odom) until an initial pose arrives (the engine gives it the
+  world's AMCL launch pose at start, as ROS 1 AMCL starts at its ``initial_pose_*``);
+* on an initial pose, the estimate is that pose, published at once;
 * the filter updates only when odometry has moved ``update_min_d`` metres or turned
   ``update_min_a`` radians since its last update (Nav2's AMCL defaults, 0.25 m and 0.2 rad);
   between updates map -> odom stays put, so the estimate follows odometry;
@@ -169,10 +170,11 @@ class AmclModel:
 def initial_pose_problem(*, frame_id: str, global_frame: str,
                          numbers: Sequence[float],
                          orientation: tuple[float, float, float, float]) -> str | None:
-    """Why AMCL would ignore this initial pose, or None: a frame that is not ``global_frame``,
-    a number that is not finite among ``numbers`` (the position, the orientation and the
-    covariance), an orientation of no length."""
-    if frame_id != global_frame:
+    """Why AMCL would ignore this initial pose, or None: a frame that is not ``global_frame``
+    (an empty one is taken as the global frame, as ROS 1 AMCL takes it), a number that is not
+    finite among ``numbers`` (the position, the orientation and the covariance), an orientation
+    of no length."""
+    if frame_id and frame_id != global_frame:
         return f"frame {frame_id!r}, must be {global_frame!r}"
     if not all(math.isfinite(number) for number in numbers):
         return "a number in it is not finite"

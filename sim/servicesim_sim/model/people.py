@@ -21,7 +21,13 @@ Design intent:
   robot's start: the ``occupied`` discs), and an idler is refused where it would cut a passage
   the robot needs (the robot-passable free space must not split), so no seed makes a room
   unreachable.
-* Walker routes are ours (the original's are twelve hand-drawn loops): planned afterwards on a
+* A world with walker routes (the office: the original's hand-drawn loops) has each walker draw
+  one as the original's world generator did (``worlds/service.world.erb`` 397-405,
+  ``worlds/actor_trajectory.erb`` 14-45): a route by its weight, a speed of 0.9-1.2 m/s and a
+  first waypoint (``rand(0..20)`` round the loop, the next one while another walker starts
+  there), walking the loop one way; the fixed task may name its walkers instead (the shipped
+  world file's ten). Anyone stops such a walker, idlers too, as the original's actors did.
+* Elsewhere, or with ``random_routes``, walker routes are ours: planned after the idlers on a
   coarse grid of the free space eroded by 0.5 m, with the keep-clear discs and the idlers cut
   out, straightened by line of sight, and redrawn until nobody standing still (an idler, the
   waiting guest) ever comes into a walker's lane: a walker stopped by someone who never moves
@@ -42,7 +48,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from servicesim_sim.world.files import IdlingArea, OccupancyMap
+from servicesim_sim.world.files import IdlingArea, OccupancyMap, PlacedWalker, WalkerRoute
 
 WALKER = "walker"
 IDLER = "idler"
@@ -60,6 +66,7 @@ WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns bac
 # original's hand-drawn loops run one way and rarely meet head on; random loops do, and without
 # this every walker of the office stands deadlocked within about 100 s)
 ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of standing people
+FIRST_WAYPOINT_DRAW = 21  # the original draws a walker's first waypoint as rand(0..20)
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
@@ -586,6 +593,48 @@ class NearPoints:
         return walkers_moved + max(moved) <= NEAR_POINTS_SLACK - 1e-6
 
 
+def walkers_on_routes(names: list[str], routes: tuple[WalkerRoute, ...],
+                      rng: np.random.Generator, *, placed: tuple[PlacedWalker, ...] = (),
+                      occupied: Sequence[KeepClear] = ()) -> list[Walker]:
+    """One walker per name on the world's loops, drawn as the original's generator drew them
+    (see the module docstring), or as ``placed`` names them; no two start at one waypoint,
+    and a drawn walker starts at none within its stop distance of an ``occupied`` spot (a
+    random task's robot or guest: the original's fixed spots had no walker start on them)."""
+    by_name = {route.name: route for route in routes}
+    entries = [route for route in routes for _ in range(route.weight)]
+    starts: set[tuple[float, float]] = set()
+    walkers = []
+    for index, name in enumerate(names):
+        if placed:
+            fixed = placed[index]
+            route, first, speed = by_name[fixed.route], fixed.start, fixed.speed
+        else:
+            route = entries[int(rng.integers(len(entries)))]
+            speed = float(rng.uniform(*WALKER_SPEED_RANGE))
+            first = _free_start(route, int(rng.integers(FIRST_WAYPOINT_DRAW)),
+                                taken=starts, occupied=occupied)
+        starts.add(route.waypoints[first])
+        loop = route.waypoints[first:] + route.waypoints[:first + 1]
+        x, y = loop[0]
+        person = Person(name=name, role=WALKER, x=x, y=y, yaw=0.0)
+        walkers.append(Walker.on(person, np.array(loop, dtype=float), speed=speed, start=0.0))
+    return walkers
+
+
+def _free_start(route: WalkerRoute, draw: int, *, taken: set[tuple[float, float]],
+                occupied: Sequence[KeepClear]) -> int:
+    """The waypoint ``draw`` round the loop, or the next one free to start at."""
+    count = len(route.waypoints)
+    for step in range(count):
+        first = (draw + step) % count
+        x, y = route.waypoints[first]
+        if (route.waypoints[first] not in taken
+                and all(math.hypot(x - ox, y - oy) >= WALKER_STOP_DISTANCE + radius
+                        for ox, oy, radius in occupied)):
+            return first
+    raise CrowdError(f"walker route {route.name!r}: no waypoint is free to start a walker at")
+
+
 def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:
     """``count`` distinct ``human_NNNNN`` names, none of them in ``taken``."""
     names: list[str] = []
@@ -603,22 +652,28 @@ class Crowd:
 
     ``keep_clear`` discs keep walker routes away (the task's spots and areas); ``occupied``
     discs are bodies nobody may be placed on (the guest, the robot's start); ``idling_areas``
-    are where idlers stand (none: anywhere free). A walker blocked by the robot, the guest or an
-    idler for ``walker_patience_s`` turns back; the default, infinity, is the original's rule:
-    it waits as long as it stays blocked.
+    are where idlers stand (none: anywhere free). ``routes`` are the world's walker loops (none:
+    random loops) and ``placed`` the walkers on them a fixed task names (none: drawn). A walker
+    blocked by the robot, the guest or an idler for ``walker_patience_s`` turns back; the
+    default, infinity, is the original's rule: it waits as long as it stays blocked.
     """
 
     def __init__(self, occupancy_map: OccupancyMap, *, rng: np.random.Generator,
                  walkers: int, idlers: int, taken_names: set[str],
                  keep_clear: list[KeepClear], occupied: Sequence[KeepClear] = (),
                  idling_areas: tuple[IdlingArea, ...] = (),
-                 walker_patience_s: float = math.inf) -> None:
+                 walker_patience_s: float = math.inf,
+                 routes: tuple[WalkerRoute, ...] = (),
+                 placed: tuple[PlacedWalker, ...] = ()) -> None:
         if walkers < 0 or idlers < 0:
             raise ValueError(f"walkers {walkers}, idlers {idlers}: counts must be 0 or more")
         if walkers + idlers + len(taken_names) > NAME_NUMBERS:
             raise CrowdError(f"walkers {walkers} and idlers {idlers}: more people than the "
                              f"{NAME_NUMBERS} human_NNNNN names")
         self.walker_patience_s = walker_patience_s
+        # walkers on the world's one-way loops wait for each other as the original's did, as
+        # long as they stay blocked; random loops meet head-on, so there a standoff ends
+        self.standoff_s = math.inf if routes else WALKER_STANDOFF_S
         clearance = Clearance.of(occupancy_map)
         names = fresh_names(rng, walkers + idlers, taken=taken_names)
         poses = idler_poses(clearance, rng, count=idlers, areas=idling_areas,
@@ -626,7 +681,12 @@ class Crowd:
         standing = [Person(name=name, role=IDLER, x=x, y=y, yaw=yaw)
                     for name, (x, y, yaw) in zip(names[walkers:], poses, strict=True)]
         self._walkers: list[Walker] = []
-        if walkers:
+        # on the world's routes idlers may stand in a lane, and stop walkers as anyone does
+        self._standing = [(x, y) for x, y, _ in poses] if routes else []
+        if walkers and routes:
+            self._walkers = walkers_on_routes(names[:walkers], routes, rng, placed=placed,
+                                              occupied=occupied)
+        elif walkers:
             spots = [(x, y) for x, y, _ in poses]
             grid = RouteGrid(clearance, keep_clear=keep_clear, idlers=spots)
             still = np.array(spots + [(x, y) for x, y, _ in occupied], dtype=float)
@@ -658,12 +718,12 @@ class Crowd:
         """Move every walker ``dt`` seconds on, except those with someone in their lane (as
         everyone stood at the step's start): the robot, ``others`` (the guest), an idler or
         another walker. A walker waits for the first three for :attr:`walker_patience_s`, and
-        for walkers alone :data:`WALKER_STANDOFF_S`; then it turns back."""
+        for walkers alone :attr:`standoff_s`; then it turns back."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
-        # idlers are left out: routes are drawn so that none ever stands in a walker's lane
+        # idlers count only on the world's routes: random ones keep them out of every lane
         floor = [(robot[0], robot[1])]
-        others = list(others)
+        others = list(others) + self._standing
         moving = [(w.person.x, w.person.y) for w in self._walkers]
         within = self._near.within(floor + others + moving, walkers=len(moving))
         for walker, near in zip(self._walkers, within, strict=True):
@@ -674,7 +734,7 @@ class Crowd:
                 walker.advance(walker.direction * walker.speed * dt)
                 continue
             walker.waited += dt
-            patience = self.walker_patience_s if by_people else WALKER_STANDOFF_S
+            patience = self.walker_patience_s if by_people else self.standoff_s
             if walker.waited >= patience:
                 walker.turn_back()
 

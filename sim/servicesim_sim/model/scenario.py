@@ -11,7 +11,8 @@ placed beyond RFID range of the pick-up area's centre, earlier and more frequent
 navigation goals that abort, RFID messages that are lost, and slow referee services. It also
 carries ``guest_path``, the one deliberate difference of the guest from the original that can be
 switched back: ``trail`` (the default) follows the robot's trail, ``straight`` walks straight at
-the robot, through walls, as the original's guest did.
+the robot, through walls, as the original's guest did. ``walker_routes`` ``random`` gives every
+walker a random loop of ours instead of the world's (the office: the original's).
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ class Difficulty:
     odom_drift: float = 0.0  # encoder calibration error (std of the scale factors' offsets)
     localisation_noise: float = 0.0  # m (and rad): std of the noise on a converged estimate
     guest_path: str = "trail"  # how the guest follows: "trail" (ours) or "straight" (original)
+    walker_routes: str = "world"  # "world": the world's loops (the original's); "random": ours
 
     @classmethod
     def default(cls) -> Difficulty:
@@ -80,12 +82,17 @@ class ScenarioError(ValueError):
 
 
 def make_scenario(world: World, *, seed: int | None = None,
-                  difficulty: Difficulty | None = None) -> Scenario:
-    """The world's fixed task without a seed (if it has one), else a task drawn from ``seed``."""
+                  difficulty: Difficulty | None = None, draw: int = 0) -> Scenario:
+    """The world's fixed task without a seed (if it has one), else a task drawn from ``seed``.
+
+    ``draw`` > 0 draws again, deterministically (:mod:`servicesim_sim.model.playable` does
+    while a draw cannot be played): another task of the seed, or the fixed task with other
+    people and knobs."""
     difficulty = difficulty or Difficulty.default()
+    again = [draw] if draw else []
     if seed is None and world.task is not None:
-        return _fixed_scenario(world, difficulty)
-    rng = np.random.default_rng([0 if seed is None else seed, 1])
+        return _fixed_scenario(world, difficulty, again=again)
+    rng = np.random.default_rng([0 if seed is None else seed, 1, *again])
     free = _spot_mask(world)
     pick_up, drop_off, start_area = _three_areas(world, rng, seeded=seed is not None)
     guest_x, guest_y = _guest_spot(world, world.areas[pick_up], free, rng, difficulty)
@@ -137,10 +144,10 @@ def fixed_drift_times(spec: DriftSpec, *, scale: float = 1.0) -> tuple[float, ..
     return tuple(round(time * scale, 3) for time in spec.times)
 
 
-def _fixed_scenario(world: World, difficulty: Difficulty) -> Scenario:
+def _fixed_scenario(world: World, difficulty: Difficulty, *, again: list[int]) -> Scenario:
     task = world.task
     assert task is not None
-    rng = np.random.default_rng([SHIPPED_DRIFT_SEED, 1])
+    rng = np.random.default_rng([SHIPPED_DRIFT_SEED, 1, *again])
     if difficulty.guest_out_of_range:
         guest_x, guest_y = _out_of_range_spot(world, world.areas[task.pick_up],
                                               _spot_mask(world), rng)

@@ -269,10 +269,17 @@ class Costmap:
             self.version += 1
         self.marks = marks
 
-    def _with_people(self, costs: np.ndarray) -> np.ndarray:
+    def costs_with(self, people: list[tuple[float, float]]) -> np.ndarray:
+        """The static costs with ``people`` marked, as if the lidar had seen them all (the
+        marks themselves are left as they are)."""
+        marks = tuple(PersonMark(float(x), float(y), 0.0) for x, y in people)
+        return self._with_people(self.static.copy(), marks=marks)
+
+    def _with_people(self, costs: np.ndarray,
+                     marks: tuple[PersonMark, ...] | None = None) -> np.ndarray:
         reach = self.person_radius + self.social.inflation_radius
         frame = self.frame
-        for mark in self.marks:
+        for mark in self.marks if marks is None else marks:
             row0, col0 = frame.cell_of(mark.x - reach, mark.y - reach)
             row1, col1 = frame.cell_of(mark.x + reach, mark.y + reach)
             row0, col0 = max(row0, 0), max(col0, 0)

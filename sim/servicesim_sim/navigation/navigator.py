@@ -35,7 +35,7 @@ import bisect
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -109,6 +109,8 @@ class Tuning:
     progress_window: float = 10.0
     backup_speed: float = 0.15
     backup_time: float = 1.0
+    body_horizon: float = 0.3  # s: a command is checked for the body this far ahead ...
+    body_margin: float = 0.01  # m: ... to keep its outline this far off walls
 
 
 class PolylinePath:
@@ -212,6 +214,33 @@ def pursue(path: PolylinePath, s: float, pose: Pose, limits: Limits, tuning: Tun
     return speed, turn
 
 
+class Body(Protocol):
+    """The robot's body on the map (:class:`servicesim_sim.world.footprint.Footprint`)."""
+
+    def clearance(self, pose: Pose, *, beyond: float = 0.0) -> float:
+        """Metres between the body at ``pose`` and the nearest wall (see Footprint)."""
+        ...
+
+
+BODY_SAMPLES: tuple[Twist, ...] = (
+    *((v, w) for v in (0.3, 0.15) for w in (1.0, 0.5, 0.0, -0.5, -1.0)),
+    (0.0, 1.0), (0.0, 0.5), (0.0, -0.5), (0.0, -1.0), (-0.1, 0.0), (-0.1, 0.5), (-0.1, -0.5))
+"""The twists tried, as a sampling local planner would, when the follower's own would bring
+the body against a wall: forward arcs, turns on the spot, backing off."""
+
+
+def arc_end(pose: Pose, twist: Twist, seconds: float) -> Pose:
+    """Where (v, w) held for ``seconds`` takes a differential drive from ``pose``."""
+    x, y, yaw = pose
+    v, w = twist
+    turn = w * seconds
+    if abs(turn) > 1e-9:
+        radius = v / w
+        return (x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
+                y - radius * (math.cos(yaw + turn) - math.cos(yaw)), yaw + turn)
+    return x + v * seconds * math.cos(yaw), y + v * seconds * math.sin(yaw), yaw
+
+
 class Navigator:
     """One navigation goal at a time, driven step by step by the engine (see module docstring).
 
@@ -222,8 +251,10 @@ class Navigator:
     def __init__(self, occupancy_map: OccupancyMap, *, max_speed: float = 0.5,
                  max_turn_rate: float = 1.0, xy_tolerance: float = 0.3,
                  yaw_tolerance: float = 0.262, rng: np.random.Generator,
-                 tuning: Tuning | None = None, lidar: Lidar | None = None) -> None:
+                 tuning: Tuning | None = None, lidar: Lidar | None = None,
+                 body: Body | None = None) -> None:
         self.tuning = tuning or Tuning()
+        self.body = body
         self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
         self.xy_tolerance = xy_tolerance
         self.yaw_tolerance = yaw_tolerance
@@ -285,7 +316,37 @@ class Navigator:
         self._replan_needed = True
 
     def command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
-        """The (v, w) for this step; observes people first, stops unless a goal is running."""
+        """The (v, w) for this step; observes people first, stops unless a goal is running.
+        A command that would bring the body against a wall is changed for one that does not."""
+        twist = self._command(pose=pose, people=people, now=now)
+        return self._keeping_the_body_clear(pose, twist)
+
+    def _keeping_the_body_clear(self, pose: Pose, twist: Twist) -> Twist:
+        """``twist`` if it keeps the body's outline :attr:`Tuning.body_margin` off walls over
+        the next :attr:`Tuning.body_horizon` (or no nearer than now), else the sampled twist
+        nearest it that does (turn first, then speed), else stop: the footprint check
+        move_base's local planner made of every trajectory it sampled."""
+        if self.body is None or twist == STOP or self._body_keeps_clear(pose, twist, None):
+            return twist
+        now = self.body.clearance(pose, beyond=self.tuning.body_margin)
+        options = sorted(BODY_SAMPLES, key=lambda option: (abs(option[1] - twist[1]),
+                                                           abs(option[0] - twist[0])))
+        return next((option for option in options
+                     if self._body_keeps_clear(pose, option, now)), STOP)
+
+    def _body_keeps_clear(self, pose: Pose, twist: Twist, now: float | None) -> bool:
+        """Whether ``twist`` keeps the body off walls over the horizon (halfway and at its
+        end), or, given its clearance ``now``, brings it no nearer."""
+        assert self.body is not None
+        tuning = self.tuning
+        for share in (0.5, 1.0):
+            ahead = self.body.clearance(arc_end(pose, twist, share * tuning.body_horizon),
+                                        beyond=tuning.body_margin)
+            if ahead < tuning.body_margin and (now is None or ahead <= now + 1e-4):
+                return False
+        return True
+
+    def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
         self._people = people
         self._observe(pose, now)
         if self.status != "running":

@@ -34,7 +34,7 @@ from rclpy.task import Future
 
 from servicesim_sim.lockstep.server import LockstepServer
 from servicesim_sim.model.engine import SimEngine
-from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.model.playable import playable_engine
 from servicesim_sim.process.executor import DrainingExecutor
 from servicesim_sim.process.pacing import Pacer
 from servicesim_sim.ros.camera_topic import CameraTopic
@@ -63,9 +63,8 @@ class SimulatorNode:
         self.settings = settings
         self.node = node
         self.resets = resets
-        self.engine = engine = engine or SimEngine(
-            world=settings.world, scenario=make_scenario(settings.world, seed=settings.seed,
-                                                         difficulty=settings.difficulty))
+        self.engine = engine = engine or playable_engine(
+            settings.world, seed=settings.seed, difficulty=settings.difficulty)
         self.steps_per_io = max(1, round(IO_PERIOD_S / engine.dt))
         self._io_count = 0
         self._had_client = False

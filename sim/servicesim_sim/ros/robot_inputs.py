@@ -40,8 +40,12 @@ class RobotInputs:
                                  callback_group=lockstep.callback_group)
 
     def on_initial_pose(self, message: PoseWithCovarianceStamped) -> None:
-        """AMCL's initialpose: taken in the global frame only and with finite numbers, as Nav2's
-        AMCL takes it; any other is ignored with a warning."""
+        """AMCL's initialpose: taken in the global frame only and with finite numbers, as AMCL
+        takes it (an empty frame is taken as the global one, with a warning, as ROS 1 AMCL does);
+        any other is ignored with a warning."""
+        if not message.header.frame_id:
+            self.node.get_logger().warning(
+                f"initial pose with an empty frame_id taken as {MAP_FRAME!r}")
         pose = message.pose.pose
         position, turn = pose.position, pose.orientation
         orientation = (turn.x, turn.y, turn.z, turn.w)

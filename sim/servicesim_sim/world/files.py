@@ -3,9 +3,9 @@
 A world file is a small YAML document (the format is described in
 ``docs/reference/worlds.md``). It names a standard ROS map_server map (a map YAML beside an
 image), the target areas the referee's ``room_info`` service answers for, and optionally a
-fixed task, the people counts, the drift schedule and which areas a random task may use.
-:func:`load_world` reads and checks all of it and returns a :class:`World`, an immutable value
-the engine, navigation and people share.
+fixed task, the people counts, the drift schedule, the walkers' routes, AMCL's launch pose and
+which areas a random task may use. :func:`load_world` reads and checks all of it and returns a
+:class:`World`, an immutable value the engine, navigation and people share.
 
 Design intent:
 
@@ -43,7 +43,7 @@ MAX_DRIFTS = 10_000  # drift.count: the original draws 30; a schedule is drawn o
 MAX_WALKERS = 200
 """people.walkers at most: each walker's routes are planned at start, so the count sets how
 long the simulator takes to come up. Setting the office in motion took 12.6 s with 200
-walkers and 31.6 s with 400 on the project's 2-core machine under a load average of 20
+walkers and 31.6 s with 400 on a busy 2-core machine
 (``make_scenario`` and ``SimEngine``, seed 1; 1.6 s with the shipped 10), where a run gives its
 simulator 60 s to come up: 200 keeps it within a fifth of that, with room for the idlers."""
 MAX_IDLERS = 400
@@ -51,7 +51,8 @@ MAX_IDLERS = 400
 walkers), measured as :data:`MAX_WALKERS` was; both at their bounds stay within half of the
 60 s a run gives its simulator to come up."""
 WORLD_KEYS = ("name", "description", "map", "areas", "task", "people", "idling_areas", "drift",
-              "targets")
+              "targets", "amcl_initial_pose", "walker_routes", "walkers")
+AMCL_DEFAULT_INITIAL_POSE = (0.0, 0.0, 0.0)  # ROS 1 AMCL's initial_pose_x, _y, _a defaults
 
 
 class WorldError(ValueError):
@@ -186,6 +187,25 @@ class IdlingArea:
 
 
 @dataclass(frozen=True)
+class WalkerRoute:
+    """A loop walkers walk, one way, waypoint to waypoint and back to the first; ``weight``:
+    how many entries of the world's list of routes it is (a walker draws one entry)."""
+
+    name: str
+    weight: int
+    waypoints: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class PlacedWalker:
+    """A walker of the fixed task: its route, the waypoint it starts at and its speed."""
+
+    route: str
+    start: int
+    speed: float
+
+
+@dataclass(frozen=True)
 class PeopleSpec:
     """How many people share the building with the robot and the guest, and how walkers wait.
 
@@ -224,6 +244,10 @@ class World:
     drift: DriftSpec = field(default_factory=DriftSpec)
     targets: tuple[str, ...] = ()
     idling_areas: tuple[IdlingArea, ...] = ()  # none: idlers stand anywhere free
+    # where AMCL starts before any initialpose, (x, y, yaw) in map; None: it waits for one
+    amcl_initial_pose: tuple[float, float, float] | None = AMCL_DEFAULT_INITIAL_POSE
+    walker_routes: tuple[WalkerRoute, ...] = ()  # none: each walker gets a random loop
+    walkers: tuple[PlacedWalker, ...] = ()  # the fixed task's walkers; none: drawn
 
 
 # --------------------------------------------------------------------------- reading YAML
@@ -499,6 +523,7 @@ def load_world(path: str | Path) -> World:
         name=fields.text("name", default=path.stem), path=path, map=occupancy, areas=areas,
         task=task, people=_people(fields), drift=_drift(fields),
         targets=_targets(fields, areas), idling_areas=_idling_areas(fields, occupancy),
+        amcl_initial_pose=_amcl_initial_pose(fields), **_walkers(fields, occupancy),
     )
 
 
@@ -553,6 +578,89 @@ def _area(fields: _Fields, occupancy: OccupancyMap | None) -> AreaBox:
         fields.fail(f"{fields.where} lies outside the map (x {low_x:g}..{high_x:g}, "
                     f"y {low_y:g}..{high_y:g})")
     return box
+
+
+def _walkers(fields: _Fields, occupancy: OccupancyMap) -> dict[str, Any]:
+    """``walker_routes`` and the fixed task's ``walkers`` on them, checked together."""
+    routes = _walker_routes(fields, occupancy)
+    if not fields.has("walkers"):
+        return {"walker_routes": routes, "walkers": ()}
+    value = fields.raw("walkers")
+    if not routes:
+        fields.fail("walkers needs walker_routes to walk on")
+    if not isinstance(value, list) or len(value) != _people(fields).walkers:
+        fields.fail(f"walkers must be a list of people.walkers ({_people(fields).walkers}) "
+                    f"walkers, not {_kind(value)}")
+    by_name = {route.name: route for route in routes}
+    walkers = tuple(_placed_walker(_Fields(item, path=fields.path, where=f"walkers[{index}]"),
+                                   by_name) for index, item in enumerate(value))
+    return {"walker_routes": routes, "walkers": walkers}
+
+
+def _walker_routes(fields: _Fields, occupancy: OccupancyMap) -> tuple[WalkerRoute, ...]:
+    if not fields.has("walker_routes"):
+        return ()
+    value = fields.raw("walker_routes")
+    if not isinstance(value, list) or not value:
+        fields.fail(f"walker_routes must be a non-empty list, not {_kind(value)}")
+    routes = tuple(_walker_route(_Fields(item, path=fields.path, where=f"walker_routes[{index}]"),
+                                 occupancy) for index, item in enumerate(value))
+    names = [route.name for route in routes]
+    duplicates = sorted({name for name in names if names.count(name) > 1})
+    if duplicates:
+        fields.fail(f"walker_routes names {duplicates[0]!r} twice")
+    return routes
+
+
+def _walker_route(fields: _Fields, occupancy: OccupancyMap) -> WalkerRoute:
+    fields.reject_unknown(("name", "weight", "waypoints"))
+    name, weight = fields.text("name"), fields.integer("weight", default=1)
+    if weight < 1:
+        fields.fail(f"{fields.name('weight')} must be 1 or more, not {weight}")
+    value = fields.raw("waypoints")
+    if not isinstance(value, list) or len(value) < 2:
+        fields.fail(f"{fields.name('waypoints')} must be a list of at least two [x, y], "
+                    f"not {_kind(value)}")
+    waypoints = tuple(_waypoint(item, fields, f"{fields.name('waypoints')}[{index}]")
+                      for index, item in enumerate(value))
+    for x, y in waypoints:
+        if not occupancy.is_free(x, y):
+            fields.fail(f"{fields.where} waypoint ({x:g}, {y:g}) is not on a free map cell")
+    return WalkerRoute(name=name, weight=weight, waypoints=waypoints)
+
+
+def _waypoint(value: Any, fields: _Fields, name: str) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        fields.fail(f"{name} must be a list [x, y], not {_kind(value)}")
+    return _as_number(value[0], fields, name), _as_number(value[1], fields, name)
+
+
+def _placed_walker(fields: _Fields, routes: dict[str, WalkerRoute]) -> PlacedWalker:
+    fields.reject_unknown(("route", "start", "speed"))
+    name = fields.text("route")
+    if name not in routes:
+        fields.fail(f"{fields.name('route')} names an unknown walker route {name!r}")
+    start, speed = fields.integer("start"), fields.number("speed")
+    if not 0 <= start < len(routes[name].waypoints):
+        fields.fail(f"{fields.name('start')} must be a waypoint of {name!r}, 0.."
+                    f"{len(routes[name].waypoints) - 1}, not {start}")
+    if not speed > 0.0:
+        fields.fail(f"{fields.name('speed')} must be more than 0, not {speed:g}")
+    return PlacedWalker(route=name, start=start, speed=speed)
+
+
+def _amcl_initial_pose(fields: _Fields) -> tuple[float, float, float] | None:
+    """``amcl_initial_pose``: absent, ROS 1 AMCL's default (0, 0, 0); null, none (AMCL waits
+    for an initialpose, as Nav2's does by default); else ``[x, y, yaw]``."""
+    if "amcl_initial_pose" not in fields.data:
+        return AMCL_DEFAULT_INITIAL_POSE
+    value = fields.data["amcl_initial_pose"]
+    if value is None:
+        return None
+    if not isinstance(value, list) or len(value) != 3:
+        fields.fail(f"amcl_initial_pose must be a list [x, y, yaw] or null, not {_kind(value)}")
+    x, y, yaw = (_as_number(item, fields, "amcl_initial_pose") for item in value)
+    return x, y, yaw
 
 
 def _point(fields: _Fields, key: str) -> tuple[float, float]:

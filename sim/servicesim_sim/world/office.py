@@ -23,6 +23,9 @@ Everything is plain data, so the building can be read and changed like a drawing
 * ``IDLING_AREAS`` - the 19 boxes where the competition's idlers stand, each with the way they
   face (facts of its ``worlds/idling_humans.erb``; one box there has min and max x swapped,
   written here low to high).
+* ``WALKER_ROUTES`` - the competition's walker loops, their waypoints as facts of its
+  ``worlds/trajectory_*.erb``, and ``SHIPPED_WALKERS``, the shipped world file's ten walkers on
+  them (route, first waypoint, speed), which the shipped task plays.
 
 Doors are 1.2 m wide (the original's are about 1.05 m) so that a robot whose planner inflates
 obstacles by 0.35-0.4 m still fits through. ``python -m servicesim_sim.world.office`` rasterises the
@@ -309,6 +312,67 @@ SHIPPED_PICK_UP, SHIPPED_DROP_OFF = "FrontElevator", "PrivateCubicle_32_1"
 SHIPPED_GUEST = {"name": "human_20843", "x": -0.043, "y": 1.512, "yaw": 1.5708}
 SHIPPED_START = {"area": "PublicBathroomB", "x": 10.975, "y": 3.75, "yaw": 3.14}
 PEOPLE = {"walkers": 10, "idlers": 30}
+AMCL_INITIAL_POSE = (-24.469, 6.278, 0.15)  # the competitor's AMCL launch file's initial pose
+WALKER_ROUTES: tuple[tuple[str, int, tuple[Point, ...]], ...] = (
+    # (name, weight, waypoints): the original's walker loops (worlds/trajectory_*.erb), each
+    # walked one way; the weight counts its entries in the world's list of 12 (service.world.erb
+    # 298-311 lists public_a, public_b and middle twice), of which each walker draws one
+    ("private_a", 1, (
+        (-6.16816, 18.587), (-12.4968, 18.6143), (-12.4028, 14.6816), (-6.1741, 14.5956),
+    )),
+    ("private_b", 1, (
+        (-12.4711, 13.7521), (-12.5163, 10.117987), (-6.171264, 10.116618), (-6.2575, 13.6915),
+    )),
+    ("private_c", 1, (
+        (-12.52011, 5.16458), (-10.9879, 5.74511), (-8.9867, 5.11785), (-6.08475, 5.70235),
+        (-6.15453, 9.26386), (-12.6079, 9.35446),
+    )),
+    ("private_d", 1, (
+        (-13.2529, 18.580999), (-22.38113, 18.87678), (-23.494101, 18.9972), (-23.4842, 20.4646),
+        (-26.001801, 20.2019), (-26.606701, 18.231199), (-23.3948, 18.7012),
+        (-22.129801, 18.5949), (-21.9725, 14.8722), (-13.4044, 14.7422),
+    )),
+    ("private_e", 1, (
+        (-13.3706, 13.7295), (-13.2745, 10.315), (-21.4146, 10.113), (-23.207399, 10.4149),
+        (-25.7551, 10.2685), (-25.962799, 13.9653), (-22.680201, 13.8011),
+    )),
+    ("private_f", 1, (
+        (-13.418113, 9.5487), (-21.608414, 9.4787), (-22.565878, 7.074205),
+        (-25.294289, 6.835807), (-23.635027, 5.355711), (-13.40267, 5.40426),
+    )),
+    ("public_a", 2, (
+        (20.506599, 19.421101), (20.538099, 17.3319), (19.028212, 17.399599),
+        (18.885065, 15.7129), (11.0484, 15.652), (10.0429, 17.692699), (7.8387, 17.7792),
+        (6.33662, 16.371099), (6.51252, 11.1019), (10.4842, 11.0926), (12.5155, 13.2793),
+        (18.30191, 13.4166), (18.697857, 15.7464), (18.697857, 20.0874),
+    )),
+    ("public_b", 2, (
+        (14.846853, 7.988438), (16.0257, 8.12129), (16.195299, 1.99335), (14.1699, 1.91747),
+        (14.176, 5.385326), (12.1254, 5.385326), (10.3737, 3.89311), (7.96763, 4.71297),
+        (6.41362, 5.11439), (6.32939, 8.46126), (7.37067, 9.849683), (10.5193, 9.81355),
+        (12.1611, 8.39257), (13.1988, 5.185326), (14.704, 5.185326),
+    )),
+    ("middle", 2, (
+        (5.73804, 0.57919), (4.92099, 1.79494), (3.97233, 2.61649), (3.80775, 3.75994),
+        (5.260433, 3.78449), (5.164691, 17.968399), (2.06448, 18.5096), (0.880134, 19.172422),
+        (0.629188, 20.632648), (-1.98216, 21.1175), (-1.29948, 19.322399), (-3.52062, 17.694099),
+        (-5.25849, 17.376499), (-5.2171, 4.85426), (-6.80757, 2.21765), (-5.42005, 0.928583),
+        (-3.5244, 0.95478), (0.133735, 2.10273), (3.57247, 2.54955), (4.24307, 1.33246),
+    )),
+)
+SHIPPED_WALKERS = (  # (route, first waypoint, speed m/s) of the shipped world file's walkers
+    # (worlds/service.world 39892-41563), played by the shipped task
+    ("private_b", 0, 1.1672),
+    ("private_b", 1, 1.1871),
+    ("middle", 19, 1.1589),
+    ("public_a", 12, 1.1307),
+    ("private_d", 0, 1.1557),
+    ("public_a", 1, 1.0997),
+    ("private_a", 0, 1.0064),
+    ("public_b", 6, 1.1434),
+    ("public_b", 5, 1.0516),
+    ("public_b", 12, 0.9195),
+)
 SHIPPED_DRIFT_TIMES = (487, 654, 889, 1038, 1313, 1606, 1767, 1881, 2164, 2463, 2643, 2745, 2966,
                        3171, 3418, 3581, 3862, 3989, 4145, 4358, 4616, 4892, 5039, 5306, 5515,
                        5653, 5925, 6043, 6335, 6619)
@@ -424,6 +488,14 @@ def world_yaml(*, closed_doors: bool = False) -> str:
         *(f"  - {{min: [{low[0]!r}, {low[1]!r}], max: [{high[0]!r}, {high[1]!r}], "
           f"yaw: {round(yaw, 5)!r}}}" for low, high, yaw in IDLING_AREAS),
         f"drift: {_flow(DRIFT)}",
+        f"amcl_initial_pose: [{', '.join(repr(value) for value in AMCL_INITIAL_POSE)}]",
+        "walker_routes:",
+        *(f"  - {{name: {name}, weight: {weight}, waypoints: "
+          f"[{', '.join(f'[{x!r}, {y!r}]' for x, y in points)}]}}"
+          for name, weight, points in WALKER_ROUTES),
+        "walkers:",
+        *(f"  - {{route: {route}, start: {start}, speed: {speed!r}}}"
+          for route, start, speed in SHIPPED_WALKERS),
     ]
     return "\n".join(lines) + "\n"
 

@@ -1,0 +1,84 @@
+"""Whether a task can be played: the robot's navigation must find a way from its start to the
+pick-up area, on to the drop-off area and back to the start area, with every idler in place.
+
+The original's idlers stand in curated idling areas, clear of every target; a world of our own
+(idlers placed anywhere, a random task) may put one in the only doorway of a room, and a task
+behind it cannot be played: the robot fails checkpoint 1 for the whole run. So a task the
+simulator draws is checked once the people are placed, and drawn again from the seed when it
+cannot be played (deterministically: the n-th draw of a seed is always the same); a world's
+fixed task that the walls alone make unplayable is refused, in one line.
+
+The check is the navigation's own: the costmap's static layer with each idler marked as the
+lidar would mark them, cells below inscribed cost passable, and the areas reached when the
+passable cells connected to the robot's start meet their boxes. Walkers move on and the guest
+follows, so neither counts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.people import IDLER
+from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
+from servicesim_sim.navigation.costmap import INSCRIBED, Costmap
+from servicesim_sim.world.files import AreaBox, World
+
+MAX_DRAWS = 20  # draws of a seed's task (or of a fixed task's people) before giving up
+START_ESCAPE_M = 0.5  # a start in lethal cost may reach passable floor this far off
+
+
+def unreachable_areas(engine: SimEngine, *, with_idlers: bool = True) -> list[str]:
+    """The task's areas (pick-up, drop-off, start; in that order) the robot's navigation
+    cannot reach from its start, with the idlers in place unless ``with_idlers`` is False."""
+    costmap = engine.navigator.costmap
+    idlers = [(x, y) for _, role, x, y in engine.crowd.states() if role == IDLER]
+    costs = costmap.costs_with(idlers if with_idlers else [])
+    labels, _ = ndimage.label(costs < INSCRIBED, structure=np.ones((3, 3), dtype=bool))
+    task = engine.scenario.task
+    region = _region_at(costmap, labels, task.start_x, task.start_y)
+    names = (task.pick_up, task.drop_off, task.start_area)
+    return [name for name in names
+            if region == 0 or not _meets(costmap, labels, region, engine.world.areas[name])]
+
+
+def _region_at(costmap: Costmap, labels: np.ndarray, x: float, y: float) -> int:
+    """The passable region the robot at (x, y) is in, or may escape to; 0 for none."""
+    frame = costmap.frame
+    row, col = frame.cell_of(x, y)
+    reach = int(np.ceil(START_ESCAPE_M / frame.resolution))
+    row0, col0 = max(row - reach, 0), max(col - reach, 0)
+    window = labels[row0:row + reach + 1, col0:col + reach + 1]
+    found = np.argwhere(window > 0)
+    if found.size == 0:
+        return 0
+    nearest = found[np.argmin(np.hypot(found[:, 0] + row0 - row, found[:, 1] + col0 - col))]
+    return int(window[nearest[0], nearest[1]])
+
+
+def _meets(costmap: Costmap, labels: np.ndarray, region: int, box: AreaBox) -> bool:
+    frame = costmap.frame
+    row0, col0 = frame.cell_of(box.min_x, box.min_y)
+    row1, col1 = frame.cell_of(box.max_x, box.max_y)
+    row0, col0 = max(row0, 0), max(col0, 0)
+    return bool(np.any(labels[row0:row1 + 1, col0:col1 + 1] == region))
+
+
+def playable_engine(world: World, *, seed: int | None,
+                    difficulty: Difficulty | None = None) -> SimEngine:
+    """The engine of the seed's first playable draw (without a seed: the world's fixed task,
+    its people drawn again while idlers cut it off), or :class:`ScenarioError` saying why
+    there is none."""
+    for draw in range(MAX_DRAWS):
+        scenario = make_scenario(world, seed=seed, difficulty=difficulty, draw=draw)
+        engine = SimEngine(world=world, scenario=scenario)
+        if not unreachable_areas(engine):
+            return engine
+        walled_off = unreachable_areas(engine, with_idlers=False)
+        if walled_off and scenario.seed is None:
+            raise ScenarioError(f"{world.path}: the task cannot be played: navigation finds no "
+                                f"way from the robot's start to {', '.join(walled_off)}")
+    what = f"seed {seed}" if seed is not None else "the fixed task"
+    raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (idlers "
+                        f"or walls cut the robot off from an area of every one)")

@@ -1,0 +1,146 @@
+"""The robot's body and what it touches: walls and furniture on the map, and people.
+
+The original's servicebot is planned and driven as a 0.4 x 0.5 m box centred on its base
+(``competitor_example_solution/servicebot_2dnav/config/costmap_common_params.yaml``: footprint
+x ±0.2 m, y ±0.25 m; its corners 0.32 m from the centre), and its referee books every touch of
+the robot with a wall, a piece of furniture or a person, by depth (``PenaltyChecker.cc``). This
+module is the one place that measures those touches: :meth:`Footprint.wall_depth` says how
+deep the box is in the map's obstacles, :meth:`Footprint.person_depths` how deep it is in each
+person's disc. The physics (:mod:`servicesim_sim.model.robot`) stops the box at the walls, the
+engine books what it touches, and navigation checks its commands with the same box. It lives
+with the world because both the model and navigation need it.
+
+Design intent:
+
+* Depth into the map comes from a signed distance field worked out once per map: metres from
+  each cell centre to the boundary between free and blocked cells, negative inside obstacles,
+  read between cell centres by bilinear interpolation so that it varies smoothly with the pose
+  (a 0.05 m map read cell by cell would make depths jump by whole cells).
+* The box is sampled along its outline every 2.5 cm; its depth is the deepest sample. Walls are
+  at least 5 cm thick, so none slips between two samples.
+* A body pressed against a wall rests :data:`CONTACT_SURFACE_LAYER` deep in it, as ODE leaves
+  that much penetration uncorrected (the original world's ``contact_surface_layer``,
+  ``worlds/service.world.erb`` 452): the physics lets the box sink that deep and no deeper.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+from scipy import ndimage
+
+from servicesim_sim.world.files import OccupancyMap
+
+Pose = tuple[float, float, float]
+
+HALF_LENGTH = 0.2  # m, along the robot's x (costmap_common_params.yaml's footprint)
+HALF_WIDTH = 0.25  # m, along its y
+CIRCUMSCRIBED_RADIUS = math.hypot(HALF_LENGTH, HALF_WIDTH)  # 0.32 m: the corners
+INSCRIBED_RADIUS = min(HALF_LENGTH, HALF_WIDTH)  # 0.2 m
+CONTACT_SURFACE_LAYER = 0.01  # m: ODE's allowed penetration in the original world
+OUTLINE_SPACING = 0.025  # m between the outline's samples
+
+
+class WallDistance:
+    """Signed metres from any point to the nearest boundary of the map's obstacles (free and
+    blocked cells; outside the map counts as blocked), negative inside them."""
+
+    def __init__(self, occupancy_map: OccupancyMap) -> None:
+        self.map = occupancy_map
+        blocked = np.pad(occupancy_map.blocked_mask(), 1, constant_values=True)
+        half = occupancy_map.resolution / 2.0
+        outside = ndimage.distance_transform_edt(~blocked) * occupancy_map.resolution - half
+        inside = ndimage.distance_transform_edt(blocked) * occupancy_map.resolution - half
+        self.grid = np.where(blocked, -inside, outside).astype(np.float64)
+        self.grid.setflags(write=False)
+
+    def at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Signed distances at world points, interpolated between cell centres."""
+        occupancy = self.map
+        # padded grid: cell (r, c) of the map is (r + 1, c + 1) here, centres at +0.5 cells
+        cols = (np.asarray(xs) - occupancy.origin_x) / occupancy.resolution + 0.5
+        rows = (np.asarray(ys) - occupancy.origin_y) / occupancy.resolution + 0.5
+        last_row, last_col = self.grid.shape[0] - 2, self.grid.shape[1] - 2
+        cols = np.minimum(np.maximum(cols, 0.0), last_col + 0.999999)
+        rows = np.minimum(np.maximum(rows, 0.0), last_row + 0.999999)
+        col0, row0 = np.floor(cols).astype(np.intp), np.floor(rows).astype(np.intp)
+        fx, fy = cols - col0, rows - row0
+        grid = self.grid
+        below = grid[row0, col0] * (1.0 - fx) + grid[row0, col0 + 1] * fx
+        above = grid[row0 + 1, col0] * (1.0 - fx) + grid[row0 + 1, col0 + 1] * fx
+        return below * (1.0 - fy) + above * fy
+
+
+_WALL_DISTANCES: weakref.WeakKeyDictionary[OccupancyMap, WallDistance] = (
+    weakref.WeakKeyDictionary())
+
+
+def wall_distance(occupancy_map: OccupancyMap) -> WallDistance:
+    """The map's :class:`WallDistance`, worked out once per loaded map and shared read-only."""
+    distance = _WALL_DISTANCES.get(occupancy_map)
+    if distance is None:
+        distance = _WALL_DISTANCES[occupancy_map] = WallDistance(occupancy_map)
+    return distance
+
+
+def _outline() -> tuple[np.ndarray, np.ndarray]:
+    """Points along the box's edges, in the robot's frame, corners included."""
+    corners = [(HALF_LENGTH, HALF_WIDTH), (-HALF_LENGTH, HALF_WIDTH),
+               (-HALF_LENGTH, -HALF_WIDTH), (HALF_LENGTH, -HALF_WIDTH)]
+    xs: list[float] = []
+    ys: list[float] = []
+    for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
+        steps = math.ceil(math.hypot(x1 - x0, y1 - y0) / OUTLINE_SPACING)
+        xs += [x0 + (x1 - x0) * i / steps for i in range(steps)]
+        ys += [y0 + (y1 - y0) * i / steps for i in range(steps)]
+    return np.array(xs), np.array(ys)
+
+
+class Footprint:
+    """The 0.4 x 0.5 m box on one map: how deep it is in walls and in people at a pose."""
+
+    def __init__(self, occupancy_map: OccupancyMap) -> None:
+        self.map = occupancy_map
+        self.walls = wall_distance(occupancy_map)
+        self._outline_x, self._outline_y = _outline()
+
+    def wall_depth(self, pose: Pose) -> float:
+        """Metres the box reaches into walls or furniture at ``pose`` (0 when clear)."""
+        return max(0.0, -self.clearance(pose))
+
+    def clearance(self, pose: Pose, *, beyond: float = 0.0) -> float:
+        """Metres between the box at ``pose`` and the nearest wall, negative when the box is in
+        one. Gaps wider than ``beyond`` are not worked out: the answer is then some gap wider
+        than that (the centre's clearance less the corners' reach)."""
+        x, y, yaw = pose
+        near = self._centre_gap(x, y) - CIRCUMSCRIBED_RADIUS
+        if near > beyond:
+            return near  # no corner can come nearer than that
+        cos, sin = math.cos(yaw), math.sin(yaw)
+        xs = x + cos * self._outline_x - sin * self._outline_y
+        ys = y + sin * self._outline_x + cos * self._outline_y
+        return float(self.walls.at(xs, ys).min())
+
+    def _centre_gap(self, x: float, y: float) -> float:
+        """A lower bound of the metres from (x, y) to the nearest obstacle's boundary, read
+        from the map's own distance grid (cheap: this runs every physics step)."""
+        occupancy = self.map
+        row, col = occupancy.world_to_cell(x, y)
+        if not occupancy.in_bounds(row, col):
+            return 0.0
+        return float(occupancy.wall_distance[row, col]) - 1.5 * occupancy.resolution
+
+    @staticmethod
+    def person_depths(pose: Pose, xs: np.ndarray, ys: np.ndarray, *,
+                      radius: float) -> np.ndarray:
+        """Metres the box reaches into each person's disc of ``radius`` (0 when apart)."""
+        x, y, yaw = pose
+        cos, sin = math.cos(yaw), math.sin(yaw)
+        dx, dy = np.asarray(xs) - x, np.asarray(ys) - y
+        along = np.abs(cos * dx + sin * dy) - HALF_LENGTH
+        across = np.abs(-sin * dx + cos * dy) - HALF_WIDTH
+        outside = np.hypot(np.maximum(along, 0.0), np.maximum(across, 0.0))
+        inside = np.minimum(np.maximum(along, across), 0.0)
+        return np.maximum(radius - (outside + inside), 0.0)

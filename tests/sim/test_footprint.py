@@ -1,0 +1,109 @@
+"""The robot's body: the original's 0.4 x 0.5 m box, what it touches and what that costs.
+
+The office's outer wall runs along y = 0 below the lobby; at x = 10.975 the floor above it is
+clear for metres, so the tests put the robot there, facing or beside the wall.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+import pytest
+
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.referee import CONTACT_REPORT_RATE_HZ, OBJECT_CONTACT_WEIGHT
+from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
+from servicesim_sim.world.footprint import (
+    CIRCUMSCRIBED_RADIUS,
+    CONTACT_SURFACE_LAYER,
+    Footprint,
+)
+
+WALL_X = 10.975  # the lobby's south wall, its face at y = 0
+
+
+@cache
+def office() -> World:
+    return load_world(DEFAULT_WORLD)
+
+
+def robot_at(pose: tuple[float, float, float]) -> SimEngine:
+    """The shipped task with nobody else about and the robot at ``pose``, localised there."""
+    sim = SimEngine(world=office(), scenario=make_scenario(office()))
+    sim.crowd.people.clear()
+    sim.guest.x, sim.guest.y = -20.0, 20.0
+    robot = sim.robot
+    robot.x, robot.y, robot.yaw = pose
+    robot.wall_depth = robot.footprint.wall_depth(pose)
+    sim.set_initial_pose(*pose)
+    return sim
+
+
+def drive(sim: SimEngine, v: float, w: float, seconds: float) -> None:
+    for _ in range(round(seconds / sim.dt)):
+        sim.command_velocity(v, w)
+        sim.step()
+
+
+def test_the_body_is_the_originals_box_0_4_m_long_and_0_5_m_wide() -> None:
+    box = Footprint(office().map)
+    along, across = 0.2, 0.25
+    assert pytest.approx(math.hypot(along, across)) == CIRCUMSCRIBED_RADIUS
+    people_x = np.array([along + 0.25 - 0.01, 0.0, along + 0.3])
+    people_y = np.array([0.0, across + 0.25 - 0.02, 0.0])
+    depths = box.person_depths((0.0, 0.0, 0.0), people_x, people_y, radius=0.25)
+    assert depths == pytest.approx([0.01, 0.02, 0.0])
+    turned = box.person_depths((0.0, 0.0, math.pi / 2), people_x, people_y, radius=0.25)
+    assert turned == pytest.approx([0.06, 0.0, 0.0])  # its long side now faces +x
+
+
+def test_the_box_turning_in_place_beside_a_wall_touches_it_where_a_disc_would_not() -> None:
+    box = Footprint(office().map)
+    beside = (WALL_X, 0.28, 0.0)  # its side 3 cm off the wall, the centre 0.28 m
+    assert box.wall_depth(beside) == 0.0
+    assert box.wall_depth((WALL_X, 0.28, math.pi / 4)) == pytest.approx(0.038, abs=0.005)
+
+
+def test_driving_into_a_wall_rests_the_surface_layer_deep_and_books_20000_per_report() -> None:
+    sim = robot_at((WALL_X, 1.0, -math.pi / 2))
+    drive(sim, 0.5, 0.0, 3.0)
+    robot = sim.robot
+    assert robot.y == pytest.approx(0.2, abs=0.02) and robot.v == 0.0  # stopped by the wall
+    assert 0.0 < robot.wall_depth <= CONTACT_SURFACE_LAYER
+    before = sim.referee.penalties.contact
+    drive(sim, 0.5, 0.0, 1.0)  # pressing on for a second
+    booked = sim.referee.penalties.contact - before
+    expected = OBJECT_CONTACT_WEIGHT * robot.wall_depth * CONTACT_REPORT_RATE_HZ
+    assert booked == pytest.approx(expected, rel=0.05) and booked > 50_000.0
+
+
+def test_turning_in_place_beside_a_wall_costs_the_contact_penalty() -> None:
+    sim = robot_at((WALL_X, 0.28, 0.0))
+    drive(sim, 0.0, 1.0, 1.0)
+    assert sim.referee.penalties.contact > 10_000.0
+    assert abs(sim.robot.yaw) < 0.5  # the wall holds the turn
+
+
+def test_backing_away_from_a_wall_ends_the_contact() -> None:
+    sim = robot_at((WALL_X, 1.0, -math.pi / 2))
+    drive(sim, 0.5, 0.0, 3.0)
+    drive(sim, -0.2, 0.0, 1.0)
+    assert sim.robot.wall_depth == 0.0
+    before = sim.referee.penalties.contact
+    drive(sim, 0.0, 0.0, 1.0)
+    assert sim.referee.penalties.contact == before
+
+
+def test_navigation_turns_the_box_clear_of_a_wall_it_stands_beside() -> None:
+    # the goal lies behind the robot: a turn on the spot would sweep a corner into the wall
+    sim = robot_at((WALL_X, 0.30, 0.0))
+    ticket = sim.navigate(WALL_X + 0.8, 0.9, math.pi / 2)
+    for _ in range(round(40.0 / sim.dt)):
+        sim.step()
+        if sim.navigation_state(ticket).status != "running":
+            break
+    assert sim.navigation_state(ticket).status == "succeeded"
+    assert sim.referee.penalties.contact == 0.0

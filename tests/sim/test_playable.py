@@ -1,0 +1,116 @@
+"""A task the simulator plays can be played: navigation finds a way from the robot's start to
+the pick-up area, the drop-off area and back with every idler in place.
+
+The world here is a hall with a closet off it, through one 1.2 m door. One of its two idling
+spots stands in that doorway: an idler there cuts the closet off (it is small enough that the
+idlers' own rule, never to split the robot's floor, lets a pocket that size go), so a draw
+that puts the idler there is drawn again; with the door walled up the task is refused.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.people import IDLER
+from servicesim_sim.model.playable import playable_engine, unreachable_areas
+from servicesim_sim.model.scenario import ScenarioError, make_scenario
+from servicesim_sim.world.files import World, load_world
+
+RESOLUTION = 0.05
+DOORWAY = (4.05, 1.5)
+WORLD = """\
+name: closet
+map: map.yaml
+areas:
+  Closet: {min: [4.2, 0.8], max: [5.5, 2.2]}
+  Hall: {min: [0.5, 0.5], max: [2.0, 2.0]}
+  Entry: {min: [2.5, 0.5], max: [3.5, 2.5]}
+task:
+  pick_up: Closet
+  drop_off: Hall
+  guest: {name: human_12345, x: 5.0, y: 1.5, yaw: 0.0}
+  start: {area: Entry, x: 3.0, y: 2.2, yaw: 0.0}
+people: {walkers: 0, idlers: 1}
+idling_areas:
+  - {min: [4.05, 1.5], max: [4.05, 1.5], yaw: 0.0}
+  - {min: [1.0, 2.6], max: [1.0, 2.6], yaw: 0.0}
+"""
+
+
+def box(pixels: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: int) -> None:
+    """Paint [x0, x1] x [y0, y1] (metres); image rows count down from the top."""
+    rows = pixels.shape[0]
+    c0, c1 = round(x0 / RESOLUTION), round(x1 / RESOLUTION)
+    r0, r1 = rows - round(y1 / RESOLUTION), rows - round(y0 / RESOLUTION)
+    pixels[r0:r1, c0:c1] = value
+
+
+def closet_world(directory: Path, *, door: bool = True) -> Path:
+    pixels = np.full((round(3.0 / RESOLUTION), round(6.0 / RESOLUTION)), 0, dtype=np.uint8)
+    box(pixels, 0.1, 0.1, 4.0, 2.9, 254)  # the hall
+    box(pixels, 4.1, 0.7, 5.6, 2.3, 254)  # the closet, 1.5 x 1.6 m
+    if door:
+        box(pixels, 4.0, 0.9, 4.1, 2.1, 254)  # its 1.2 m door
+    Image.fromarray(pixels).save(directory / "map.pgm")
+    (directory / "map.yaml").write_text(
+        f"image: map.pgm\nresolution: {RESOLUTION}\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    path = directory / "world.yaml"
+    path.write_text(WORLD)
+    return path
+
+
+def idler_spot(engine: SimEngine) -> tuple[float, float]:
+    (spot,) = [(x, y) for _, role, x, y in engine.crowd.states() if role == IDLER]
+    return spot
+
+
+def test_an_idler_in_the_only_doorway_cuts_the_pick_up_area_off(tmp_path: Path) -> None:
+    world = load_world(closet_world(tmp_path))
+    blocked = [draw for draw in range(10) if idler_spot(SimEngine(
+        world=world, scenario=make_scenario(world, draw=draw))) == DOORWAY]
+    assert blocked, "no draw put the idler in the doorway"
+    engine = SimEngine(world=world, scenario=make_scenario(world, draw=blocked[0]))
+    assert unreachable_areas(engine) == ["Closet"]
+    assert unreachable_areas(engine, with_idlers=False) == []
+
+
+def test_a_draw_that_cannot_be_played_is_drawn_again_the_same_way_every_time(
+        tmp_path: Path) -> None:
+    world = load_world(closet_world(tmp_path))
+    engine = playable_engine(world, seed=None)
+    assert idler_spot(engine) != DOORWAY and unreachable_areas(engine) == []
+    assert engine.scenario.task.pick_up == "Closet"  # the fixed task, other people
+    again = playable_engine(world, seed=None)
+    assert (again.scenario, idler_spot(again)) == (engine.scenario, idler_spot(engine))
+    for seed in range(4):  # random tasks on this world: every one of them playable
+        assert unreachable_areas(playable_engine(world, seed=seed)) == []
+
+
+def test_the_office_plays_its_shipped_task_and_seeds_at_their_first_draw() -> None:
+    from servicesim_sim.world.files import DEFAULT_WORLD
+
+    office: World = load_world(DEFAULT_WORLD)
+    for seed in (None, 0, 1):
+        engine = playable_engine(office, seed=seed)
+        assert engine.scenario == make_scenario(office, seed=seed)
+
+
+def test_a_fixed_task_the_walls_cut_off_is_refused_in_one_line(tmp_path: Path) -> None:
+    world = load_world(closet_world(tmp_path, door=False))
+    with pytest.raises(ScenarioError, match="the task cannot be played: navigation finds no "
+                                            "way from the robot's start to Closet"):
+        playable_engine(world, seed=None)
+    result = subprocess.run([sys.executable, "-m", "servicesim_sim", "--world",
+                             str(tmp_path / "world.yaml")],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2 and result.stdout == ""
+    (line,) = result.stderr.strip().splitlines()
+    assert "the task cannot be played" in line and "Closet" in line
