@@ -28,6 +28,9 @@ tree (the snapshot log's key, which carries no random UUID):
     sim seconds it was RUNNING; sim seconds it was the tip.
 ``points_tip``, ``points_under``
     points booked while it was the tip; while the tip was it or under it (inclusive).
+``fired`` (a ``Retry`` or a ``RecoveryNode`` only)
+    how often it went round again: a retry's child failures it did not pass on; a recovery
+    node's recovery starts (its second child's).
 """
 
 from __future__ import annotations
@@ -143,6 +146,9 @@ class NodeCounter:
         self._running: dict[str, _Running] = {}
         self._phase_of = phase_map(self.shape, self.phases)
         self._leaves = {node.key for node in self.shape.nodes if node.kind == "behaviour"}
+        self._telling = telling_failures(self.shape)
+        self.phase_failures: dict[str, int] = {}
+        """The tick of the last telling failure (see :func:`telling_failures`) per phase."""
         self._tip: str | None = None
         self._tip_since: float | None = None
 
@@ -180,8 +186,10 @@ class NodeCounter:
         else:
             figures.failure += 1
             figures.last_failure_tick, figures.last_failure_reason = tick, feedback
-            if key in self._leaves:
-                self.last_failure = (tick, now, key, feedback)
+            if key in self._telling:
+                self.phase_failures[self._phase_of.get(key, NO_PHASE)] = tick
+                if key in self._leaves:
+                    self.last_failure = (tick, now, key, feedback)
 
     def _close_segment(self, now: float) -> None:
         assert self._tip_since is not None
@@ -210,28 +218,65 @@ class NodeCounter:
         return self.segments[index].phase if index >= 0 else NO_PHASE
 
 
+QUIET_FAILURES = frozenset({"FailureIsRunning", "FailureIsSuccess", "Inverter"})
+"""Decorators under which a child's failure is the normal course (a watch, an optional step)."""
+
+
+def telling_failures(shape: TreeShape) -> set[str]:
+    """The nodes whose failure means something went wrong: not a fallback's child (failing over
+    is what a fallback is for), nor a child of a decorator in :data:`QUIET_FAILURES`."""
+    nodes = shape.nodes
+    return {node.key for node in nodes
+            if node.parent is None or not (nodes[node.parent].kind == "selector"
+                                           or nodes[node.parent].type in QUIET_FAILURES)}
+
+
 def phase_map(shape: TreeShape, phases: str | None) -> dict[str, str]:
     """Each node's phase: the child of the ``phases`` composite it is under, named as the
     executive names it (a subtree by its ``<SubTree name>``, decorators looked through)."""
-    if phases is None:
-        return {}
+    named = _phase_heads(shape, phases)
+    result: dict[str, str] = {}
+    for index, node in enumerate(shape.nodes):
+        for head, phase in named.items():
+            if head in _ancestors(shape, index):
+                result[node.key] = phase
+    return result
+
+
+def phase_nodes(shape: TreeShape, phases: str | None) -> dict[str, str]:
+    """Each phase's own node (the first under the phases' composite that is not a decorator:
+    what fails when an attempt at the phase fails), by phase name."""
+    heads = _phase_heads(shape, phases)
+    return {phase: shape.nodes[_named(shape, head)].key for head, phase in heads.items()}
+
+
+def _phase_heads(shape: TreeShape, phases: str | None) -> dict[int, str]:
+    """The phases' composite's children (their indices), with their phase names."""
     nodes = shape.nodes
     composites = [index for index, node in enumerate(nodes)
-                  if node.label == phases and node.kind != "behaviour"]
+                  if phases is not None and node.label == phases and node.kind != "behaviour"]
     if not composites:
         return {}
     top = composites[0]
-    result: dict[str, str] = {}
+    heads: dict[int, str] = {}
     for index, node in enumerate(nodes):
-        path = _ancestors(shape, index)
-        if top not in path or path[-1] == top:
-            continue
-        below = path[path.index(top) + 1:]  # phases' child first, down to this node
-        named = next((position for position in below if nodes[position].kind != "decorator"),
-                     below[0])
-        parent_key = nodes[nodes[named].parent or 0].key
-        result[node.key] = nodes[named].key[len(parent_key) + 1:].split(".", 1)[0]
-    return result
+        if node.parent == top:
+            named = _named(shape, index)
+            parent_key = nodes[nodes[named].parent or 0].key
+            heads[index] = nodes[named].key[len(parent_key) + 1:].split(".", 1)[0]
+    return heads
+
+
+def _named(shape: TreeShape, head: int) -> int:
+    """The first node from ``head`` down its only children that is not a decorator."""
+    index = head
+    while shape.nodes[index].kind == "decorator":
+        children = [position for position, node in enumerate(shape.nodes)
+                    if node.parent == index]
+        if not children:
+            break
+        index = children[0]
+    return index
 
 
 def _ancestors(shape: TreeShape, index: int) -> list[int]:
@@ -374,7 +419,10 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
              "duration_s": round(mark.duration_s, 3)})
     phase_names = _in_order([segment.phase for segment in counter.segments]
                             + list(phase_points))
+    own_node = phase_nodes(shape, phases)
     last = counter.last_failure
+    node_phase = phase_map(shape, phases)
+    fired = _fired(shape, counter.figures)
     return {
         "version": PROFILE_VERSION,
         "tree_file": tree_file,
@@ -386,6 +434,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
             "phase": phase,
             "sim_time_s": round(phase_time.get(phase, 0.0), 3),
             "checkpoints": phase_checkpoints.get(phase, []),
+            **_phase_outcome(counter.figures.get(own_node.get(phase, "")),
+                             counter.phase_failures.get(phase)),
             "points": round(sum(phase_points.get(phase, {}).values()), 3),
             "penalties_by_role": _rounded(by_role(phase_points.get(phase, {}))),
             "penalties_by_cause": _rounded(phase_points.get(phase, {})),
@@ -393,10 +443,38 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
         "proxemics": proxemics(proximity, end_s=end, phase_at=counter.phase_at),
         "last_failure": None if last is None else {
             "tick": last[0], "sim_time_s": round(last[1], 3), "node": last[2],
-            "phase": phase_map(shape, phases).get(last[2], NO_PHASE), "reason": last[3]},
-        "nodes": {key: {"kind": node.kind, **counter.figures[key].to_json()}
+            "phase": node_phase.get(last[2], NO_PHASE), "reason": last[3]},
+        "nodes": {key: {"label": node.label, "kind": node.kind, "type": node.type,
+                        "phase": node_phase.get(key, NO_PHASE),
+                        **counter.figures[key].to_json(),
+                        **({"fired": fired[key]} if key in fired else {})}
                   for key, node in zip(shape.keys, shape.nodes, strict=True)},
     }
+
+
+def _fired(shape: TreeShape, figures: Mapping[str, NodeFigures]) -> dict[str, int]:
+    """How often each Retry and RecoveryNode fired (see the module docstring)."""
+    children: dict[int, list[int]] = {}
+    for index, node in enumerate(shape.nodes):
+        if node.parent is not None:
+            children.setdefault(node.parent, []).append(index)
+    fired = {}
+    for index, node in enumerate(shape.nodes):
+        below = [figures[shape.nodes[child].key] for child in children.get(index, [])]
+        if node.type == "RecoveryNode" and len(below) >= 2:
+            fired[node.key] = below[1].starts
+        elif node.type == "Retry" and below:
+            fired[node.key] = max(0, below[0].failure - figures[node.key].failure)
+    return fired
+
+
+def _phase_outcome(figures: NodeFigures | None, last_inside: int | None) -> dict[str, Any]:
+    """Whether the phase's own node succeeded, its attempts, and the tick its last attempt
+    failed (else, for a phase cut short, that of the last telling failure inside it)."""
+    if figures is None:
+        return {"succeeded": None, "attempts": 0, "last_failure_tick": last_inside}
+    return {"succeeded": figures.success > 0, "attempts": figures.starts,
+            "last_failure_tick": figures.last_failure_tick or last_inside}
 
 
 def _points_up_the_tree(shape: TreeShape, figures: dict[str, NodeFigures],

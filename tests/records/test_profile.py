@@ -74,6 +74,9 @@ def test_retries_and_failures_are_counted_per_node(tmp_path: Path) -> None:
     clear = next(figures for key, figures in profile["nodes"].items()
                  if matches(key, "GoToPickUpArea.ClearCostmaps"))
     assert clear["success"] == 2
+    recovery = next(figures for key, figures in profile["nodes"].items()
+                    if matches(key, "GoToPickUpArea.NavigateRecovery"))
+    assert recovery["type"] == "RecoveryNode" and recovery["fired"] == 2
     assert profile["last_failure"]["phase"] == "Pickup"
 
 
