@@ -132,7 +132,7 @@ def profile_of_run(run: Path) -> dict[str, Any]:
                          phases=header.phases or DEFAULT_PHASES,
                          bookings=inputs.attributed, proximity=inputs.proximity,
                          checkpoints=inputs.checkpoints, end_s=inputs.end_s,
-                         tree_file=header.tree_file)
+                         tree_file=header.tree_file, counts=header.counts)
 
 
 def write_profile(run: Path, profile: dict[str, Any]) -> Path:

@@ -22,6 +22,11 @@ Format, one JSON object per line:
   qualified name before it is the node's path in the tree, unique already), so two runs of the
   same seed write the same lines.
 
+* last, when the log is closed: ``{"kind": "counts", "nodes": {KEY: [TICKS, STARTS, SUCCESS,
+  FAILURE], ...}}`` for every node ever ticked, counted by :class:`TickCounter` as the tree
+  ticked (a change log cannot see a node that ran and finished the same way again between two
+  lines).
+
 A blackboard value counts as changed when a different object with a different repr is stored
 under its key (ports write new values; a value mutated in place is not noticed). Listeners (the
 MCAP recorder's tree topic) are called with each :class:`TickRecord` as it is written.
@@ -105,6 +110,36 @@ def blackboard_values() -> dict[str, Any]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
 
+class TickCounter(py_trees.visitors.VisitorBase):
+    """A visitor that counts, per node, its ticks, starts and outcomes as the tree ticks.
+
+    py_trees hands a visitor every behaviour it ticks, just after its tick, however often a
+    tick reaches it. A tick is a start when the node was not RUNNING before it (its status at
+    its last visit, or as the log last saw it: a node stopped from above, never visited, is
+    INVALID). The counts are a list per node, in :func:`walk` order.
+    """
+
+    def __init__(self, behaviours: list[py_trees.behaviour.Behaviour]) -> None:
+        super().__init__(full=False)
+        self._index = {id(behaviour): index for index, behaviour in enumerate(behaviours)}
+        self.status: list[Status] = [behaviour.status for behaviour in behaviours]
+        self.counts: list[list[int]] = [[0, 0, 0, 0] for _ in behaviours]
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        index = self._index.get(id(behaviour))
+        if index is None:
+            return
+        counts, status = self.counts[index], behaviour.status
+        counts[0] += 1
+        if self.status[index] is not Status.RUNNING:
+            counts[1] += 1
+        if status is Status.SUCCESS:
+            counts[2] += 1
+        elif status is Status.FAILURE:
+            counts[3] += 1
+        self.status[index] = status
+
+
 class TreeLog:
     """Post-tick handler that appends a line to ``path`` whenever the tree changed.
 
@@ -139,6 +174,8 @@ class TreeLog:
         self._last_values: dict[str, tuple[Any, str]] = {}
         self._stable_keys: dict[str, str] = {}
         self._records = 0
+        self.counter = TickCounter(self._behaviours)
+        tree.add_visitor(self.counter)
         self._stream: TextIO | None = path.open("w", encoding="utf-8")
         header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,
                   "phases": phases, "nodes": self.shape.to_json()}
@@ -182,9 +219,11 @@ class TreeLog:
         if not changed_at and not values and tip == self._last_tip:
             return None
         changed: dict[str, NodeState] = {}
+        seen = self.counter.status
         for index in changed_at:
             key, state = self._keys[index], states[index]
             self._last_nodes[key] = changed[key] = state
+            seen[index] = state[0]
         self._last_states = states
         self._last_tip = tip
         return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
@@ -236,7 +275,11 @@ class TreeLog:
             self._stream.flush()
 
     def close(self) -> None:
+        """Write the counts line and close the file (once)."""
         if self._stream is not None:
+            self._write({"kind": "counts", "nodes": {
+                key: counts for key, counts in zip(self._keys, self.counter.counts, strict=True)
+                if counts[0]}})
             self._stream.close()
             self._stream = None
 
@@ -331,13 +374,15 @@ def _read(stream: TextIO) -> TreeHistory:
                        phases=header.phases)
 
 
-@dataclass(frozen=True)
+@dataclass
 class LogHeader:
-    """The log's first line: the tree's shape, its file and its phases' composite."""
+    """The log's first line: the tree's shape, its file and its phases' composite; and, once
+    the records have been read, the counts line (None in a log cut short)."""
 
     shape: TreeShape
     tree_file: str | None
     phases: str | None
+    counts: dict[str, list[int]] | None = None
 
 
 def read_records(path: Path) -> tuple[LogHeader, list[TickRecord]]:
@@ -365,14 +410,19 @@ def _header_and_records(stream: TextIO) -> tuple[LogHeader, Iterator[TickRecord]
 
     def records() -> Iterator[TickRecord]:
         for number, line in lines:
+            if line.get("kind") == "counts":
+                read.counts = {str(key): [int(count) for count in counts]
+                               for key, counts in line.get("nodes", {}).items()}
+                continue
             try:
                 yield TickRecord.from_json(line)
             except (KeyError, TypeError, ValueError) as error:
                 raise ValueError(f"line {number}: malformed tick record ({error!r})") from error
 
     phases = header.get("phases")
-    return (LogHeader(shape=shape, tree_file=header.get("tree_file"),
-                      phases=None if phases is None else str(phases)), records())
+    read = LogHeader(shape=shape, tree_file=header.get("tree_file"),
+                     phases=None if phases is None else str(phases))
+    return read, records()
 
 
 def _json_lines(stream: TextIO) -> Iterator[tuple[int, dict[str, Any]]]:
