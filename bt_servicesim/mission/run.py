@@ -212,7 +212,8 @@ class MissionRun:
         if self.monitor is not None and tree is not None:
             self.monitor.watch(tree)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
-                             tree_file=self.settings.tree, live_server=self.live_server)
+                             tree_file=self.settings.tree, live_server=self.live_server,
+                             profile=self.settings.profile)
         stops.defer()  # a signal is raised between the executor's turns, not in a callback
         try:
             try:

@@ -150,12 +150,14 @@ class TreeLog:
         tree_file: the tree file the run loaded, noted in the header
         blackboard: reads the blackboard's current values (default: py_trees' global storage)
         phases: the composite whose children are the mission's phases, noted in the header
+        count: count every node's ticks, starts and outcomes (:class:`TickCounter`) and write
+            them as the last line
     """
 
     def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
                  sim_time_s: Callable[[], float], tree_file: str | None = None,
                  blackboard: Callable[[], dict[str, Any]] = blackboard_values,
-                 phases: str | None = None) -> None:
+                 phases: str | None = None, count: bool = True) -> None:
         self.tree = tree
         self.shape = TreeShape.of(tree.root)
         self.path = path
@@ -175,7 +177,9 @@ class TreeLog:
         self._stable_keys: dict[str, str] = {}
         self._records = 0
         self.counter = TickCounter(self._behaviours)
-        tree.add_visitor(self.counter)
+        if count:
+            tree.add_visitor(self.counter)
+        self._count = count
         self._stream: TextIO | None = path.open("w", encoding="utf-8")
         header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,
                   "phases": phases, "nodes": self.shape.to_json()}
@@ -276,10 +280,11 @@ class TreeLog:
 
     def close(self) -> None:
         """Write the counts line and close the file (once)."""
-        if self._stream is not None:
+        if self._stream is not None and self._count:
             self._write({"kind": "counts", "nodes": {
                 key: counts for key, counts in zip(self._keys, self.counter.counts, strict=True)
                 if counts[0]}})
+        if self._stream is not None:
             self._stream.close()
             self._stream = None
 
