@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import py_trees
 from rclpy.node import Node
@@ -61,6 +62,8 @@ class RunRecords:
         self.phases: list[tuple[float, str]] = []
         self._node = node
         self._profile = profile
+        self.profile: dict[str, Any] | None = None
+        """The run's profile once written (:meth:`finish`); None before, or without one."""
         self.tree_log: TreeLog | None = None
         self.tree_topic: TreeTopic | None = None
         if self.tree is not None:
@@ -96,13 +99,16 @@ class RunRecords:
         if self.tree_log is not None:
             steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
             if self._profile:
-                steps.append((PROFILE_NAME,
-                              lambda: write_profile(self.out, profile_of_run(self.out))))
+                steps.append((PROFILE_NAME, self._write_profile))
         for name, step in steps:
             try:
                 step()
             except Exception as error:  # a record is not worth losing the report for
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
+
+    def _write_profile(self) -> None:
+        self.profile = profile_of_run(self.out)
+        write_profile(self.out, self.profile)
 
     def _close_recording(self) -> None:
         if self.live is not None:

@@ -532,3 +532,15 @@ def add_bounds(profile: dict[str, Any], legs: Sequence[Mapping[str, Any]]) -> di
                                     if bound > 0 else None)
     profile["bound_s"] = round(total, 3)
     return profile
+
+
+def penalties_explained(profile: Mapping[str, Any] | None) -> dict[str, Any]:
+    """What ``report.json`` says of the points' causes, from the run's profile: the points by
+    penalty and what it was near (``penalties_by_cause``: ``approximation/walker``...) and by
+    phase (``penalties_by_phase``: phase -> the same); both None without a profile."""
+    if profile is None:
+        return {"penalties_by_cause": None, "penalties_by_phase": None}
+    return {"penalties_by_cause": dict(profile["penalties"]["by_role"]),
+            "penalties_by_phase": {phase["phase"]: dict(phase["penalties_by_role"])
+                                   for phase in profile["phases"]}}
+

@@ -110,34 +110,48 @@ def blackboard_values() -> dict[str, Any]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
 
+_RUNNING, _SUCCESS, _FAILURE = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+
+
 class TickCounter(py_trees.visitors.VisitorBase):
     """A visitor that counts, per node, its ticks, starts and outcomes as the tree ticks.
 
     py_trees hands a visitor every behaviour it ticks, just after its tick, however often a
     tick reaches it. A tick is a start when the node was not RUNNING before it (its status at
     its last visit, or as the log last saw it: a node stopped from above, never visited, is
-    INVALID). The counts are a list per node, in :func:`walk` order.
+    INVALID). This runs for every node ticked, so it does as little as it can: one dict look-up
+    by the behaviour itself and a few list operations.
     """
 
     def __init__(self, behaviours: list[py_trees.behaviour.Behaviour]) -> None:
         super().__init__(full=False)
-        self._index = {id(behaviour): index for index, behaviour in enumerate(behaviours)}
-        self.status: list[Status] = [behaviour.status for behaviour in behaviours]
-        self.counts: list[list[int]] = [[0, 0, 0, 0] for _ in behaviours]
+        self._behaviours = behaviours
+        self._tallies: dict[py_trees.behaviour.Behaviour, list[Any]] = {
+            behaviour: [0, 0, 0, 0, behaviour.status] for behaviour in behaviours}
+        """Per behaviour: ticks, starts, successes, failures, and its status when last seen."""
 
     def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
-        index = self._index.get(id(behaviour))
-        if index is None:
+        tally = self._tallies.get(behaviour)
+        if tally is None:
             return
-        counts, status = self.counts[index], behaviour.status
-        counts[0] += 1
-        if self.status[index] is not Status.RUNNING:
-            counts[1] += 1
-        if status is Status.SUCCESS:
-            counts[2] += 1
-        elif status is Status.FAILURE:
-            counts[3] += 1
-        self.status[index] = status
+        status = behaviour.status
+        tally[0] += 1
+        if tally[4] is not _RUNNING:
+            tally[1] += 1
+        if status is _SUCCESS:
+            tally[2] += 1
+        elif status is _FAILURE:
+            tally[3] += 1
+        tally[4] = status
+
+    def saw(self, index: int, status: Status) -> None:
+        """The log saw node ``index`` (in :func:`walk` order) end a tick with ``status``."""
+        self._tallies[self._behaviours[index]][4] = status
+
+    @property
+    def counts(self) -> list[list[int]]:
+        """Ticks, starts, successes and failures per node, in :func:`walk` order."""
+        return [self._tallies[behaviour][:4] for behaviour in self._behaviours]
 
 
 class TreeLog:
@@ -223,11 +237,11 @@ class TreeLog:
         if not changed_at and not values and tip == self._last_tip:
             return None
         changed: dict[str, NodeState] = {}
-        seen = self.counter.status
+        saw = self.counter.saw
         for index in changed_at:
             key, state = self._keys[index], states[index]
             self._last_nodes[key] = changed[key] = state
-            seen[index] = state[0]
+            saw(index, state[0])
         self._last_states = states
         self._last_tip = tip
         return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
