@@ -11,7 +11,8 @@
 * episodes: ``python -m bt_servicesim.run --headless --speed 0`` on each seed, ``--episodes``
   times each, alternately with ``--no-profile`` (no counter, no profile.json) and with the
   profile (the default): each episode's wall time and the CPU time of the run's process tree
-  (executive and simulator), and the medians' difference as a share of the episode.
+  (executive and simulator), and the paired differences (the same seed and round, with and
+  without) as shares of the episode without the profile.
 
 Figures are this machine's, under its load; nothing here is asserted. Bad arguments give one
 line and exit status 2.
@@ -120,10 +121,12 @@ def episodes(seeds: Sequence[int], count: int, directory: Path) -> Path:
         print(f"  {label:17} wall median {statistics.median(walls):6.2f} s "
               f"(mean {statistics.fmean(walls):6.2f}), CPU median {statistics.median(cpus):6.2f} s "
               f"(mean {statistics.fmean(cpus):6.2f})")
-    plain = [statistics.median(values) for values in zip(*figures[False], strict=True)]
-    with_profile = [statistics.median(values) for values in zip(*figures[True], strict=True)]
-    print(f"  profile's share: wall {(with_profile[0] - plain[0]) / plain[0]:+.1%}, "
-          f"CPU {(with_profile[1] - plain[1]) / plain[1]:+.1%} of an episode without it")
+    for index, measure in ((0, "wall"), (1, "CPU")):
+        shares = [(with_profile[index] - plain[index]) / plain[index]
+                  for plain, with_profile in zip(figures[False], figures[True], strict=True)]
+        print(f"  {measure} with the profile over the same seed without it, paired: median "
+              f"{statistics.median(shares):+.1%}, mean {statistics.fmean(shares):+.1%} "
+              f"(n={len(shares)})")
     return directory / f"{seeds[0]}-profile-0"
 
 
