@@ -78,6 +78,7 @@ from servicesim_sim.process.pacing import Pacer
 from servicesim_sim.process.stop_signals import STOP_SIGNALS, handled
 from servicesim_sim.ros.episodes import EpisodeResets, ResetRequested, episodes_ros_node
 from servicesim_sim.ros.marker_topics import MarkerTopics
+from servicesim_sim.ros.penalty_causes import PenaltyCausesTopic
 from servicesim_sim.settings import SimSettings
 from servicesim_sim.wire.actor_messages import ActorNamesBytes, ActorStatesBytes
 from servicesim_sim.wire.costmap_message import OccupancyValues, serialised_occupancy_grid
@@ -218,6 +219,8 @@ class SimulatorNode:
         self._costmap = publisher(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, LATCHED)
         self._markers = MarkerTopics(engine=self.engine, make_publisher=publisher, send=self._send,
                                      latched=LATCHED, now=stamp(self.engine.sim_time))
+        self._penalty_causes = PenaltyCausesTopic(engine=self.engine, make_publisher=publisher,
+                                                  send=self._send, latched=LATCHED)
         # the high-rate messages are serialised by hand (servicesim_sim.wire.pose_messages), or
         # built once and refilled: publish serialises at the call
         self._clock_bytes = ClockBytes()
@@ -518,6 +521,7 @@ class SimulatorNode:
         self._io_count += 1
         if self._io_count % PUBLIC_PERIOD_STEPS == 0 or self.engine.referee_changed():
             self._send(self._referee, self._referee_state())
+        self._penalty_causes.publish()
         if self._io_count % PUBLIC_PERIOD_STEPS == 0:
             self._send(self._actors, self._actor_states())
             self._markers.publish(stamp(now))
