@@ -155,7 +155,8 @@ def phase_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
         by_phase: dict[str, list[tuple[Episode, Mapping[str, Any]]]] = {}
         for episode in group:
             for entry in episode.profile["phases"]:
-                by_phase.setdefault(entry["phase"], []).append((episode, entry))
+                if entry["phase"] != "-":  # not a phase: before the first tick, after the last
+                    by_phase.setdefault(entry["phase"], []).append((episode, entry))
         for phase, entries in by_phase.items():
             count = len(group)
             causes: dict[str, float] = {}

@@ -38,9 +38,9 @@ def profile_sections(tables: Mapping[str, list[dict[str, Any]]],
               "time share | points as tip / episode |", "|" + "---|" * 9]
     lines += [_node_line(row) for row in _costliest(tables["nodes"])]
     lines += ["", "### Recoveries and retries", "",
-              "| executive | set | node | fired in | fired / episode | phase succeeded after |",
-              "|---|---|---|---|---|---|"]
-    lines += [f"| {row['executive']} | {row['scenario']} | {row['label']} | "
+              "| executive | set | phase | node | fired in | fired / episode | phase succeeded "
+              "after |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {row['executive']} | {row['scenario']} | {row['phase']} | {_path(row['node'])} | "
               f"{_percent(row['fired_share'])} | {row['fired_per_episode']:.2f} | "
               f"{_percent(row['phase_succeeded_after'])} |"
               for row in tables["recoveries"] if row["fired_share"] > 0]

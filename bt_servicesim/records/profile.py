@@ -429,8 +429,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
                                      []).append(
             {"name": mark.name, "sim_time_s": round(mark.sim_time_s, 3),
              "duration_s": round(mark.duration_s, 3)})
-    phase_names = _in_order([segment.phase for segment in counter.segments]
-                            + list(phase_points))
+    phase_names = [phase for phase in _in_order([segment.phase for segment in counter.segments]
+                                                + list(phase_points)) if phase != NO_PHASE]
     own_node = phase_nodes(shape, phases)
     last = counter.last_failure
     node_phase = phase_map(shape, phases)
@@ -441,7 +441,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
         "phases_composite": phases,
         "sim_time_s": round(end, 3),
         "ticks": last_tick,
-        "penalties": {"by_cause": _rounded(total), "by_role": _rounded(by_role(total))},
+        "penalties": {"by_cause": _rounded(total), "by_role": _rounded(by_role(total)),
+                      "outside_phases": _rounded(by_role(phase_points.get(NO_PHASE, {})))},
         "phases": [{
             "phase": phase,
             "sim_time_s": round(phase_time.get(phase, 0.0), 3),
