@@ -57,6 +57,7 @@ from bt_servicesim.mission.stopping import (
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
+from bt_servicesim.records.profile import PROFILE_NAME, penalties_explained
 from bt_servicesim.records.trajectory import TRAJECTORY_NAME
 from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.discovery import (
@@ -169,7 +170,7 @@ class MissionRun:
         """In a directory reused with ``--overwrite``: the records a run writes only sometimes
         (what it raised, the picture, which a completed run draws only when asked) would be taken
         for this run's. Everything else a run writes it writes anew."""
-        for name in (TRACEBACK_NAME, TRAJECTORY_NAME):
+        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME):
             (self.settings.out / name).unlink(missing_ok=True)
 
     def _node(self) -> ExecutiveNode:
@@ -210,7 +211,8 @@ class MissionRun:
         if self.monitor is not None and tree is not None:
             self.monitor.watch(tree)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
-                             tree_file=self.settings.tree, live_server=self.live_server)
+                             tree_file=self.settings.tree, live_server=self.live_server,
+                             profile=self.settings.profile)
         stops.defer()  # a signal is raised between the executor's turns, not in a callback
         try:
             try:
@@ -244,7 +246,7 @@ class MissionRun:
         finally:
             if simulator is not None:
                 simulator.stop()
-        self._finish(monitor, code, executive)
+        self._finish(monitor, code, executive, profile=records.profile)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()
         node.destroy_node()
@@ -436,7 +438,8 @@ class MissionRun:
             "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
 
-    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
+    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive, *,
+                profile: dict[str, Any] | None = None) -> None:
         fields = monitor.report_fields()
         status = ("completed" if fields["completed"] else
                   "interrupted" if code >= 128 else "failed")
@@ -456,6 +459,7 @@ class MissionRun:
             "ticks": getattr(executive, "ticks", None),
             "lockstep_stalls": self.lockstep.stalls if self.lockstep else None,
             "lockstep_dropped": self._lockstep_dropped(),
+            **penalties_explained(profile),
         }
         write_report(self.settings.out / REPORT_NAME, report)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"

@@ -439,15 +439,23 @@ class SimEngine:
         # constant minus a distance), without np.clip's wrappers, every step someone is near;
         # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
         touching = robot.footprint.person_depths(robot.pose, xs, ys, radius=PERSON_BODY_RADIUS)
+        causes = self._person_causes()
         self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
-                             object_depth=robot.wall_depth, dt=dt)
+                             object_depth=robot.wall_depth, dt=dt,
+                             people=list(zip(causes, touching.tolist(), strict=True)))
         approach = np.minimum(
             np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
             PERSON_APPROXIMATION_M)
         self.referee.approximation(
             person_depth=float(np.add.reduce(approach, axis=None)),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
-            dt=dt)
+            dt=dt, people=list(zip(causes, approach.tolist(), strict=True)))
+
+    def _person_causes(self) -> list[str]:
+        """Each person's cause key for the referee's books by cause (``ROLE/NAME``), in
+        :meth:`_person_distances`' order."""
+        return [*(f"{person.role}/{person.name}" for person in self.crowd.people),
+                f"guest/{self.guest.name}"]
 
     def _anyone_may_be_near(self) -> bool:
         """Whether someone's body may be within the people's ghost cylinder.
@@ -512,6 +520,12 @@ class SimEngine:
 
     def referee_report(self) -> dict[str, object]:
         return self.referee.report()
+
+    def penalty_causes(self) -> tuple[int, dict[str, float]]:
+        """How many steps booked contact or approximation points so far, and the points by
+        cause (the referee's running sums, see :mod:`servicesim_sim.model.referee`)."""
+        penalties = self.referee.penalties
+        return penalties.bookings, penalties.by_cause
 
     def referee_changed(self) -> bool:
         """Whether a referee event happened since the last call."""

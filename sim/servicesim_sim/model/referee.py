@@ -24,12 +24,19 @@ were: its contact checker ran from the start, and a pick-up or drop-off called b
 booked its failed-attempt points on a checkpoint that had not started; both count in the score
 once it starts. Nothing is booked once the task has completed.
 
+Contact and approximation points are also kept by **cause**, running sums for the run's
+records (:attr:`Penalties.by_cause`): ``approximation/ROLE/NAME`` for the depth into a person
+(role ``guest``, ``walker`` or ``idler``), ``approximation/walls`` for the depth into the
+nearest wall; ``contact/...`` the same. They are booked here, with the totals, from the depths
+the engine took, so they add up to the totals (to rounding) and nothing is reconstructed later.
+
 A drift or a guest lost "too fast" during checkpoint 3 sends the task back to checkpoint 2. The
 referee only keeps the books; the engine decides what happened and asks it to record it.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -55,6 +62,10 @@ class Penalties:
     drifts: int = 0
     contact: float = 0.0
     approximation: float = 0.0
+    by_cause: dict[str, float] = field(default_factory=dict)
+    """Contact and approximation points by cause (see the module docstring), running sums."""
+    bookings: int = 0
+    """How many steps booked contact or approximation points: changes when ``by_cause`` does."""
 
     def points(self) -> float:
         return (self.failed_pickup * FAILED_PICKUP_PENALTY
@@ -121,18 +132,39 @@ class Referee:
         self.penalties.failed_dropoff += 1
         self.revision += 1
 
-    def contact(self, *, person_depth: float, object_depth: float, dt: float) -> None:
+    def contact(self, *, person_depth: float, object_depth: float, dt: float,
+                people: Sequence[tuple[str, float]] = ()) -> None:
+        """Book a step's contact; ``people``: each person's cause (``ROLE/NAME``) and depth,
+        adding up to ``person_depth``, for the books by cause."""
         if not self.completed and (person_depth > 0.0 or object_depth > 0.0):
             reports = CONTACT_REPORT_RATE_HZ * dt
             self.penalties.contact += reports * (PERSON_CONTACT_WEIGHT * person_depth
                                                  + OBJECT_CONTACT_WEIGHT * object_depth)
+            self._by_cause("contact", reports * PERSON_CONTACT_WEIGHT, people,
+                           reports * OBJECT_CONTACT_WEIGHT * object_depth)
 
-    def approximation(self, *, person_depth: float, object_depth: float, dt: float) -> None:
+    def approximation(self, *, person_depth: float, object_depth: float, dt: float,
+                      people: Sequence[tuple[str, float]] = ()) -> None:
+        """Book a step's approximation; ``people`` as for :meth:`contact`."""
         if not self.completed and (person_depth > 0.0 or object_depth > 0.0):
             reports = CONTACT_REPORT_RATE_HZ * dt
             self.penalties.approximation += reports * (
                 PERSON_APPROXIMATION_WEIGHT * person_depth
                 + OBJECT_APPROXIMATION_WEIGHT * object_depth)
+            self._by_cause("approximation", reports * PERSON_APPROXIMATION_WEIGHT, people,
+                           reports * OBJECT_APPROXIMATION_WEIGHT * object_depth)
+
+    def _by_cause(self, penalty: str, per_depth: float, people: Sequence[tuple[str, float]],
+                  walls: float) -> None:
+        books = self.penalties.by_cause
+        for who, depth in people:
+            if depth > 0.0:
+                cause = f"{penalty}/{who}"
+                books[cause] = books.get(cause, 0.0) + per_depth * depth
+        if walls > 0.0:
+            cause = f"{penalty}/walls"
+            books[cause] = books.get(cause, 0.0) + walls
+        self.penalties.bookings += 1
 
     def score(self) -> float:
         timed = sum(weight * seconds

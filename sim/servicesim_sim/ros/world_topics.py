@@ -1,4 +1,4 @@
-"""The world's topics: the map, navigation's global costmap, the referee's state and score, the
+"""The world's topics: the map, navigation's global costmap, the referee's state, score and penalties by cause, the
 people, and the markers a viewer draws.
 
 Design intent: each goes out at its own rate, counted in I/O periods: the map once (latched),
@@ -17,6 +17,7 @@ from servicesim_competition.msg import ActorStates, RefereeState, Score
 
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.ros.marker_topics import MarkerTopics
+from servicesim_sim.ros.penalty_causes import PenaltyCausesTopic
 from servicesim_sim.ros.publishing import LATCHED, Publishing, stamp, stamp_ns
 from servicesim_sim.wire.actor_messages import ActorStatesBytes
 from servicesim_sim.wire.costmap_message import OccupancyValues, serialised_occupancy_grid
@@ -42,6 +43,8 @@ class WorldTopics:
         self._costmap = publisher(OccupancyGrid, GLOBAL_COSTMAP_TOPIC, LATCHED)
         self._markers = MarkerTopics(engine=engine, make_publisher=publisher, send=send,
                                      latched=LATCHED, now=stamp(engine.sim_time))
+        self._penalty_causes = PenaltyCausesTopic(engine=engine, make_publisher=publisher,
+                                                  send=send, latched=LATCHED)
         self._score_message = Score()  # refilled: publish serialises at the call
         self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
         self._actor_states_bytes = ActorStatesBytes()
@@ -53,6 +56,7 @@ class WorldTopics:
         """What is due in I/O period number ``io_count`` (counted from 1)."""
         if io_count % PUBLIC_PERIOD_STEPS == 0 or self.engine.referee_changed():
             self._send(self._referee, self._referee_state())
+        self._penalty_causes.publish()
         if io_count % PUBLIC_PERIOD_STEPS == 0:
             self._send(self.actors, self._actor_states())
             self._markers.publish(stamp(self.engine.sim_time))
