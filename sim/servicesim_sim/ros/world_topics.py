@@ -1,5 +1,5 @@
-"""The world's topics: the map, navigation's global costmap, the referee's state, score and penalties by cause, the
-people, and the markers a viewer draws.
+"""The world's topics: the map, navigation's global costmap, the referee's state, score and
+penalties by cause, the people, and the markers a viewer draws.
 
 Design intent: each goes out at its own rate, counted in I/O periods: the map once (latched),
 the referee's state and the people every 0.5 sim s (the referee's state also as soon as it
