@@ -349,7 +349,8 @@ def _success_bars(axes: Any, settings: EvaluationSettings, rows: list[dict[str, 
 
 
 def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> None:
-    """summary.json, results.md and the plots in ``--out`` (and in ``--docs`` if given).
+    """summary.json, results.md, report.html and the plots in ``--out`` (and results.md and the
+    plots in ``--docs`` if given).
 
     The checkout is described before anything is written: ``--docs`` inside it would
     otherwise make every report say "with uncommitted changes".
@@ -362,6 +363,10 @@ def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> N
     write_plots(settings, rows, settings.out)
     (settings.out / "results.md").write_text(
         markdown_report(settings, rows, ".", revision=revision, bound_problem=problem))
+    from bt_servicesim.evaluation.html_report import write_html_report  # py_trees: not at start
+
+    write_html_report(settings, rows, revision=revision + revision_note(rows, revision),
+                      plots=PLOTS)
     if settings.docs is not None:
         write_plots(settings, rows, settings.docs / "images")
         (settings.docs / "results.md").write_text(

@@ -159,7 +159,7 @@
     const main = el("div", {});
     main.append(el("h3", {}, "Trajectory"));
     if (ep.picture) {
-      main.append(el("img", { src: ep.picture, alt: `Trajectory of ${ep.executive}, ${ep.scenario}, episode ${ep.episode}`, loading: "lazy" }));
+      main.append(el("img", { src: ep.picture, alt: `Trajectory of ${ep.executive}, ${ep.scenario}, episode ${ep.episode}` }));
     } else {
       main.append(el("p", { class: "absent" }, "No trajectory picture: the run drew none (an evaluation draws it for failed episodes). python -m bt_servicesim.trajectory DIR draws it from the recording."));
     }

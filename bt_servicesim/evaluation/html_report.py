@@ -1,0 +1,254 @@
+"""An evaluation's ``report.html``: the figures the evaluation computed, gathered for the page.
+
+Design intent: the page shows what the evaluation already knows -- the summary and paired
+comparisons of :mod:`bt_servicesim.evaluation.summary`, the failure groups of the Markdown
+report, every episode's row -- and what the episodes' profiles add when they have them
+(``profile.json``: the tree's per-node figures for the heat map, points by cause). Where a
+section's data is absent the page says why instead of showing nothing. The page itself is
+drawn by :mod:`bt_servicesim.records.html_report`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from bt_servicesim.evaluation.settings import EvaluationSettings
+from bt_servicesim.evaluation.summary import (
+    completed_by_one,
+    distinct_missions,
+    exact_binomial_p,
+    mean_or_none,
+    paired_drop_off_times,
+    paired_scores,
+    played,
+    sign_test,
+    summarise,
+    time_over_bound,
+    unplayed,
+)
+from bt_servicesim.records.episode_view import PROFILE_NAME, episode_view, read_json
+from bt_servicesim.records.html_report import HTML_NAME, render, write_page
+
+MEASURES = (
+    ("points_under", "points lost while it or a node under it ran", " pts"),
+    ("points_tip", "points lost while it was the running leaf", " pts"),
+    ("running_s", "sim time RUNNING", " s"),
+    ("tip_s", "sim time as the running leaf", " s"),
+    ("failure", "failures", ""),
+    ("starts", "starts", ""),
+)
+"""The heat map's measures: a node's figure in ``profile.json``, its name, its unit; each the
+mean per profiled episode of the tree."""
+COMMANDS_SHOWN = 5
+"""Commands a failure group lists; the rest are counted."""
+
+
+def write_html_report(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
+                      revision: str, plots: Sequence[tuple[str, str]] = ()) -> Path:
+    """``report.html`` in ``settings.out``, from the rows the evaluation wrote; ``revision``
+    says which checkout played them (as results.md does), ``plots`` are the (name, title) of
+    the ``results_NAME.png`` plots written beside it."""
+    path = settings.out / HTML_NAME
+    write_page(path, render(evaluation_context(settings, rows, revision=revision, plots=plots)))
+    return path
+
+
+def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
+                       revision: str, plots: Sequence[tuple[str, str]] = ()) -> dict[str, Any]:
+    """Everything the evaluation's page shows (see :func:`~bt_servicesim.records.html_report.
+    render`)."""
+    episodes = [_episode(settings.out, row) for row in played(rows)]
+    return {
+        "mode": "evaluation",
+        "title": "Evaluation results",
+        "subtitle": [f"{settings.command_line}",
+                     f"On {revision}: {settings.episodes} "
+                     f"episodes per scenario set, every executive on the same seeds; speed "
+                     f"{settings.speed:g}, mission time limit {settings.time_limit_s:g} sim s."],
+        "notes": {
+            "interval": "Completed: the share of episodes completed, with the 95 % Wilson "
+                        "score interval over the distinct missions (one per seed). Time over "
+                        "bound: mission time over the task's kinematic lower bound, over the "
+                        "completed episodes. Penalties: mean per episode.",
+            "paired": "Over distinct missions: which executive completed missions the other "
+                      "did not (McNemar's exact test), the scores where both completed and the "
+                      "time to the drop-off where both got there (sign tests).",
+            "not_run": _not_run(settings, rows),
+        },
+        "summary": summary_rows(settings, rows),
+        "paired": paired_rows(settings, rows),
+        "plots": [{"title": title, "src": f"results_{name}.png", "svg": None}
+                  for name, title in plots if (settings.out / f"results_{name}.png").is_file()],
+        "heat": heat_map(settings.out, rows),
+        "failures": failure_groups(settings.out, rows, episodes),
+        "filters": {"executives": list(settings.executives),
+                    "scenarios": list(settings.scenarios)},
+        "episodes": episodes,
+    }
+
+
+def _episode(out: Path, row: Mapping[str, Any]) -> dict[str, Any]:
+    run_dir = Path(str(row.get("out") or out))
+    episode = episode_view(run_dir, row, link_base=out)
+    episode["page"] = (f"{episode['dir']}/{HTML_NAME}" if (run_dir / HTML_NAME).is_file()
+                       else f"{episode['dir']}/")
+    return episode
+
+
+def _not_run(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> str | None:
+    counts = unplayed(settings, rows)
+    if not counts:
+        return None
+    parts = ", ".join(f"{executive} {scenario}: {count}"
+                      for (executive, scenario), count in sorted(counts.items()))
+    return f"The evaluation was stopped early; episodes not played: {parts}."
+
+
+# ----------------------------------------------------------------------------- the summary
+def summary_rows(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per scenario set and executive, as results.md's tables."""
+    table = []
+    for scenario in settings.scenarios:
+        for executive in settings.executives:
+            group = [row for row in rows
+                     if row["executive"] == executive and row["scenario"] == scenario]
+            summary, bound = summarise(group), time_over_bound(group)
+            interval = summary["success_interval"]
+            success = f"{summary['success_rate']:.0%}" + (
+                "" if interval is None else f" ({interval[0]:.0%}–{interval[1]:.0%})")
+            table.append({
+                "executive": executive, "scenario": scenario, "episodes": summary["episodes"],
+                "success": success, "mean_score": summary["mean_score"],
+                "median_score": summary["median_score"],
+                "mean_sim_time_s": summary["mean_sim_time_s"],
+                "over_bound_median": bound["median"], "over_bound_p90": bound["p90"],
+                "penalties": summary["penalties"],
+            })
+    return table
+
+
+def paired_rows(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The first executive against each other one, set by set, over distinct missions."""
+    missions = distinct_missions(rows)
+    first, others = settings.executives[0], settings.executives[1:]
+    table = []
+    for second in others:
+        for scenario in settings.scenarios:
+            scores = paired_scores(missions, scenario, first, second)
+            times = paired_drop_off_times(missions, scenario, first, second)
+            only_first, only_second = completed_by_one(missions, scenario, first, second)
+            table.append({
+                "scenario": scenario, "first": first, "second": second,
+                "only": _with_p(f"{only_first} / {only_second}",
+                                exact_binomial_p(only_first, only_second)),
+                "both": len(scores[0]), "first_score": mean_or_none(scores[0]),
+                "second_score": mean_or_none(scores[1]), "lower": _below(*scores),
+                "both_dropped": len(times[0]), "first_time": mean_or_none(times[0]),
+                "second_time": mean_or_none(times[1]), "faster": _below(*times),
+            })
+    return table
+
+
+def _with_p(text: str, p_value: float | None) -> str:
+    return text if p_value is None else f"{text} (p {p_value:.2g})"
+
+
+def _below(first: list[float], second: list[float]) -> str:
+    below = sum(a < b for a, b in zip(first, second, strict=True))
+    return _with_p(f"{below}/{len(first)}", sign_test(first, second))
+
+
+# ---------------------------------------------------------------------------- the heat map
+def heat_map(out: Path, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per tree (executive), each node's measures, the mean over its profiled episodes; or
+    why there is none."""
+    profiles: dict[str, list[Mapping[str, Any]]] = {}
+    for row in played(rows):
+        profile = read_json(Path(str(row.get("out") or out)) / PROFILE_NAME)
+        if profile is not None and isinstance(profile.get("nodes"), dict):
+            profiles.setdefault(str(row["executive"]), []).append(profile)
+    measures = [{"key": key, "label": label, "unit": unit} for key, label, unit in MEASURES]
+    if not profiles:
+        return {"trees": [], "measures": measures, "why": (
+            "No heat map: no episode has a profile.json (the per-node figures a run writes "
+            "with its records); the baseline executive is not a tree.")}
+    trees = [_tree(name, group) for name, group in profiles.items()]
+    episodes = sum(len(group) for group in profiles.values())
+    return {"trees": trees, "measures": measures, "default": MEASURES[0][0], "why": None,
+            "note": f"Each node's figure is its mean over the {episodes} profiled episodes of "
+                    "its tree; the colour is its share of the largest. Choose a measure; point "
+                    "at a node (or reach it with Tab) for all its figures."}
+
+
+def _tree(name: str, profiles: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    order: list[str] = []
+    kinds: dict[str, str] = {}
+    sums: dict[str, dict[str, float]] = {}
+    for profile in profiles:
+        for key, figures in profile["nodes"].items():
+            if key not in sums:
+                order.append(key)
+                kinds[key] = str(figures.get("kind", ""))
+                sums[key] = dict.fromkeys((measure for measure, _, _ in MEASURES), 0.0)
+            for measure, _, _ in MEASURES:
+                sums[key][measure] += float(figures.get(measure) or 0.0)
+    count = len(profiles)
+    nodes, stack = [], []
+    for key in order:
+        while stack and not key.startswith(stack[-1] + "."):
+            stack.pop()
+        figures = {measure: round(total / count, 3) for measure, total in sums[key].items()}
+        nodes.append({"key": key, "label": key.rsplit(".", 1)[-1], "kind": kinds[key],
+                      "depth": len(stack), "figures": figures})
+        stack.append(key)
+    _colour(nodes, MEASURES[0][0])
+    return {"name": f"{name} ({count} profiled episodes)", "nodes": nodes}
+
+
+def _colour(nodes: list[dict[str, Any]], measure: str) -> None:
+    """The colour and figure each node is written with, so the page reads without scripts."""
+    top = max((node["figures"][measure] for node in nodes), default=0.0) or 1.0
+    for node in nodes:
+        share = node["figures"][measure] / top
+        node["colour"] = _heat(share)
+        node["shown"] = f"{node['figures'][measure]:.1f}" if node["figures"][measure] else ""
+
+
+def _heat(share: float) -> str:
+    stops = ((255, 255, 255), (253, 208, 162), (241, 105, 19), (127, 39, 4))
+    at = min(max(share, 0.0), 1.0) * (len(stops) - 1)
+    low = int(at)
+    high = min(low + 1, len(stops) - 1)
+    fraction = at - low
+    red, green, blue = (round(a + (b - a) * fraction) for a, b in zip(stops[low], stops[high],
+                                                                          strict=True))
+    return f"rgb({red},{green},{blue})"
+
+
+# ------------------------------------------------------------------------- failure groups
+def failure_groups(out: Path, rows: list[dict[str, Any]],
+                   episodes: list[dict[str, Any]]) -> dict[str, Any]:
+    """Failed episodes grouped by executive, set, checkpoints reached and reason, each group
+    with the commands that play its episodes again."""
+    groups: dict[tuple[str, str, int, str], list[dict[str, Any]]] = {}
+    for episode in episodes:
+        if episode["completed"]:
+            continue
+        done = len(episode["timeline"]["legs"])
+        key = (str(episode["executive"]), str(episode["scenario"]), done,
+               str(episode["failure"] or episode["status"]))
+        groups.setdefault(key, []).append(episode)
+    listed = []
+    for (executive, scenario, done, reason), group in sorted(
+            groups.items(), key=lambda item: (-len(item[1]), item[0])):
+        commands = list(dict.fromkeys(episode["commands"]["replay"] for episode in group
+                                      if episode["commands"]["replay"]))
+        listed.append({
+            "title": f"{executive}, {scenario}: {done} of 4 checkpoints",
+            "count": len(group), "reason": reason,
+            "commands": commands[:COMMANDS_SHOWN],
+            "more": max(0, len(commands) - COMMANDS_SHOWN),
+        })
+    return {"groups": listed, "note": None}
