@@ -10,6 +10,8 @@ drawn by :mod:`bt_servicesim.records.html_report`.
 
 from __future__ import annotations
 
+import html
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -46,17 +48,21 @@ COMMANDS_SHOWN = 5
 
 
 def write_html_report(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
-                      revision: str, plots: Sequence[tuple[str, str]] = ()) -> Path:
+                      revision: str, plots: Sequence[tuple[str, str]] = (),
+                      svgs: Mapping[str, str] | None = None) -> Path:
     """``report.html`` in ``settings.out``, from the rows the evaluation wrote; ``revision``
     says which checkout played them (as results.md does), ``plots`` are the (name, title) of
-    the ``results_NAME.png`` plots written beside it."""
+    the ``results_NAME.png`` plots written beside it, ``svgs`` the same drawn as SVG (by name),
+    inlined where given."""
     path = settings.out / HTML_NAME
-    write_page(path, render(evaluation_context(settings, rows, revision=revision, plots=plots)))
+    context = evaluation_context(settings, rows, revision=revision, plots=plots, svgs=svgs)
+    write_page(path, render(context))
     return path
 
 
 def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
-                       revision: str, plots: Sequence[tuple[str, str]] = ()) -> dict[str, Any]:
+                       revision: str, plots: Sequence[tuple[str, str]] = (),
+                       svgs: Mapping[str, str] | None = None) -> dict[str, Any]:
     """Everything the evaluation's page shows (see :func:`~bt_servicesim.records.html_report.
     render`)."""
     episodes = [_episode(settings.out, row) for row in played(rows)]
@@ -79,14 +85,28 @@ def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]],
         },
         "summary": summary_rows(settings, rows),
         "paired": paired_rows(settings, rows),
-        "plots": [{"title": title, "src": f"results_{name}.png", "svg": None}
-                  for name, title in plots if (settings.out / f"results_{name}.png").is_file()],
+        "plots": [{"title": title, "src": f"results_{name}.png",
+                   "svg": inline_svg((svgs or {}).get(name), title=title)} for name, title in plots
+                  if (svgs or {}).get(name) or (settings.out / f"results_{name}.png").is_file()],
         "heat": heat_map(settings.out, rows),
         "failures": failure_groups(settings.out, rows, episodes),
         "filters": {"executives": list(settings.executives),
                     "scenarios": list(settings.scenarios)},
         "episodes": episodes,
     }
+
+
+def inline_svg(document: str | None, *, title: str) -> str | None:
+    """An SVG document as an element to put in the page (no XML declaration or doctype), its
+    size left to the page's style, named by ``title`` for a screen reader."""
+    if not document or "<svg" not in document:
+        return None
+    element = re.sub(r"<metadata>.*?</metadata>\s*", "", document[document.index("<svg"):],
+                     count=1, flags=re.DOTALL)
+    label = html.escape(title, quote=True)
+    return re.sub(r'^<svg([^>]*?) width="[^"]*" height="[^"]*"',
+                  lambda match: f'<svg{match.group(1)} role="img" aria-label="{label}"', element,
+                  count=1)
 
 
 def _episode(out: Path, row: Mapping[str, Any]) -> dict[str, Any]:
@@ -213,6 +233,7 @@ def _colour(nodes: list[dict[str, Any]], measure: str) -> None:
     for node in nodes:
         share = node["figures"][measure] / top
         node["colour"] = _heat(share)
+        node["ink"] = "#fff" if share > 0.6 else "inherit"
         node["shown"] = f"{node['figures'][measure]:.1f}" if node["figures"][measure] else ""
 
 

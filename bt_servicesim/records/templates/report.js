@@ -141,10 +141,13 @@
         el("tr", {}, el("th", {}, words(cause)), el("td", { class: "n" }, fixed(points, 1)))))
       ) : el("p", {}, "No points booked."));
     } else {
-      side.append(el("p", { class: "absent" }, "No points by cause: the run has no profile.json. The referee's totals:"));
+      side.append(el("p", { class: "absent" }, "No points by cause: the run has no profile.json."));
     }
-    side.append(el("table", {}, el("tbody", {}, ...Object.entries(ep.penalties).map(([kind, value]) =>
-      el("tr", {}, el("th", {}, words(kind)), el("td", { class: "n" }, fixed(value, 2)))))));
+    if (withHead) {  // a run's own page lists the referee's totals above
+      side.append(el("h3", {}, "Penalties as the referee counted them"),
+        el("table", {}, el("tbody", {}, ...Object.entries(ep.penalties).map(([kind, value]) =>
+          el("tr", {}, el("th", {}, words(kind)), el("td", { class: "n" }, fixed(value, 2)))))));
+    }
     side.append(el("h3", {}, "Commands"));
     const c = ep.commands;
     if (c.replay) side.append(el("p", {}, "Play it again:"), commandBlock(c.replay, "command that plays it again"));

@@ -1,0 +1,239 @@
+"""What the evaluation's ``report.html`` costs at scale: written, its size, opened and sorted.
+
+``python benchmarks/report_html.py [--episodes N] [--runs R] [--log-lines L] [--keep DIR]``
+makes a synthetic evaluation of N episodes (default 1000: two executives, two scenario sets),
+each the files a real episode leaves -- ``report.json`` with every field a run and the
+evaluation write; for the tree executive a ``tree_log.jsonl`` of L tick lines (default 2500,
+a real mission's count) whose tip changes as often as a real mission's (a dozen times) and a
+``profile.json`` with a figure for each of 130 nodes (the shipped tree's size); a
+``trajectory.png`` for each failed episode -- and then, R times (default 3):
+
+* ``written``: the wall time of writing ``report.html`` (the page alone: summary.json, the
+  plots and results.md are written before it; scipy, which their statistics import, is
+  imported before the clock starts);
+* ``size``: the page's bytes (the pictures are files beside it, not counted);
+* ``first render``: in headless Chromium (Debian's, through Selenium), the time from the
+  navigation's start to its first contentful paint, and to the load event;
+* ``sort``: clicking the score column's heading until the next frame is drawn, sorting
+  ascending then descending (two figures per run).
+
+It prints each figure per run and their range; nothing is asserted (the targets: written in
+under 5 s, under 5 MB, sorted in under 200 ms). Times are wall time on this machine and move
+with its load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from bt_servicesim.cli import OneLineArgumentParser
+from bt_servicesim.evaluation.html_report import write_html_report
+from bt_servicesim.evaluation.settings import EvaluationSettings
+
+CHECKPOINTS = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
+LEAVES = ("RequestNewTask", "WaitForLocalisationAndMap", "GetPickUpArea", "NavigateToGoal",
+          "NavigateIntoPickUpArea", "GuestSteadilyInRangeHere", "CallPickUpGuest",
+          "GetDropOffArea", "NavigateToGoal", "LetGuestCatchUp", "CallDropOffGuest",
+          "NavigateToGoal")
+"""The running leaves of a real mission, in the order they run (a dozen tip changes)."""
+NODES = 130
+PHASES = ("BeginTask", "Pickup", "Dropoff", "Return")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = OneLineArgumentParser(prog="benchmarks/report_html.py",
+                                   description="Cost of the evaluation's report.html.")
+    parser.add_argument("--episodes", type=int, default=1000, help="episodes in all")
+    parser.add_argument("--runs", type=int, default=3, help="rounds of writing and opening")
+    parser.add_argument("--log-lines", type=int, default=2500,
+                        help="tick lines in each tree log")
+    parser.add_argument("--keep", type=Path, help="make the evaluation here and keep it")
+    return parser
+
+
+def node_keys() -> list[str]:
+    """130 keys in pre-order: a root, four phases, each with sequences of leaves."""
+    keys = ["Mission"]
+    for phase in PHASES:
+        keys.append(f"Mission.{phase}")
+        for group in range((NODES - 1) // len(PHASES) // 8):
+            keys.append(f"Mission.{phase}.Step{group}")
+            keys += [f"Mission.{phase}.Step{group}.{leaf}" for leaf in LEAVES[:7]]
+    while len(keys) < NODES:
+        keys.append(f"Mission.Return.Extra{len(keys)}")
+    return keys
+
+
+def write_tree_log(path: Path, *, lines: int, end_s: float) -> None:
+    keys = node_keys()
+    header = {"kind": "tree", "version": 1, "tree_file": "trees/servicesim_mission.xml",
+              "nodes": [{"key": key, "label": key.rsplit(".", 1)[-1],
+                         "kind": "behaviour" if key.count(".") == 3 else "sequence",
+                         "memory": True, "parent": None} for key in keys]}
+    with path.open("w") as stream:
+        stream.write(json.dumps(header) + "\n")
+        for tick in range(1, lines + 1):
+            time_s = round(end_s * tick / lines, 1)
+            leaf = LEAVES[min(len(LEAVES) - 1, (tick * len(LEAVES)) // lines)]
+            tip = f"Mission.{PHASES[(tick * 4) // (lines + 1)]}.Step0.{leaf}"
+            stream.write(json.dumps({
+                "kind": "tick", "tick": tick, "sim_time_s": time_s, "root": "RUNNING",
+                "tip": tip, "nodes": {tip: ["RUNNING", f"{leaf}: {time_s:.1f} sim s to go, "
+                                                       "path 12.3 m, 4 people in view"]},
+                "blackboard": {"/robot_pose": f"({time_s:.2f}, 3.21, 0.5)"}}) + "\n")
+
+
+def write_episode(run_dir: Path, *, executive: str, scenario: str, episode: int,
+                  log_lines: int, picture: bytes) -> dict[str, Any]:
+    run_dir.mkdir(parents=True)
+    completed = (episode * 7 + len(executive)) % 5 != 0
+    seed = None if scenario == "default" else episode
+    durations = [30.0 + episode % 40, 1.0, 50.0 + episode % 30, 60.0 + episode % 20]
+    score = 600.0 + (episode * 37 % 900) + (200.0 if executive == "baseline" else 0.0)
+    row = {
+        "status": "completed" if completed else "failed", "run_id": f"bench-{episode}",
+        "seed": seed, "world": "default", "executive": executive, "ros_domain_id": 7,
+        "attached": False, "clock": "sim", "timing": "lockstep",
+        "reproduce": f"python -m bt_servicesim.run{'' if seed is None else f' --seed {seed}'}"
+                     f" --tree trees/servicesim_mission.xml --executive {executive} --speed 0 "
+                     "--time-limit 900",
+        "completed": completed, "referee_heard": True, "score": score,
+        "sim_time_s": sum(durations),
+        "checkpoints": [{"name": name, "done": completed or index < 2,
+                         "sim_time_s": duration}
+                        for index, (name, duration) in enumerate(zip(CHECKPOINTS, durations,
+                                                                     strict=True))],
+        "penalties": {"failed_pickup": int(not completed), "failed_dropoff": 0,
+                      "too_fast": 0, "drifts": episode % 2, "contact": 0.0,
+                      "approximation": score - 500.0},
+        "wall_time_s": 20.0, "exit_code": 0 if completed else 1,
+        "failure": None if completed else "the mission time limit ran out",
+        "last_activity": None if completed else "Pickup: NavigateToGoal: 12 m to go",
+        "ticks": log_lines, "lockstep_stalls": 0, "lockstep_dropped": None,
+        "not_run": False, "scenario": scenario, "episode": episode, "episode_seed": seed,
+        "returncode": 0, "episode_wall_time_s": 21.0, "out": str(run_dir),
+        "revision": "commit `bench`", "kinematic_bound_s": 120.0,
+        "kinematic_bound_legs": [{"checkpoint": name, "bound_s": 30.0} for name in CHECKPOINTS],
+        "time_over_bound": round(sum(durations) / 120.0, 4) if completed else None,
+    }
+    (run_dir / "report.json").write_text(json.dumps(row, indent=2))
+    if executive == "bt":
+        write_tree_log(run_dir / "tree_log.jsonl", lines=log_lines, end_s=row["sim_time_s"])
+        nodes = {key: {"kind": "sequence", "ticks": 40, "starts": 2, "success": 1,
+                       "failure": episode % 3 == 0, "invalid": 0,
+                       "running_s": 3.0 * (index % 17), "tip_s": 1.5 * (index % 13),
+                       "points_tip": 2.0 * (index % 7), "points_under": 5.0 * (index % 11)}
+                 for index, key in enumerate(node_keys())}
+        (run_dir / "profile.json").write_text(json.dumps({
+            "version": 1, "nodes": nodes,
+            "penalties": {"by_cause": {"approximation/walker/human_3": score - 500.0},
+                          "by_role": {"approximation/walker": score - 500.0}}}))
+    if not completed:
+        (run_dir / "trajectory.png").write_bytes(picture)
+    return row
+
+
+def make_evaluation(out: Path, *, episodes: int, log_lines: int) -> tuple[EvaluationSettings,
+                                                                          list[dict[str, Any]]]:
+    from PIL import Image
+
+    picture_path = out / "picture.png"
+    out.mkdir(parents=True, exist_ok=True)
+    Image.new("RGB", (320, 240), (40, 90, 160)).save(picture_path)
+    picture = picture_path.read_bytes()
+    executives, scenarios = ("bt", "baseline"), ("default", "random")
+    per_set = max(1, episodes // (len(executives) * len(scenarios)))
+    settings = EvaluationSettings(
+        episodes=per_set, scenarios=scenarios, executives=executives, jobs=2, seed=0, out=out,
+        speed=0.0, episode_timeout_s=600.0, time_limit_s=900.0, docs=None,
+        command_line=f"python -m bt_servicesim.evaluate --episodes {per_set} --out {out}")
+    rows = [write_episode(out / executive / scenario / str(episode), executive=executive,
+                          scenario=scenario, episode=episode, log_lines=log_lines,
+                          picture=picture)
+            for scenario in scenarios for executive in executives for episode in range(per_set)]
+    return settings, rows
+
+
+def browser_figures(page: Path, profile: Path) -> tuple[float, float, list[float]]:
+    """First contentful paint and load (ms from the navigation's start), and the two sorts."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(shutil.which("chromium"))
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1300,1000",
+                     f"--user-data-dir={profile}", "--no-first-run", "--disable-extensions"):
+        options.add_argument(argument)
+    driver = webdriver.Chrome(service=Service(executable_path=str(shutil.which("chromedriver"))),
+                              options=options)
+    try:
+        driver.get(page.as_uri())
+        paint, load = driver.execute_script(
+            "const p = performance.getEntriesByName('first-contentful-paint')[0];"
+            "const n = performance.getEntriesByType('navigation')[0];"
+            "return [p ? p.startTime : null, n.loadEventEnd];")
+        sorts = [driver.execute_async_script(
+            "const done = arguments[arguments.length - 1];"
+            "const button = document.querySelector('#episodes th[data-key=score] button');"
+            "const start = performance.now(); button.click();"
+            "requestAnimationFrame(() => setTimeout(() => done(performance.now() - start)));")
+            for _ in range(2)]
+        return paint, load, sorts
+    finally:
+        driver.quit()
+
+
+def spread(values: list[float], unit: str, digits: int = 0) -> str:
+    return (f"median {statistics.median(values):.{digits}f} {unit}, range "
+            f"{min(values):.{digits}f}-{max(values):.{digits}f} {unit}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.episodes < 4 or args.runs < 1 or args.log_lines < 1:
+        print("benchmarks/report_html.py: --episodes must be 4 or more, --runs and "
+              "--log-lines 1 or more", file=sys.stderr)
+        return 2
+    if shutil.which("chromium") is None or shutil.which("chromedriver") is None:
+        print("benchmarks/report_html.py: chromium and chromedriver are needed (make test "
+              "installs Debian's chromium and chromium-driver)", file=sys.stderr)
+        return 2
+    importlib.import_module("scipy.stats")  # the evaluation's statistics import it first
+
+    with tempfile.TemporaryDirectory(prefix="report-html-") as temporary:
+        out = args.keep or Path(temporary) / "evaluation"
+        started = time.perf_counter()
+        settings, rows = make_evaluation(out, episodes=args.episodes, log_lines=args.log_lines)
+        print(f"{len(rows)} synthetic episodes, {args.log_lines} tick lines per tree log, made "
+              f"in {time.perf_counter() - started:.1f} s in {out}")
+        written, sizes, paints, loads, sorts = [], [], [], [], []
+        for number in range(args.runs):
+            started = time.perf_counter()
+            page = write_html_report(settings, rows, revision="commit `bench`")
+            written.append(time.perf_counter() - started)
+            sizes.append(page.stat().st_size / 1e6)
+            paint, load, sorted_ms = browser_figures(page, Path(temporary) / f"chromium-{number}")
+            paints.append(paint)
+            loads.append(load)
+            sorts += sorted_ms
+            print(f"run {number + 1}: written {written[-1]:.2f} s, {sizes[-1]:.2f} MB; first "
+                  f"contentful paint {paint:.0f} ms, load {load:.0f} ms; sort by score "
+                  f"{sorted_ms[0]:.0f} ms ascending, {sorted_ms[1]:.0f} ms descending")
+        print(f"written: {spread(written, 's', 2)} (target < 5 s)")
+        print(f"size: {spread(sizes, 'MB', 2)} (target < 5 MB)")
+        print(f"first contentful paint: {spread(paints, 'ms')}; load: {spread(loads, 'ms')}")
+        print(f"sort: {spread(sorts, 'ms')} (target < 200 ms)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
