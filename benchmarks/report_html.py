@@ -56,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--runs", type=int, default=3, help="rounds of writing and opening")
     parser.add_argument("--log-lines", type=int, default=2500,
                         help="tick lines in each tree log")
-    parser.add_argument("--keep", type=Path, help="make the evaluation here and keep it")
+    parser.add_argument("--keep", type=Path, help="make the evaluation here and keep it; a "
+                        "directory an earlier run kept is used again as it is")
     return parser
 
 
@@ -150,17 +151,22 @@ def make_evaluation(out: Path, *, episodes: int, log_lines: int) -> tuple[Evalua
     out.mkdir(parents=True, exist_ok=True)
     Image.new("RGB", (320, 240), (40, 90, 160)).save(picture_path)
     picture = picture_path.read_bytes()
-    executives, scenarios = ("bt", "baseline"), ("default", "random")
-    per_set = max(1, episodes // (len(executives) * len(scenarios)))
-    settings = EvaluationSettings(
-        episodes=per_set, scenarios=scenarios, executives=executives, jobs=2, seed=0, out=out,
-        speed=0.0, episode_timeout_s=600.0, time_limit_s=900.0, docs=None,
-        command_line=f"python -m bt_servicesim.evaluate --episodes {per_set} --out {out}")
+    settings = _settings(out, episodes)
+    executives, scenarios, per_set = settings.executives, settings.scenarios, settings.episodes
     rows = [write_episode(out / executive / scenario / str(episode), executive=executive,
                           scenario=scenario, episode=episode, log_lines=log_lines,
                           picture=picture)
             for scenario in scenarios for executive in executives for episode in range(per_set)]
     return settings, rows
+
+
+def _settings(out: Path, episodes: int) -> EvaluationSettings:
+    executives, scenarios = ("bt", "baseline"), ("default", "random")
+    per_set = max(1, episodes // (len(executives) * len(scenarios)))
+    return EvaluationSettings(
+        episodes=per_set, scenarios=scenarios, executives=executives, jobs=2, seed=0, out=out,
+        speed=0.0, episode_timeout_s=600.0, time_limit_s=900.0, docs=None,
+        command_line=f"python -m bt_servicesim.evaluate --episodes {per_set} --out {out}")
 
 
 def browser_figures(page: Path, profile: Path) -> tuple[float, float, list[float]]:
@@ -212,9 +218,17 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="report-html-") as temporary:
         out = args.keep or Path(temporary) / "evaluation"
         started = time.perf_counter()
-        settings, rows = make_evaluation(out, episodes=args.episodes, log_lines=args.log_lines)
-        print(f"{len(rows)} synthetic episodes, {args.log_lines} tick lines per tree log, made "
-              f"in {time.perf_counter() - started:.1f} s in {out}")
+        kept = out / "rows.json"
+        if kept.is_file():
+            settings, rows = _settings(out, len(json.loads(kept.read_text()))), json.loads(
+                kept.read_text())
+            print(f"{len(rows)} synthetic episodes kept in {out}")
+        else:
+            settings, rows = make_evaluation(out, episodes=args.episodes,
+                                             log_lines=args.log_lines)
+            kept.write_text(json.dumps(rows))
+            print(f"{len(rows)} synthetic episodes, {args.log_lines} tick lines per tree log, "
+                  f"made in {time.perf_counter() - started:.1f} s in {out}")
         written, sizes, paints, loads, sorts = [], [], [], [], []
         for number in range(args.runs):
             started = time.perf_counter()

@@ -92,7 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="comma list of scenario sets: default, random, hard, "
                         "original-guest (default: the first three)")
     parser.add_argument("--executive", default="bt,baseline",
-                        help="comma list of executives: bt, baseline")
+                        help="comma list of executives: bt, baseline, and bt:FILE for a bt "
+                             "playing tree FILE (named bt:STEM in every table), as many as "
+                             "wanted, all on the same seeds")
     parser.add_argument("--jobs", type=int, default=2, help="episodes run at once")
     parser.add_argument("--seed", type=int, default=0,
                         help="seed of the first episode; episode n plays seed+n")
@@ -133,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
 def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSettings:
     """Check every argument before anything starts."""
     scenarios = _names(args.scenarios, "--scenarios", SCENARIO_SETS)
-    executives = _names(args.executive, "--executive", EXECUTIVES)
+    executives, trees = _executives(args.executive)
     _check(args.episodes >= 1, f"--episodes {args.episodes}: must be 1 or more")
     _check(1 <= args.jobs <= MAX_JOBS, f"--jobs {args.jobs}: must be within 1..{MAX_JOBS} "
                                        "(each running episode claims a ROS domain of its own)")
@@ -160,7 +162,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
         resume=args.resume, cold=args.cold, reproducibility=reproducibility,
-        throughput=throughput, tree=tree,
+        throughput=throughput, tree=tree, trees=trees,
     )
 
 
@@ -198,6 +200,35 @@ def _tree(path: Path | None, executives: tuple[str, ...]) -> Path:
         load_mission_tree(path)
     except MissionTreeError as error:
         raise UsageError(f"--tree {error}") from error
+    return path.resolve()
+
+
+def _executives(value: str) -> tuple[tuple[str, ...], dict[str, Path]]:
+    """The executives' names, and the tree of each ``bt:FILE`` (named ``bt:STEM``), each
+    loaded once here: a tree that cannot load is one line now."""
+    names: list[str] = []
+    trees: dict[str, Path] = {}
+    for entry in (part.strip() for part in value.split(",")):
+        kind, _, file = entry.partition(":")
+        _check(kind in EXECUTIVES and (not file or kind == "bt"),
+               f"--executive {value}: unknown executive {entry!r} (choose from "
+               f"{', '.join(EXECUTIVES)}, or bt:FILE for a tree of your own)")
+        name = f"bt:{Path(file).stem}" if file else kind
+        _check(name not in names, f"--executive {value}: {name} is named twice (two trees "
+                                  "need files of different names)")
+        names.append(name)
+        if file:
+            trees[name] = _loaded_tree(Path(file), f"--executive {entry}")
+    return tuple(names), trees
+
+
+def _loaded_tree(path: Path, flag: str) -> Path:
+    from bt_servicesim.tree.loading import MissionTreeError, load_mission_tree
+
+    try:
+        load_mission_tree(path)
+    except MissionTreeError as error:
+        raise UsageError(f"{flag}: {error}") from error
     return path.resolve()
 
 

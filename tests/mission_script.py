@@ -29,15 +29,23 @@ SCALARS = (float, int, str, bool)
 NOT_LEAVES = {"root", "BehaviorTree", "SubTree", "TreeNodesModel", "Sequence", "Fallback",
               "Selector", "Parallel"}
 
+class Unscripted:
+    """A value for an output no test looks into; its repr is the same in every run, so that two
+    runs of a script write the same snapshot log."""
+
+    def __repr__(self) -> str:
+        return "<unscripted value>"
+
+
 #: What a scripted leaf writes to each output port it has when it succeeds.
 OUTPUT_VALUES: dict[str, Any] = {
     "pick_up_location": "FrontElevator", "drop_off_location": "PrivateCubicle_32_1",
     "guest_name": "human_20843", "start_pose": Pose2D(10.975, 3.75, 3.14),
     "box": Box(-1.5, 0.0, 1.5, 2.7), "goal": Pose2D(0.0, 1.3, 0.0), "copy": Pose2D(0.0, 1.3),
     "jittered": Pose2D(0.1, 1.3), "waypoints": [Pose2D(1.0, 1.0), Pose2D(-1.0, 1.0)],
-    "robot_pose": Pose2D(0.0, 0.0), "occupancy": object(), "actors_in_range": [],
+    "robot_pose": Pose2D(0.0, 0.0), "occupancy": Unscripted(), "actors_in_range": [],
     "rfid_age": 0.0, "guest_last_seen": Pose2D(-5.0, 5.0), "distance_remaining": 0.0,
-    "error_code": 0, "error_msg": "", "rfid_history": object(),
+    "error_code": 0, "error_msg": "", "rfid_history": Unscripted(),
 }
 
 
@@ -122,7 +130,7 @@ def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None)
             return Status.RUNNING
         if self._outcome == Status.SUCCESS:
             for port in self.output_ports():
-                self._set_output(port, OUTPUT_VALUES.get(port, object()))
+                self._set_output(port, OUTPUT_VALUES.get(port, Unscripted()))
         self.feedback_message = f"scripted {self._outcome.name}"
         return self._outcome
 

@@ -51,6 +51,7 @@ from bt_servicesim.evaluation.settings import (
     EPISODE_NAME,
     INTERRUPTED,
     EvaluationSettings,
+    executive_kind,
     tree_digest,
 )
 from bt_servicesim.evaluation.warm_pairs import WarmPair
@@ -113,11 +114,12 @@ def planned_count(settings: EvaluationSettings) -> int:
 def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
     """The episode as a warm pair's worker takes it: what :func:`run_command` says, as JSON."""
     fields = {"out": str(episode.out), "run_id": episode.run_id,
-              "executive": episode.executive, "seed": episode.seed,
+              "executive": executive_kind(episode.executive), "seed": episode.seed,
               "speed": settings.speed, "time_limit_s": settings.time_limit_s,
               "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args)}
-    if episode.executive == "bt" and settings.own_tree:  # else the worker's own shipped tree
-        fields["tree"] = str(settings.tree)
+    tree = settings.tree_of(episode.executive)
+    if tree is not None:  # else the worker's own shipped tree
+        fields["tree"] = str(tree)
     return json.dumps(fields) + "\n"
 
 
@@ -130,11 +132,12 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
     """
     command = [sys.executable, "-m", "bt_servicesim.run", "--headless",
                "--out", str(episode.out), "--overwrite", "--run-id", episode.run_id,
-               "--executive", episode.executive,
+               "--executive", executive_kind(episode.executive),
                "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s),
                "--trajectory", "failed"]
-    if episode.executive == "bt" and settings.own_tree:  # else the run's own shipped tree
-        command += ["--tree", str(settings.tree)]
+    tree = settings.tree_of(episode.executive)
+    if tree is not None:  # else the run's own shipped tree
+        command += ["--tree", str(tree)]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
     for argument in SCENARIO_SETS[episode.scenario].sim_args:
@@ -164,7 +167,8 @@ class EpisodeRunner:
         self.finished: Queue[tuple[int, dict[str, Any] | None]] = Queue()
         """Each episode's plan number and row (None: not started), as they finish."""
         self.revision = source_revision()
-        self._tree_digest = tree_digest(settings.tree)
+        self._tree_digests = {executive: tree_digest(tree) for executive in settings.executives
+                              if (tree := settings.tree_of(executive)) is not None}
         self._die_with_us = parent_death_signal(os.getpid())
         self._idle_pairs: LifoQueue[WarmPair] = LifoQueue()
         self._pairs_started = itertools.count(1)
@@ -200,8 +204,8 @@ class EpisodeRunner:
         key = {"executive": episode.executive, "scenario": episode.scenario,
                "seed": episode.seed, "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args),
                "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
-        if episode.executive == "bt" and self.settings.own_tree:  # the shipped tree: as before
-            key["tree_sha256"] = self._tree_digest
+        if episode.executive in self._tree_digests:  # the shipped tree: as before
+            key["tree_sha256"] = self._tree_digests[episode.executive]
         return key
 
     def finished_row(self, episode: Episode) -> dict[str, Any] | None:
@@ -310,7 +314,8 @@ def episode_row(episode: Episode, outcome: EpisodeOutcome) -> dict[str, Any]:
     # the evaluation was stopped while it ran: no verdict on the executive, and no statistic
     row["not_run"] = outcome.stopped == INTERRUPTED
     row.setdefault("ros_domain_id", None)  # the domain the run claimed, as its report says
-    row.update(run_id=episode.run_id, scenario=episode.scenario, episode=episode.index,
+    row.update(executive=episode.executive,  # a tree's name (bt:NAME), where the report says bt
+               run_id=episode.run_id, scenario=episode.scenario, episode=episode.index,
                episode_seed=episode.seed, returncode=outcome.returncode,
                episode_wall_time_s=round(outcome.wall_time_s, 3), out=str(episode.out))
     return row

@@ -13,6 +13,7 @@ from __future__ import annotations
 import html
 import re
 from collections.abc import Mapping, Sequence
+from itertools import combinations
 from pathlib import Path
 from typing import Any
 
@@ -30,39 +31,43 @@ from bt_servicesim.evaluation.summary import (
     time_over_bound,
     unplayed,
 )
-from bt_servicesim.records.episode_view import PROFILE_NAME, episode_view, read_json
+from bt_servicesim.records.episode_view import episode_view
 from bt_servicesim.records.html_report import HTML_NAME, render, write_page
 
 MEASURES = (
-    ("points_under", "points lost while it or a node under it ran", " pts"),
-    ("points_tip", "points lost while it was the running leaf", " pts"),
-    ("running_s", "sim time RUNNING", " s"),
-    ("tip_s", "sim time as the running leaf", " s"),
-    ("failure", "failures", ""),
-    ("starts", "starts", ""),
+    ("points_under", "points lost per episode while it or a node under it ran", " pts"),
+    ("points_tip", "points lost per episode while it was the running leaf", " pts"),
+    ("time_share", "share of the sim time it was RUNNING", ""),
+    ("tip_share", "share of the sim time it was the running leaf", ""),
+    ("failure_rate", "failures over its outcomes", ""),
+    ("starts_per_episode", "starts per episode", ""),
+    ("ran_share", "share of episodes it ran in", ""),
 )
-"""The heat map's measures: a node's figure in ``profile.json``, its name, its unit; each the
-mean per profiled episode of the tree."""
-COMMANDS_SHOWN = 5
-"""Commands a failure group lists; the rest are counted."""
+"""The heat map's measures: a column of the ``nodes`` profile table
+(:mod:`bt_servicesim.evaluation.node_tables`), its name, its unit."""
 
 
 def write_html_report(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
                       revision: str, plots: Sequence[tuple[str, str]] = (),
-                      svgs: Mapping[str, str] | None = None) -> Path:
+                      svgs: Mapping[str, str] | None = None,
+                      profiles: Mapping[str, list[dict[str, Any]]] | None = None) -> Path:
     """``report.html`` in ``settings.out``, from the rows the evaluation wrote; ``revision``
     says which checkout played them (as results.md does), ``plots`` are the (name, title) of
     the ``results_NAME.png`` plots written beside it, ``svgs`` the same drawn as SVG (by name),
-    inlined where given."""
+    inlined where given; ``profiles`` the episodes' profile tables
+    (:func:`~bt_servicesim.evaluation.node_tables.profile_tables`)."""
     path = settings.out / HTML_NAME
-    context = evaluation_context(settings, rows, revision=revision, plots=plots, svgs=svgs)
+    context = evaluation_context(settings, rows, revision=revision, plots=plots, svgs=svgs,
+                                 profiles=profiles)
     write_page(path, render(context))
     return path
 
 
 def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
                        revision: str, plots: Sequence[tuple[str, str]] = (),
-                       svgs: Mapping[str, str] | None = None) -> dict[str, Any]:
+                       svgs: Mapping[str, str] | None = None,
+                       profiles: Mapping[str, list[dict[str, Any]]] | None = None
+                       ) -> dict[str, Any]:
     """Everything the evaluation's page shows (see :func:`~bt_servicesim.records.html_report.
     render`)."""
     episodes = [_episode(settings.out, row) for row in played(rows)]
@@ -88,8 +93,9 @@ def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]],
         "plots": [{"title": title, "src": f"results_{name}.png",
                    "svg": inline_svg((svgs or {}).get(name), title=title)} for name, title in plots
                   if (svgs or {}).get(name) or (settings.out / f"results_{name}.png").is_file()],
-        "heat": heat_map(settings.out, rows),
-        "failures": failure_groups(settings.out, rows, episodes),
+        "heat": heat_map((profiles or {}).get("nodes")),
+        "causes": (profiles or {}).get("causes") or [],
+        "failures": failure_groups((profiles or {}).get("triage"), rows),
         "filters": {"executives": list(settings.executives),
                     "scenarios": list(settings.scenarios)},
         "episodes": episodes,
@@ -150,11 +156,10 @@ def summary_rows(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> li
 
 
 def paired_rows(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The first executive against each other one, set by set, over distinct missions."""
+    """Every pair of executives, set by set, over distinct missions."""
     missions = distinct_missions(rows)
-    first, others = settings.executives[0], settings.executives[1:]
     table = []
-    for second in others:
+    for first, second in combinations(settings.executives, 2):
         for scenario in settings.scenarios:
             scores = paired_scores(missions, scenario, first, second)
             times = paired_drop_off_times(missions, scenario, first, second)
@@ -181,60 +186,53 @@ def _below(first: list[float], second: list[float]) -> str:
 
 
 # ---------------------------------------------------------------------------- the heat map
-def heat_map(out: Path, rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """Per tree (executive), each node's measures, the mean over its profiled episodes; or
-    why there is none."""
-    profiles: dict[str, list[Mapping[str, Any]]] = {}
-    for row in played(rows):
-        profile = read_json(Path(str(row.get("out") or out)) / PROFILE_NAME)
-        if profile is not None and isinstance(profile.get("nodes"), dict):
-            profiles.setdefault(str(row["executive"]), []).append(profile)
+def heat_map(nodes: Sequence[Mapping[str, Any]] | None) -> dict[str, Any]:
+    """The ``nodes`` profile table as one tree per executive and set, each node with its
+    measures; or why there is none."""
     measures = [{"key": key, "label": label, "unit": unit} for key, label, unit in MEASURES]
-    if not profiles:
+    groups: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
+    for row in nodes or ():
+        groups.setdefault((str(row["executive"]), str(row["scenario"])), []).append(row)
+    if not groups:
         return {"trees": [], "measures": measures, "why": (
-            "No heat map: no episode has a profile.json (the per-node figures a run writes "
-            "with its records); the baseline executive is not a tree.")}
-    trees = [_tree(name, group) for name, group in profiles.items()]
-    episodes = sum(len(group) for group in profiles.values())
+            "No heat map: no episode has a profile.json (the per-node figures a run of a tree "
+            "writes with its records; the baseline executive is not a tree)." if nodes is not None
+            else "No heat map: this evaluation wrote no profile tables.")}
+    trees = [_tree(f"{executive}, {scenario} ({group[0]['episodes']} profiled episodes)", group)
+             for (executive, scenario), group in groups.items()]
     return {"trees": trees, "measures": measures, "default": MEASURES[0][0], "why": None,
-            "note": f"Each node's figure is its mean over the {episodes} profiled episodes of "
-                    "its tree; the colour is its share of the largest. Choose a measure; point "
-                    "at a node (or reach it with Tab) for all its figures."}
+            "note": "Each node's figure over the profiled episodes of its executive and set "
+                    "(profiles.json's nodes table); the colour is its share of the largest. "
+                    "Choose a measure; point at a node (or reach it with Tab) for all its "
+                    "figures."}
 
 
-def _tree(name: str, profiles: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-    order: list[str] = []
-    kinds: dict[str, str] = {}
-    sums: dict[str, dict[str, float]] = {}
-    for profile in profiles:
-        for key, figures in profile["nodes"].items():
-            if key not in sums:
-                order.append(key)
-                kinds[key] = str(figures.get("kind", ""))
-                sums[key] = dict.fromkeys((measure for measure, _, _ in MEASURES), 0.0)
-            for measure, _, _ in MEASURES:
-                sums[key][measure] += float(figures.get(measure) or 0.0)
-    count = len(profiles)
-    nodes, stack = [], []
-    for key in order:
+def _tree(name: str, rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """The nodes in tree order (the table keeps each profile's order, root first), each with
+    its depth (from its path: a node's key extends its parent's)."""
+    nodes: list[dict[str, Any]] = []
+    stack: list[str] = []
+    for row in rows:
+        key = str(row["node"])
         while stack and not key.startswith(stack[-1] + "."):
             stack.pop()
-        figures = {measure: round(total / count, 3) for measure, total in sums[key].items()}
-        nodes.append({"key": key, "label": key.rsplit(".", 1)[-1], "kind": kinds[key],
-                      "depth": len(stack), "figures": figures})
+        nodes.append({"key": key, "label": str(row.get("label") or key.rsplit(".", 1)[-1]),
+                      "kind": str(row.get("type") or ""), "depth": len(stack),
+                      "figures": {measure: row.get(measure) for measure, _, _ in MEASURES}})
         stack.append(key)
     _colour(nodes, MEASURES[0][0])
-    return {"name": f"{name} ({count} profiled episodes)", "nodes": nodes}
+    return {"name": name, "nodes": nodes}
 
 
 def _colour(nodes: list[dict[str, Any]], measure: str) -> None:
     """The colour and figure each node is written with, so the page reads without scripts."""
-    top = max((node["figures"][measure] for node in nodes), default=0.0) or 1.0
+    top = max((node["figures"][measure] or 0.0 for node in nodes), default=0.0) or 1.0
     for node in nodes:
-        share = node["figures"][measure] / top
+        value = node["figures"][measure] or 0.0
+        share = value / top
         node["colour"] = _heat(share)
         node["ink"] = "#fff" if share > 0.6 else "inherit"
-        node["shown"] = f"{node['figures'][measure]:.1f}" if node["figures"][measure] else ""
+        node["shown"] = f"{value:.2f}" if value else ""
 
 
 def _heat(share: float) -> str:
@@ -249,27 +247,25 @@ def _heat(share: float) -> str:
 
 
 # ------------------------------------------------------------------------- failure groups
-def failure_groups(out: Path, rows: list[dict[str, Any]],
-                   episodes: list[dict[str, Any]]) -> dict[str, Any]:
-    """Failed episodes grouped by executive, set, checkpoints reached and reason, each group
-    with the commands that play its episodes again."""
-    groups: dict[tuple[str, str, int, str], list[dict[str, Any]]] = {}
-    for episode in episodes:
-        if episode["completed"]:
-            continue
-        done = len(episode["timeline"]["legs"])
-        key = (str(episode["executive"]), str(episode["scenario"]), done,
-               str(episode["failure"] or episode["status"]))
-        groups.setdefault(key, []).append(episode)
+def failure_groups(triage: Sequence[Mapping[str, Any]] | None,
+                   rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The ``triage`` profile table's groups (failed episodes by the phase they reached, the
+    node that failed last and why), each with the commands that play one again and show its
+    tree where it failed."""
+    if triage is None:
+        failed = sum(not row.get("completed") for row in played(rows))
+        return {"groups": [], "note": (f"{failed} episodes failed; this evaluation wrote no "
+                                       "failure triage (profile tables).") if failed else None}
     listed = []
-    for (executive, scenario, done, reason), group in sorted(
-            groups.items(), key=lambda item: (-len(item[1]), item[0])):
-        commands = list(dict.fromkeys(episode["commands"]["replay"] for episode in group
-                                      if episode["commands"]["replay"]))
+    for group in triage:
+        seeds = ", ".join("the shipped task" if seed is None else str(seed)
+                          for seed in group.get("seeds") or ())
+        where = (f"{group['phase']}, {group['node']} failed last" if group.get("node") != "-"
+                 else f"phase {group['phase']}" if group.get("phase") != "-" else "no profile")
         listed.append({
-            "title": f"{executive}, {scenario}: {done} of 4 checkpoints",
-            "count": len(group), "reason": reason,
-            "commands": commands[:COMMANDS_SHOWN],
-            "more": max(0, len(commands) - COMMANDS_SHOWN),
+            "title": f"{group['executive']}, {group['scenario']}: {where}",
+            "count": group["count"], "reason": group["reason"], "seeds": seeds,
+            "commands": [command for command in (group.get("run"), group.get("replay"))
+                         if command],
         })
     return {"groups": listed, "note": None}

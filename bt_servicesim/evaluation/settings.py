@@ -9,7 +9,8 @@ the evaluation slower, never different; a free-running backend would lag behind.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_servicesim.evaluation.reproducibility import Reproducibility
@@ -79,11 +80,25 @@ class EvaluationSettings:
     """The figures of ``benchmarks/throughput.py --json`` that results.md states."""
     tree: Path = DEFAULT_TREE
     """The mission tree the ``bt`` executive plays (an absolute path, checked to load)."""
+    trees: Mapping[str, Path] = field(default_factory=dict)
+    """The tree each ``bt:NAME`` executive plays (``--executive bt:FILE``), by its name."""
 
     @property
     def own_tree(self) -> bool:
         """Whether ``bt`` plays a tree other than the shipped one."""
         return self.tree.resolve() != DEFAULT_TREE.resolve()
+
+    def tree_of(self, executive: str) -> Path | None:
+        """The tree file a run of ``executive`` must be given (``--tree``): that of a
+        ``bt:NAME``, or ``--tree``'s for ``bt``; None for the shipped tree or no tree."""
+        if executive in self.trees:
+            return self.trees[executive]
+        return self.tree if executive == "bt" and self.own_tree else None
+
+
+def executive_kind(executive: str) -> str:
+    """What runs an executive of the evaluation: ``bt:NAME`` is a ``bt`` with its own tree."""
+    return executive.split(":", 1)[0]
 
 
 def tree_digest(tree: Path) -> str:

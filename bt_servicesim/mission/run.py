@@ -59,6 +59,7 @@ from bt_servicesim.mission.stopping import (
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.records.html_report import HTML_NAME, write_run_report
+from bt_servicesim.records.profile import PROFILE_NAME
 from bt_servicesim.records.trajectory import TRAJECTORY_NAME
 from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.discovery import (
@@ -169,10 +170,10 @@ class MissionRun:
 
     def _clear_what_an_earlier_run_left(self) -> None:
         """In a directory reused with ``--overwrite``: the records a run writes only sometimes
-        (what it raised, the picture, which a completed run draws only when asked) and the page
-        written at the end would be taken for this run's. Everything else a run writes it writes
-        anew."""
-        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, HTML_NAME):
+        (what it raised, the picture, which a completed run draws only when asked, the profile)
+        and the page written at the end would be taken for this run's. Everything else a run
+        writes it writes anew."""
+        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME, HTML_NAME):
             (self.settings.out / name).unlink(missing_ok=True)
 
     def _node(self) -> ExecutiveNode:

@@ -1,9 +1,10 @@
 """The records a run keeps in its directory, made on the executive's node.
 
-The tree's snapshot log (``tree_log.jsonl``) and its final tick (``final_tree.txt``) when the
-executive is a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS traffic
-(``run.mcap``). They are written on every way out, a signal included; a record that cannot be
-written costs a warning line, never the report.
+The tree's snapshot log (``tree_log.jsonl``), its final tick (``final_tree.txt``) and the
+mission profile built from the records (``profile.json``, :mod:`bt_servicesim.records.profile`)
+when the executive is a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS
+traffic (``run.mcap``). They are written on every way out, a signal included; a record that
+cannot be written costs a warning line, never the report.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ from bt_servicesim.records.mcap import (
     TaskTopic,
     TreeTopic,
 )
+from bt_servicesim.records.profile import PROFILE_NAME
+from bt_servicesim.records.profile_inputs import profile_of_run, write_profile
 from bt_servicesim.records.trajectory import (
     TRAJECTORY_NAME,
     boxes_from_blackboard,
@@ -61,7 +64,8 @@ class RunRecords:
         if self.tree is not None:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
                                     sim_time_s=lambda: sim_now_s(node.get_clock()),
-                                    tree_file=str(tree_file))
+                                    tree_file=str(tree_file),
+                                    phases=getattr(executive, "phases", None))
             self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
             self.tree_log.listeners.append(self.tree_topic.publish)
             self.tree.add_post_tick_handler(self._log_tick)
@@ -88,7 +92,8 @@ class RunRecords:
         if trajectory:
             steps.append((TRAJECTORY_NAME, lambda: self._render_trajectory(title)))
         if self.tree_log is not None:
-            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
+            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree),
+                      (PROFILE_NAME, lambda: write_profile(self.out, profile_of_run(self.out)))]
         for name, step in steps:
             try:
                 step()

@@ -18,12 +18,14 @@ The timeline has up to four lanes over the task's sim time:
     the running leaf (the tip) from tick to tick: stretches ``[start, end, index]`` into
     ``names``;
 ``bookings``
-    the points the referee booked and when, ``[sim time, cause, points]``, when the run's
-    profile carries them.
+    the points the referee booked and when, ``[sim time, cause, points]``, from the run's
+    profile (:mod:`bt_servicesim.records.profile`'s ``timeline``).
 
-A lane that cannot be drawn carries the reason instead (``why``), so the page can say so. The
-tree log is scanned for the two fields a lane needs (sim time and tip) without decoding each
-line's node states: a mission's log is megabytes, and an evaluation's page reads hundreds.
+The tree lanes come from the profile's ``timeline`` (its segments), or for a run recorded
+without a profile from the tree log, scanned for the two fields a lane needs (sim time and tip)
+without decoding each line's node states: a mission's log is megabytes, and an evaluation's
+page reads hundreds. A lane that cannot be drawn carries the reason instead (``why``), so the
+page can say so.
 """
 
 from __future__ import annotations
@@ -123,10 +125,16 @@ def commands(run_dir: Path, report: Mapping[str, Any]) -> dict[str, str | None]:
 # ------------------------------------------------------------------------------------ timeline
 def timeline(run_dir: Path, report: Mapping[str, Any],
              profile: Mapping[str, Any] | None) -> dict[str, Any]:
-    """The episode's lanes over sim time (see the module docstring)."""
+    """The episode's lanes over sim time (see the module docstring): from the profile's
+    ``timeline`` when the run has one, else the tip from the tree log."""
     legs = checkpoint_legs(report)
-    names, leaves, phases, why = tip_stretches(run_dir / LOG_NAME, report)
-    bookings = (profile or {}).get("bookings")
+    kept = (profile or {}).get("timeline")
+    if isinstance(kept, dict):
+        names, leaves, phases = profiled_stretches(kept.get("segments") or [])
+        why = None
+    else:
+        names, leaves, phases, why = tip_stretches(run_dir / LOG_NAME, report)
+    bookings = kept.get("bookings") if isinstance(kept, dict) else None
     end = max([float(report.get("sim_time_s") or 0.0)]
               + [stretch[1] for stretch in leaves] + [leg[1] for leg in legs])
     return {
@@ -138,9 +146,28 @@ def timeline(run_dir: Path, report: Mapping[str, Any],
         "why_no_leaves": why,
         "bookings": bookings if isinstance(bookings, list) else None,
         "why_no_bookings": (None if isinstance(bookings, list) else
-                            "no profile.json in the run directory" if profile is None else
-                            "the run's profile.json has no times of its bookings"),
+                            "the run has no profile.json (a run of a tree writes one)"
+                            if profile is None else
+                            "the run's profile.json is older than the times of its bookings"),
     }
+
+
+def profiled_stretches(segments: list[list[Any]]
+                       ) -> tuple[list[str], list[list[Any]], list[list[Any]] | None]:
+    """The leaves' keys, the tip's stretches and the phases' stretches from the profile's
+    segments (``[start, end, tip, phase]``)."""
+    names: dict[str, int] = {}
+    leaves: list[list[Any]] = []
+    phases: list[list[Any]] = []
+    for start, end, tip, phase in segments:
+        if tip is not None:
+            leaves.append([start, end, names.setdefault(str(tip), len(names))])
+        if phases and phases[-1][2] == phase and phases[-1][1] == start:
+            phases[-1][1] = end
+        else:
+            phases.append([start, end, phase])
+    named = [stretch for stretch in phases if stretch[2] != "-"]
+    return list(names), leaves, phases if named else None
 
 
 def checkpoint_legs(report: Mapping[str, Any]) -> list[list[Any]]:

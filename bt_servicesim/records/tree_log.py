@@ -8,13 +8,19 @@ the sum of the lines up to it (:class:`TreeHistory` does that sum).
 
 Format, one JSON object per line:
 
-* first line, the tree: ``{"kind": "tree", "version": 1, "tree_file": ..., "nodes": [...]}``
-  with the :class:`~bt_servicesim.dump.TreeShape` (key, label, kind, memory, parent per node);
+* first line, the tree: ``{"kind": "tree", "version": 1, "tree_file": ..., "phases": ...,
+  "nodes": [...]}`` with the :class:`~bt_servicesim.dump.TreeShape` (key, label, kind, memory,
+  parent per node); ``phases`` names the composite whose children are the mission's phases
+  (``null`` when the run did not say);
 * then one line per change: ``{"kind": "tick", "tick": N, "sim_time_s": T, "root": STATUS,
   "tip": KEY or null, "nodes": {KEY: [STATUS, FEEDBACK], ...}, "blackboard": {KEY: REPR, ...}}``.
   ``N`` counts ticks from 1. The first tick line lists every node; later ones only the nodes
   whose status or feedback changed.
-  Blackboard values are short reprs; ``null`` means the key was unset.
+  Blackboard values are short reprs; ``null`` means the key was unset. Keys are written as
+  :func:`stable_key` makes them: py_trees' ports keep a behaviour's own values (its constants,
+  its unwired outputs) under its name *and its random UUID*; the log drops the UUID (the
+  qualified name before it is the node's path in the tree, unique already), so two runs of the
+  same seed write the same lines.
 
 A blackboard value counts as changed when a different object with a different repr is stored
 under its key (ports write new values; a value mutated in place is not noticed). Listeners (the
@@ -25,6 +31,7 @@ from __future__ import annotations
 
 import bisect
 import json
+import re
 import reprlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -43,6 +50,8 @@ FORMAT_VERSION = 1
 _SHORT = reprlib.Repr()
 _SHORT.maxstring = _SHORT.maxother = 120
 _SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 6
+_UUID_SUFFIX = re.compile(
+    r"_[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}(?=/|$)", re.IGNORECASE)
 _STATE = attrgetter("status", "feedback_message")
 """A behaviour's :data:`~bt_servicesim.tree.shape.NodeState`."""
 
@@ -87,6 +96,11 @@ def short_repr(value: Any) -> str:
     return " ".join(_SHORT.repr(value).split())
 
 
+def stable_key(key: str) -> str:
+    """A blackboard key without the random UUID py_trees' ports put after a node's name."""
+    return _UUID_SUFFIX.sub("", key)
+
+
 def blackboard_values() -> dict[str, Any]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
@@ -100,11 +114,13 @@ class TreeLog:
         sim_time_s: reads the sim time, in seconds, at the end of a tick
         tree_file: the tree file the run loaded, noted in the header
         blackboard: reads the blackboard's current values (default: py_trees' global storage)
+        phases: the composite whose children are the mission's phases, noted in the header
     """
 
     def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
                  sim_time_s: Callable[[], float], tree_file: str | None = None,
-                 blackboard: Callable[[], dict[str, Any]] = blackboard_values) -> None:
+                 blackboard: Callable[[], dict[str, Any]] = blackboard_values,
+                 phases: str | None = None) -> None:
         self.tree = tree
         self.shape = TreeShape.of(tree.root)
         self.path = path
@@ -121,10 +137,11 @@ class TreeLog:
         self._last_nodes: dict[str, NodeState] = {}
         self._last_tip: str | None = None
         self._last_values: dict[str, tuple[Any, str]] = {}
+        self._stable_keys: dict[str, str] = {}
         self._records = 0
         self._stream: TextIO | None = path.open("w", encoding="utf-8")
         header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,
-                  "nodes": self.shape.to_json()}
+                  "phases": phases, "nodes": self.shape.to_json()}
         self._write(header)
 
     @property
@@ -198,13 +215,20 @@ class TreeLog:
             text = short_repr(value)
             self._last_values[key] = (value, text)
             if last is None or last[1] != text:
-                changes[key] = text
+                changes[self._stable(key)] = text
         if keys != self._last_keys:
             for key in [key for key in self._last_values if key not in current]:
                 del self._last_values[key]
-                changes[key] = None
+                changes[self._stable(key)] = None
         self._last_keys, self._last_objects = keys, values
         return changes
+
+    def _stable(self, key: str) -> str:
+        """:func:`stable_key`, remembered: a key is written again and again."""
+        stable = self._stable_keys.get(key)
+        if stable is None:
+            stable = self._stable_keys[key] = stable_key(key)
+        return stable
 
     def _write(self, line: dict[str, Any]) -> None:
         if self._stream is not None:
@@ -256,6 +280,7 @@ class TreeHistory:
     shape: TreeShape
     tree_file: str | None
     states: tuple[TreeState, ...]
+    phases: str | None = None
 
     def at_tick(self, tick: int) -> TreeState:
         """The state as it was at ``tick`` (the last change at or before it)."""
@@ -296,6 +321,39 @@ def read_tree_log(path: Path) -> TreeHistory:
 
 
 def _read(stream: TextIO) -> TreeHistory:
+    header, records = _header_and_records(stream)
+    states: list[TreeState] = []
+    state = TreeState()
+    for record in records:
+        state = state.apply(record)
+        states.append(state)
+    return TreeHistory(shape=header.shape, tree_file=header.tree_file, states=tuple(states),
+                       phases=header.phases)
+
+
+@dataclass(frozen=True)
+class LogHeader:
+    """The log's first line: the tree's shape, its file and its phases' composite."""
+
+    shape: TreeShape
+    tree_file: str | None
+    phases: str | None
+
+
+def read_records(path: Path) -> tuple[LogHeader, list[TickRecord]]:
+    """The header and every tick record, as written (no state is summed up); every problem is
+    a :class:`TreeLogError` naming the file."""
+    try:
+        with path.open(encoding="utf-8") as stream:
+            header, records = _header_and_records(stream)
+            return header, list(records)
+    except OSError as error:
+        raise TreeLogError(f"{path}: {error.strerror or error}") from error
+    except (ValueError, KeyError, TypeError) as error:
+        raise TreeLogError(f"{path}: {error}") from error
+
+
+def _header_and_records(stream: TextIO) -> tuple[LogHeader, Iterator[TickRecord]]:
     lines = _json_lines(stream)
     _, header = next(lines, (0, None))
     if header is None or header.get("kind") != "tree":
@@ -304,15 +362,17 @@ def _read(stream: TextIO) -> TreeHistory:
         raise ValueError(f"log format version {header.get('version')}, "
                          f"this reader knows {FORMAT_VERSION}")
     shape = TreeShape.from_json(header["nodes"])
-    states: list[TreeState] = []
-    state = TreeState()
-    for number, line in lines:
-        try:
-            state = state.apply(TickRecord.from_json(line))
-        except (KeyError, TypeError, ValueError) as error:
-            raise ValueError(f"line {number}: malformed tick record ({error!r})") from error
-        states.append(state)
-    return TreeHistory(shape=shape, tree_file=header.get("tree_file"), states=tuple(states))
+
+    def records() -> Iterator[TickRecord]:
+        for number, line in lines:
+            try:
+                yield TickRecord.from_json(line)
+            except (KeyError, TypeError, ValueError) as error:
+                raise ValueError(f"line {number}: malformed tick record ({error!r})") from error
+
+    phases = header.get("phases")
+    return (LogHeader(shape=shape, tree_file=header.get("tree_file"),
+                      phases=None if phases is None else str(phases)), records())
 
 
 def _json_lines(stream: TextIO) -> Iterator[tuple[int, dict[str, Any]]]:

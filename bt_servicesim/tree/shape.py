@@ -36,6 +36,8 @@ class NodeShape:
             ``behaviour`` (the kinds py_trees draws differently)
         memory: whether a sequence or selector has memory
         parent: index of the parent in :attr:`TreeShape.nodes`, ``None`` for the root
+        type: the behaviour's class name (``Retry``, ``RecoveryNode``, a leaf's ports class);
+            empty in a log written before it was kept
     """
 
     key: str
@@ -43,6 +45,7 @@ class NodeShape:
     kind: str
     memory: bool
     parent: int | None
+    type: str = ""
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,7 @@ class TreeShape:
                 memory=bool(getattr(behaviour, "memory", False)),
                 parent=None if behaviour.parent is None or behaviour is root
                 else index[id(behaviour.parent)],
+                type=type(behaviour).__name__,
             )
             for behaviour, key in zip(behaviours, keys, strict=True)
         ))
@@ -76,7 +80,8 @@ class TreeShape:
             shapes = tuple(
                 NodeShape(key=str(node["key"]), label=str(node["label"]), kind=str(node["kind"]),
                           memory=bool(node["memory"]),
-                          parent=None if node["parent"] is None else int(node["parent"]))
+                          parent=None if node["parent"] is None else int(node["parent"]),
+                          type=str(node.get("type", "")))
                 for node in nodes
             )
         except (KeyError, TypeError, ValueError) as error:

@@ -3,8 +3,8 @@
 Playing real episodes takes minutes; the page reads only files, so each episode here is the
 files a run leaves: ``report.json`` with the fields a run and the evaluation write, a tree log
 written by the project's own :class:`~bt_servicesim.records.tree_log.TreeLog` from a small
-py_trees tree ticked on a made-up clock, ``profile.json`` in the shape the profile writes
-(per-node figures, points by cause), and ``trajectory.png`` for each failed episode. The
+py_trees tree ticked on a made-up clock, ``profile.json`` built from it by the profile's own
+code with points booked near a walker, and ``trajectory.png`` for each failed episode. The
 evaluation's own :func:`~bt_servicesim.evaluation.report.write_results` then writes the
 results, ``report.html`` among them.
 """
@@ -20,7 +20,9 @@ from PIL import Image
 
 from bt_servicesim.evaluation.report import write_results
 from bt_servicesim.evaluation.settings import EvaluationSettings
-from bt_servicesim.records.tree_log import TreeLog
+from bt_servicesim.records.profile import PROFILE_NAME, Booking, build_profile
+from bt_servicesim.records.tree_log import LOG_NAME, TickRecord, TreeLog
+from bt_servicesim.tree.shape import TreeShape
 
 CHECKPOINTS = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
 PHASE_TICKS = {"Pickup": 6, "Dropoff": 8}
@@ -45,15 +47,16 @@ class Ticking(py_trees.behaviour.Behaviour):
                 else py_trees.common.Status.RUNNING)
 
 
-def write_tree_log(path: Path, *, seconds_per_tick: float) -> list[str]:
-    """A tree log of a two-phase mission; the keys of its nodes, root first."""
+def write_tree_log(path: Path, *, seconds_per_tick: float) -> None:
+    """A tree log of a two-phase mission (the phases' composite: ``Mission``)."""
     mission = py_trees.composites.Sequence(name="Mission", memory=True, children=[
         py_trees.composites.Sequence(name=f"Mission.{phase}", memory=True, children=[
             Ticking(name=f"Mission.{phase}.Go{phase}", ticks=ticks)])
         for phase, ticks in PHASE_TICKS.items()])
     tree = py_trees.trees.BehaviourTree(root=mission)
     clock = {"now": 0.0}
-    log = TreeLog(tree=tree, path=path, sim_time_s=lambda: clock["now"], blackboard=dict)
+    log = TreeLog(tree=tree, path=path, sim_time_s=lambda: clock["now"], blackboard=dict,
+                  phases="Mission")
     tick = 0
     while tree.root.status != py_trees.common.Status.SUCCESS:
         tick += 1
@@ -61,8 +64,6 @@ def write_tree_log(path: Path, *, seconds_per_tick: float) -> list[str]:
         tree.tick()
         log.log(tick=tick)
     log.close()
-    header = json.loads(path.read_text().splitlines()[0])
-    return [node["key"] for node in header["nodes"]]
 
 
 def episode_report(*, executive: str, scenario: str, episode: int, seed: int | None,
@@ -91,18 +92,19 @@ def episode_report(*, executive: str, scenario: str, episode: int, seed: int | N
     }
 
 
-def write_profile(path: Path, keys: list[str], *, points: float) -> None:
-    """A profile in the shape the run writes: per node its figures, points by cause."""
-    nodes = {key: {"kind": "behaviour" if key.count(".") == 2 else "sequence",
-                   "ticks": 3, "starts": 1, "success": 1, "failure": 0, "invalid": 0,
-                   "running_s": 10.0 * (1 + key.count(".")), "tip_s": 5.0 * key.count("."),
-                   "points_tip": points * key.count(".") / 4,
-                   "points_under": points / (1 + key.count("."))} for key in keys}
-    path.write_text(json.dumps({
-        "version": 1, "nodes": nodes,
-        "penalties": {"by_cause": {"approximation/walker/human_3": points},
-                      "by_role": {"approximation/walker": points}},
-    }))
+def write_profile(run_dir: Path, *, points: float, end_s: float) -> None:
+    """The run's profile as the run writes it (:func:`~bt_servicesim.records.profile.
+    build_profile` over its tree log, to the recording's end ``end_s``), with ``points`` booked
+    near a walker in two halves."""
+    lines = (run_dir / LOG_NAME).read_text().splitlines()
+    header = json.loads(lines[0])
+    bookings = [Booking(sim_time_s=time, sums={"approximation/walker/human_3": share})
+                for time, share in ((0.0, 0.0), (6.0, points / 2), (20.0, points))]
+    profile = build_profile(
+        shape=TreeShape.from_json(header["nodes"]), phases=header["phases"],
+        records=[TickRecord.from_json(json.loads(line)) for line in lines[1:]],
+        bookings=bookings, end_s=end_s, tree_file="fixture.xml")
+    (run_dir / PROFILE_NAME).write_text(json.dumps(profile))
 
 
 def make_evaluation(out: Path, *, episodes: int = 3) -> tuple[EvaluationSettings,
@@ -125,9 +127,9 @@ def make_evaluation(out: Path, *, episodes: int = 3) -> tuple[EvaluationSettings
                                      seed=seed, completed=completed, out=run_dir)
                 (run_dir / "report.json").write_text(json.dumps(row))
                 if executive == "bt":
-                    keys = write_tree_log(run_dir / "tree_log.jsonl", seconds_per_tick=2.5)
-                    write_profile(run_dir / "profile.json", keys,
-                                  points=row["penalties"]["approximation"])
+                    write_tree_log(run_dir / LOG_NAME, seconds_per_tick=2.5)
+                    write_profile(run_dir, points=row["penalties"]["approximation"],
+                                  end_s=row["sim_time_s"])
                 if not completed:
                     Image.new("RGB", (64, 48), (40, 90, 160)).save(run_dir / "trajectory.png")
                 rows.append(row)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -136,7 +137,9 @@ def test_the_heat_map_is_drawn_and_follows_the_measure(
         evaluation: tuple[Path, list[dict[str, Any]]], browser: Any) -> None:
     out, _ = evaluation
     _open(browser, out / HTML_NAME)
-    nodes = browser.find_elements("css selector", ".heat li")
+    maps = browser.find_elements("css selector", ".heat")
+    assert len(maps) == 2 and not maps[1].is_displayed()  # bt's tree in each set, one shown
+    nodes = maps[0].find_elements("css selector", "li")
     assert len(nodes) == 5  # the fixture tree: Mission, two phases, a leaf each
     colours = [node.value_of_css_property("background-color") for node in nodes]
     assert len(set(colours)) > 1
@@ -145,7 +148,12 @@ def test_the_heat_map_is_drawn_and_follows_the_measure(
         "s.dispatchEvent(new Event('change'));")
     assert [node.value_of_css_property("background-color") for node in nodes] != colours
     browser.execute_script("arguments[0].focus()", nodes[-1])
-    assert "sim time RUNNING" in browser.find_element("css selector", ".heat aside").text
+    assert "GoDropoff" in maps[0].find_element("css selector", "aside").text
+    assert "share of the sim time it was RUNNING" in maps[0].text
+    browser.execute_script(
+        "const s = document.getElementById('heat-tree'); s.value = '1';"
+        "s.dispatchEvent(new Event('change'));")
+    assert maps[1].is_displayed() and not maps[0].is_displayed()
     assert console_errors(browser) == []
 
 
@@ -174,4 +182,20 @@ def test_the_timeline_comes_from_the_tree_log(
     assert second[0] == 15.0 and second[1] == timeline["end"]
     assert [leg[2] for leg in timeline["legs"]] == ["go_to_pick_up", "pick_up_guest",
                                                     "drop_off_guest", "return_to_start"]
-    assert timeline["bookings"] is None and "no times" in timeline["why_no_bookings"]
+    assert [phase for _, _, phase in timeline["phases"]] == ["Pickup", "Dropoff"]
+    assert [booking[:2] for booking in timeline["bookings"]] == [
+        [6.0, "approximation/walker"], [20.0, "approximation/walker"]]
+
+
+def test_a_run_recorded_without_a_profile_shows_its_tree_log(
+        evaluation: tuple[Path, list[dict[str, Any]]], tmp_path: Path) -> None:
+    out, _ = evaluation
+    run_dir = tmp_path / "run"
+    shutil.copytree(out / "bt" / "default" / "0", run_dir)
+    report = json.loads((run_dir / "report.json").read_text())
+    profiled = episode_view(run_dir, report, link_base=run_dir)["timeline"]
+    (run_dir / "profile.json").unlink()
+    scanned = episode_view(run_dir, report, link_base=run_dir)["timeline"]
+    assert scanned["leaves"] == profiled["leaves"] and scanned["names"] == profiled["names"]
+    assert scanned["phases"] == profiled["phases"]
+    assert scanned["bookings"] is None and "no profile.json" in scanned["why_no_bookings"]

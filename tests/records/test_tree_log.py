@@ -21,6 +21,7 @@ from bt_servicesim.records.tree_log import (
     TreeLogError,
     TreeState,
     read_tree_log,
+    stable_key,
 )
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
 from tests.fakes import RecordedRun, errand_tree
@@ -43,7 +44,9 @@ def test_the_log_holds_the_blackboard_values_as_they_changed(tmp_path: Path) -> 
     history = read_tree_log(run.path)
     for tick, values in run.blackboard.items():
         logged = history.at_tick(tick).blackboard
-        assert logged == {key: repr(value) for key, value in values.items()}, f"tick {tick}"
+        assert logged == {stable_key(key): repr(value)
+                          for key, value in values.items()}, f"tick {tick}"
+    assert not any("-" in key.rsplit("/", 2)[-2] for key in logged)  # no UUID in a node's key
     progress = [state.blackboard.get("/progress") for state in history.states]
     assert "'Detour step 3'" in progress
 
