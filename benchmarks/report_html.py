@@ -4,13 +4,14 @@
 makes a synthetic evaluation of N episodes (default 1000: two executives, two scenario sets),
 each the files a real episode leaves -- ``report.json`` with every field a run and the
 evaluation write; for the tree executive a ``tree_log.jsonl`` of L tick lines (default 2500,
-a real mission's count) whose tip changes as often as a real mission's (a dozen times) and a
-``profile.json`` with a figure for each of 130 nodes (the shipped tree's size); a
-``trajectory.png`` for each failed episode -- and then, R times (default 3):
+a real mission's count) whose tip changes as often as a real mission's (a dozen times) and the
+``profile.json`` the profile's own code builds from it (130 nodes, the shipped tree's size,
+points booked near walkers every other second of half the mission); a ``trajectory.png`` for
+each failed episode -- and the evaluation's profile tables, and then, R times (default 3):
 
 * ``written``: the wall time of writing ``report.html`` (the page alone: summary.json, the
-  plots and results.md are written before it; scipy, which their statistics import, is
-  imported before the clock starts);
+  profile tables, the plots and results.md are written before it; scipy, which their
+  statistics import, is imported before the clock starts; the plots are left out);
 * ``size``: the page's bytes (the pictures are files beside it, not counted);
 * ``first render``: in headless Chromium (Debian's, through Selenium), the time from the
   navigation's start to its first contentful paint, and to the load event;
@@ -37,7 +38,11 @@ from typing import Any
 
 from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.evaluation.html_report import write_html_report
+from bt_servicesim.evaluation.node_tables import profile_tables
 from bt_servicesim.evaluation.settings import EvaluationSettings
+from bt_servicesim.records.profile import Booking, build_profile
+from bt_servicesim.records.tree_log import TickRecord
+from bt_servicesim.tree.shape import TreeShape
 
 CHECKPOINTS = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
 LEAVES = ("RequestNewTask", "WaitForLocalisationAndMap", "GetPickUpArea", "NavigateToGoal",
@@ -68,29 +73,51 @@ def node_keys() -> list[str]:
         keys.append(f"Mission.{phase}")
         for group in range((NODES - 1) // len(PHASES) // 8):
             keys.append(f"Mission.{phase}.Step{group}")
-            keys += [f"Mission.{phase}.Step{group}.{leaf}" for leaf in LEAVES[:7]]
+            keys += [f"Mission.{phase}.Step{group}.{leaf}{number}"
+                     for number, leaf in enumerate(LEAVES[:6])]
     while len(keys) < NODES:
         keys.append(f"Mission.Return.Extra{len(keys)}")
     return keys
 
 
-def write_tree_log(path: Path, *, lines: int, end_s: float) -> None:
+def tree_header() -> dict[str, Any]:
+    """The tree log's first line: the 130 nodes, each under the longest key it extends."""
     keys = node_keys()
-    header = {"kind": "tree", "version": 1, "tree_file": "trees/servicesim_mission.xml",
-              "nodes": [{"key": key, "label": key.rsplit(".", 1)[-1],
-                         "kind": "behaviour" if key.count(".") == 3 else "sequence",
-                         "memory": True, "parent": None} for key in keys]}
-    with path.open("w") as stream:
-        stream.write(json.dumps(header) + "\n")
-        for tick in range(1, lines + 1):
-            time_s = round(end_s * tick / lines, 1)
-            leaf = LEAVES[min(len(LEAVES) - 1, (tick * len(LEAVES)) // lines)]
-            tip = f"Mission.{PHASES[(tick * 4) // (lines + 1)]}.Step0.{leaf}"
-            stream.write(json.dumps({
-                "kind": "tick", "tick": tick, "sim_time_s": time_s, "root": "RUNNING",
-                "tip": tip, "nodes": {tip: ["RUNNING", f"{leaf}: {time_s:.1f} sim s to go, "
-                                                       "path 12.3 m, 4 people in view"]},
-                "blackboard": {"/robot_pose": f"({time_s:.2f}, 3.21, 0.5)"}}) + "\n")
+    index = {key: number for number, key in enumerate(keys)}
+    return {"kind": "tree", "version": 1, "tree_file": "trees/servicesim_mission.xml",
+            "phases": "Mission",
+            "nodes": [{"key": key, "label": key.rsplit(".", 1)[-1],
+                       "kind": "behaviour" if key.count(".") == 3 else "sequence",
+                       "memory": True, "parent": index.get(key.rsplit(".", 1)[0])
+                       if "." in key else None} for key in keys]}
+
+
+def tick_lines(*, lines: int, end_s: float) -> list[dict[str, Any]]:
+    """The tick lines of a mission that runs a dozen leaves one after the other."""
+    leaves = [key for key in node_keys() if key.count(".") == 3]
+    ticks = []
+    for tick in range(1, lines + 1):
+        time_s = round(end_s * tick / lines, 1)
+        tip = leaves[min(len(leaves) - 1, (tick * 12) // lines * (len(leaves) // 12))]
+        ticks.append({"kind": "tick", "tick": tick, "sim_time_s": time_s, "root": "RUNNING",
+                      "tip": tip, "nodes": {tip: ["RUNNING", f"{time_s:.1f} sim s, path 12.3 m"]},
+                      "blackboard": {"/robot_pose": f"({time_s:.2f}, 3.21, 0.5)"}})
+    return ticks
+
+
+def profile_of(header: dict[str, Any], ticks: list[dict[str, Any]], *,
+               points: float) -> dict[str, Any]:
+    """The profile the run would write: built by the profile's own code, with points booked
+    near walkers at every other second of the mission's middle half."""
+    end = ticks[-1]["sim_time_s"]
+    times = [end / 4 + step for step in range(0, int(end / 2), 2)]
+    bookings = [Booking(sim_time_s=time, sums={
+        "approximation/walker/human_3": points * (number + 1) / len(times) * 0.7,
+        "approximation/idler/human_9": points * (number + 1) / len(times) * 0.3})
+        for number, time in enumerate(times)]
+    return build_profile(shape=TreeShape.from_json(header["nodes"]), phases=header["phases"],
+                         records=[TickRecord.from_json(line) for line in ticks],
+                         bookings=bookings, end_s=end, tree_file=header["tree_file"])
 
 
 def write_episode(run_dir: Path, *, executive: str, scenario: str, episode: int,
@@ -128,16 +155,12 @@ def write_episode(run_dir: Path, *, executive: str, scenario: str, episode: int,
     }
     (run_dir / "report.json").write_text(json.dumps(row, indent=2))
     if executive == "bt":
-        write_tree_log(run_dir / "tree_log.jsonl", lines=log_lines, end_s=row["sim_time_s"])
-        nodes = {key: {"kind": "sequence", "ticks": 40, "starts": 2, "success": 1,
-                       "failure": episode % 3 == 0, "invalid": 0,
-                       "running_s": 3.0 * (index % 17), "tip_s": 1.5 * (index % 13),
-                       "points_tip": 2.0 * (index % 7), "points_under": 5.0 * (index % 11)}
-                 for index, key in enumerate(node_keys())}
-        (run_dir / "profile.json").write_text(json.dumps({
-            "version": 1, "nodes": nodes,
-            "penalties": {"by_cause": {"approximation/walker/human_3": score - 500.0},
-                          "by_role": {"approximation/walker": score - 500.0}}}))
+        header = tree_header()
+        ticks = tick_lines(lines=log_lines, end_s=row["sim_time_s"])
+        (run_dir / "tree_log.jsonl").write_text(
+            "\n".join(json.dumps(line) for line in [header, *ticks]) + "\n")
+        profile = profile_of(header, ticks, points=score - 500.0)
+        (run_dir / "profile.json").write_text(json.dumps(profile, indent=1))
     if not completed:
         (run_dir / "trajectory.png").write_bytes(picture)
     return row
@@ -229,10 +252,15 @@ def main(argv: list[str] | None = None) -> int:
             kept.write_text(json.dumps(rows))
             print(f"{len(rows)} synthetic episodes, {args.log_lines} tick lines per tree log, "
                   f"made in {time.perf_counter() - started:.1f} s in {out}")
+        started = time.perf_counter()
+        profiles = profile_tables(rows, settings.executives)
+        print(f"the evaluation's profile tables (not the page's): "
+              f"{time.perf_counter() - started:.2f} s")
         written, sizes, paints, loads, sorts = [], [], [], [], []
         for number in range(args.runs):
             started = time.perf_counter()
-            page = write_html_report(settings, rows, revision="commit `bench`")
+            page = write_html_report(settings, rows, revision="commit `bench`",
+                                     profiles=profiles)
             written.append(time.perf_counter() - started)
             sizes.append(page.stat().st_size / 1e6)
             paint, load, sorted_ms = browser_figures(page, Path(temporary) / f"chromium-{number}")

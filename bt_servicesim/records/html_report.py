@@ -49,15 +49,38 @@ def render(context: Mapping[str, Any]) -> str:
     (lines), ``episodes`` (episode views), and for an evaluation ``summary``, ``paired``,
     ``notes``, ``plots``, ``heat``, ``failures`` and ``filters``."""
     episodes = list(context["episodes"])
+    strings: dict[str, int] = {}
     for episode in episodes:
         episode.setdefault("page", episode["dir"])
-    data = {"mode": context["mode"], "episodes": episodes, "heat": context.get("heat")}
+        episode["timeline"] = interned(episode["timeline"], strings)
+    data = {"mode": context["mode"], "episodes": episodes, "heat": context.get("heat"),
+            "strings": list(strings)}
     return _environment().get_template("report.html.j2").render(
         **{**context, "episodes": episodes}, data=data, penalty_kinds=PENALTY_KINDS,
         columns=[{"key": key, "label": label, "numeric": numeric}
                  for key, label, numeric in COLUMNS],
         css=(TEMPLATES / "report.css").read_text(encoding="utf-8"),
         js=(TEMPLATES / "report.js").read_text(encoding="utf-8"))
+
+
+def interned(timeline: Mapping[str, Any], strings: dict[str, int]) -> dict[str, Any]:
+    """The timeline with every name (checkpoint, phase, leaf, cause) an index into
+    ``strings``, which it extends: a thousand episodes name the same few dozen leaves, and the
+    page carries each name once."""
+    def index(name: Any) -> int:
+        return strings.setdefault(str(name), len(strings))
+
+    names = timeline["names"]
+    return {
+        **{key: value for key, value in timeline.items() if key != "names"},
+        "legs": [[start, end, index(name), bound] for start, end, name, bound
+                 in timeline["legs"]],
+        "phases": None if timeline["phases"] is None else [
+            [start, end, index(name)] for start, end, name in timeline["phases"]],
+        "leaves": [[start, end, index(names[leaf])] for start, end, leaf in timeline["leaves"]],
+        "bookings": None if timeline["bookings"] is None else [
+            [time, index(cause), points] for time, cause, points in timeline["bookings"]],
+    }
 
 
 def write_page(path: Path, text: str) -> None:

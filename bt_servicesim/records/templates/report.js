@@ -5,6 +5,7 @@
 (function () {
   const data = JSON.parse(document.getElementById("report-data").textContent);
   const episodes = data.episodes;
+  const S = data.strings;  // every name in the timelines, once
   const SVG = "http://www.w3.org/2000/svg";
 
   function el(tag, attributes, ...children) {
@@ -59,12 +60,12 @@
     const end = Math.max(timeline.end, 1);
     const width = 900, left = 110, right = 12, laneHeight = 26, gap = 8;
     const lanes = [["checkpoints", timeline.legs.map((leg) => ({ start: leg[0], end: leg[1],
-      label: words(leg[2]), detail: leg[3] === null ? "" : `bound ${fixed(leg[3], 1)} s` }))]];
+      label: words(S[leg[2]]), detail: leg[3] === null ? "" : `bound ${fixed(leg[3], 1)} s` }))]];
     if (timeline.phases) {
-      lanes.push(["tree phase", timeline.phases.map((p) => ({ start: p[0], end: p[1], label: p[2] }))]);
+      lanes.push(["tree phase", timeline.phases.map((p) => ({ start: p[0], end: p[1], label: S[p[2]] }))]);
     }
     lanes.push(["running leaf", timeline.leaves.map((s) => ({ start: s[0], end: s[1],
-      label: timeline.names[s[2]].split(".").pop(), detail: timeline.names[s[2]], colour: s[2] }))]);
+      label: S[s[2]].split(".").pop(), detail: S[s[2]], colour: s[2] }))]);
     const axisY = lanes.length * (laneHeight + gap) + 14;
     const height = axisY + 26;
     const x = (t) => left + (width - left - right) * t / end;
@@ -97,7 +98,7 @@
     for (const booking of timeline.bookings || []) {
       const bx = x(booking[0]);
       svg.append(el("svg:line", { x1: bx, x2: bx, y1: 2, y2: axisY - 10, stroke: "#b3261e",
-        "stroke-width": 1.5 }, el("svg:title", {}, `${words(booking[1])}: ${fixed(booking[2], 1)} points at ${fixed(booking[0], 1)} s`)));
+        "stroke-width": 1.5 }, el("svg:title", {}, `${words(S[booking[1]])}: ${fixed(booking[2], 1)} points at ${fixed(booking[0], 1)} s`)));
       svg.append(el("svg:path", { d: `M${bx - 4},${axisY - 10} l4,6 l4,-6 z`, fill: "#b3261e" }));
     }
     svg.append(el("svg:line", { x1: left, x2: width - right, y1: axisY, y2: axisY, stroke: "#59636e" }));
