@@ -66,7 +66,8 @@
     }
     lanes.push(["running leaf", timeline.leaves.map((s) => ({ start: s[0], end: s[1],
       label: S[s[2]].split(".").pop(), detail: S[s[2]], colour: s[2] }))]);
-    const axisY = lanes.length * (laneHeight + gap) + 14;
+    const bookingLanes = timeline.bookings && timeline.bookings.length ? 1 : 0;
+    const axisY = (lanes.length + bookingLanes) * (laneHeight + gap) + 14;
     const height = axisY + 26;
     const x = (t) => left + (width - left - right) * t / end;
     const svg = el("svg:svg", { viewBox: `0 0 ${width} ${height}`, role: "img",
@@ -95,11 +96,15 @@
         svg.append(el("svg:text", { x: left, y: y + laneHeight * 0.65, class: "lane-label" }, why || "nothing logged"));
       }
     });
-    for (const booking of timeline.bookings || []) {
-      const bx = x(booking[0]);
-      svg.append(el("svg:line", { x1: bx, x2: bx, y1: 2, y2: axisY - 10, stroke: "#b3261e",
-        "stroke-width": 1.5 }, el("svg:title", {}, `${words(S[booking[1]])}: ${fixed(booking[2], 1)} points at ${fixed(booking[0], 1)} s`)));
-      svg.append(el("svg:path", { d: `M${bx - 4},${axisY - 10} l4,6 l4,-6 z`, fill: "#b3261e" }));
+    if (timeline.bookings && timeline.bookings.length) {  // a lane of bars, height by points
+      const y = 4 + lanes.length * (laneHeight + gap);
+      const top = Math.max(...timeline.bookings.map((b) => b[2]), 1e-9);
+      svg.append(el("svg:text", { x: 0, y: y + laneHeight * 0.65, class: "lane-label" }, "points booked"));
+      for (const booking of timeline.bookings) {
+        const h = Math.max(laneHeight * booking[2] / top, 1.5);
+        svg.append(el("svg:rect", { x: x(booking[0]) - 1.5, y: y + laneHeight - h, width: 3, height: h,
+          fill: "#b3261e" }, el("svg:title", {}, `${words(S[booking[1]])}: ${fixed(booking[2], 1)} points at ${fixed(booking[0], 1)} s`)));
+      }
     }
     svg.append(el("svg:line", { x1: left, x2: width - right, y1: axisY, y2: axisY, stroke: "#59636e" }));
     const step = niceStep(end);
