@@ -205,16 +205,17 @@
         const ascending = heading.getAttribute("aria-sort") !== "ascending";
         for (const other of table.tHead.rows[0].cells) other.setAttribute("aria-sort", "none");
         heading.setAttribute("aria-sort", ascending ? "ascending" : "descending");
-        const order = rows.slice().sort((a, b) => {
-          const x = value(episodes[a.dataset.i], key), y = value(episodes[b.dataset.i], key);
-          if (x === y) return a.dataset.i - b.dataset.i;
+        const sign = ascending ? 1 : -1;
+        const keyed = episodes.map((episode, i) => ({ i, v: value(episode, key) }));
+        keyed.sort((a, b) => {
+          const x = a.v, y = b.v;
+          if (x === y) return a.i - b.i;
           if (x === null || x === undefined) return 1;  // missing values last either way
           if (y === null || y === undefined) return -1;
-          const sign = ascending ? 1 : -1;
           return (typeof x === "number" && typeof y === "number" ? x - y
             : String(x).localeCompare(String(y))) * sign;
         });
-        body.append(...order);
+        body.append(...keyed.map((k) => rows[k.i]));
       });
     }
     const filters = document.getElementById("episode-filters");
