@@ -17,7 +17,7 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any
 
-from bt_servicesim.evaluation.settings import EvaluationSettings
+from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings
 from bt_servicesim.evaluation.summary import (
     completed_by_one,
     distinct_missions,
@@ -99,6 +99,7 @@ def evaluation_context(settings: EvaluationSettings, rows: list[dict[str, Any]],
         "filters": {"executives": list(settings.executives),
                     "scenarios": list(settings.scenarios)},
         "episodes": episodes,
+        "penalty_kinds": PENALTY_KEYS,
     }
 
 

@@ -35,15 +35,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from bt_servicesim.records.profile import PROFILE_NAME
 from bt_servicesim.records.tree_log import LOG_NAME
 
-REPORT_NAME = "report.json"
-PROFILE_NAME = "profile.json"
-PICTURE_NAME = "trajectory.png"
-RECORDING_NAME = "run.mcap"
-PENALTY_KINDS = ("failed_pickup", "failed_dropoff", "too_fast", "drifts", "contact",
-                 "approximation")
-"""The referee's penalty kinds, as report.json counts them."""
+PICTURE_NAME, RECORDING_NAME = "trajectory.png", "run.mcap"
+"""The picture and the recording as a run names them (:mod:`bt_servicesim.records.trajectory`,
+:mod:`bt_servicesim.records.mcap`), named again here: the page's modules import no ROS, so that
+an evaluation's page is written without it."""
 _TIME_FIELD, _TIP_FIELD, _NODES_FIELD = b'"sim_time_s": ', b'"tip": ', b', "nodes": '
 
 
@@ -66,8 +64,8 @@ def episode_view(run_dir: Path, report: Mapping[str, Any], *, link_base: Path) -
         "bound_s": _number(report.get("kinematic_bound_s")),
         "failure": report.get("failure"),
         "last_activity": report.get("last_activity"),
-        "penalties": {kind: _number((report.get("penalties") or {}).get(kind))
-                      for kind in PENALTY_KINDS},
+        "penalties": {str(kind): _number(points)
+                      for kind, points in (report.get("penalties") or {}).items()},
         "causes": _causes(profile),
         "picture": f"{link}/{PICTURE_NAME}" if (run_dir / PICTURE_NAME).is_file() else None,
         "timeline": timeline(run_dir, report, profile),

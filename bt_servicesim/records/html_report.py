@@ -21,7 +21,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from bt_servicesim.records.episode_view import PENALTY_KINDS, episode_view, read_json
+from bt_servicesim.records.episode_view import episode_view
 
 HTML_NAME = "report.html"
 TEMPLATES = Path(__file__).with_name("templates")
@@ -29,9 +29,8 @@ COLUMNS = (
     ("executive", "executive", False), ("scenario", "set", False), ("seed", "seed", True),
     ("completed", "completed", False), ("score", "score", True),
     ("sim_time_s", "sim time (s)", True), ("over_bound", "time over bound", True),
-    *((f"penalties.{kind}", kind.replace("_", " "), True) for kind in PENALTY_KINDS),
 )
-"""The episodes' table: (key in the episode's data, heading, numeric)."""
+"""The episodes' table before the penalties: (key in the episode's data, heading, numeric)."""
 
 
 @cache
@@ -46,8 +45,9 @@ def _environment() -> Any:
 
 def render(context: Mapping[str, Any]) -> str:
     """The page for ``context``: ``mode`` ("evaluation" or "run"), ``title``, ``subtitle``
-    (lines), ``episodes`` (episode views), and for an evaluation ``summary``, ``paired``,
-    ``notes``, ``plots``, ``heat``, ``failures`` and ``filters``."""
+    (lines), ``episodes`` (episode views), ``penalty_kinds`` (the referee's, in the order the
+    tables list them), and for an evaluation ``summary``, ``paired``, ``causes``, ``notes``,
+    ``plots``, ``heat``, ``failures`` and ``filters``."""
     episodes = list(context["episodes"])
     strings: dict[str, int] = {}
     for episode in episodes:
@@ -55,10 +55,11 @@ def render(context: Mapping[str, Any]) -> str:
         episode["timeline"] = interned(episode["timeline"], strings)
     data = {"mode": context["mode"], "episodes": episodes, "heat": context.get("heat"),
             "strings": list(strings)}
+    kinds = list(context["penalty_kinds"])
     return _environment().get_template("report.html.j2").render(
-        **{**context, "episodes": episodes}, data=data, penalty_kinds=PENALTY_KINDS,
-        columns=[{"key": key, "label": label, "numeric": numeric}
-                 for key, label, numeric in COLUMNS],
+        **{**context, "episodes": episodes}, data=data,
+        columns=[{"key": key, "label": label, "numeric": numeric} for key, label, numeric in (
+            *COLUMNS, *((f"penalties.{kind}", kind.replace("_", " "), True) for kind in kinds))],
         css=(TEMPLATES / "report.css").read_text(encoding="utf-8"),
         js=(TEMPLATES / "report.js").read_text(encoding="utf-8"))
 
@@ -96,17 +97,14 @@ def write_page(path: Path, text: str) -> None:
         raise
 
 
-def write_run_report(run_dir: Path, report: Mapping[str, Any] | None = None) -> Path | None:
-    """``report.html`` of the run in ``run_dir`` (its report.json unless ``report`` is given);
-    None when there is no report to show."""
-    report = report if report is not None else read_json(run_dir / "report.json")
-    if report is None:
-        return None
+def write_run_report(run_dir: Path, report: Mapping[str, Any]) -> Path:
+    """``report.html`` of the run in ``run_dir`` whose report is ``report``."""
     episode = episode_view(run_dir, report, link_base=run_dir)
     seed = "the shipped task" if episode["seed"] is None else f"seed {episode['seed']}"
     text = render({
         "mode": "run", "title": f"Run of {episode['executive']} on {seed}",
         "subtitle": _run_subtitle(report), "episodes": [episode],
+        "penalty_kinds": list(episode["penalties"]),
     })
     path = run_dir / HTML_NAME
     write_page(path, text)

@@ -161,7 +161,7 @@ def test_a_run_has_its_own_page(evaluation: tuple[Path, list[dict[str, Any]]],
                                 browser: Any) -> None:
     out, _ = evaluation
     run_dir = out / "bt" / "random" / "2"
-    page = write_run_report(run_dir)
+    page = write_run_report(run_dir, json.loads((run_dir / "report.json").read_text()))
     assert page == run_dir / HTML_NAME
     _open(browser, page)
     assert "Did not complete" in browser.find_element("id", "run").text
