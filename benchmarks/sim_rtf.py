@@ -67,7 +67,7 @@ from ros_harness import Simulator, isolate, spin_until, start_task
 from bt_servicesim.cli import OneLineArgumentParser
 
 LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
-"""Read by the simulator (``servicesim_sim/lockstep.py``): 0 waits for each tick."""
+"""Read by the simulator (``servicesim_sim/lockstep/server.py``): 0 waits for each tick."""
 TIMINGS = {"lockstep": ("lockstep",), "free": ("free running",),
            "both": ("lockstep", "free running"),
            "all": ("lockstep", "lockstep, taking turns", "free running")}

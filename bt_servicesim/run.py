@@ -107,6 +107,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="draw trajectory.png after every run (always, the default) or only "
                         "when the mission did not complete (failed); python -m "
                         "bt_servicesim.trajectory DIR draws any run's later from its run.mcap")
+    parser.add_argument("--no-profile", action="store_false", dest="profile",
+                        help="write no profile.json and count no node's ticks (to measure "
+                             "what they cost: benchmarks/profile_cost.py)")
     parser.add_argument("--run-id", default=None,
                         help="an id the report carries, for tools that start runs "
                         "(default: a random one)")
@@ -144,7 +147,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         time_limit_s=args.time_limit, headless=args.headless, executive=args.executive,
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove), free_running=args.free_running,
-        trajectory=args.trajectory, clock=args.clock,
+        trajectory=args.trajectory, clock=args.clock, profile=args.profile,
     )
 
 

@@ -96,7 +96,7 @@ def triage_lines(groups: Sequence[Mapping[str, Any]]) -> list[str]:
 def diff_lines(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     lines = ["### Tree against tree: the shared nodes that changed most", "",
              "| pair | set | node | change | ran in | starts / episode | failure rate | "
-             "time share | points under / episode |", "|" + "---|" * 9]
+             "sim s running / episode | points under / episode |", "|" + "---|" * 9]
     for row in rows:
         first, second = row["first"], row["second"]
 
@@ -108,7 +108,7 @@ def diff_lines(rows: Sequence[Mapping[str, Any]]) -> list[str]:
             f"| {first} → {second} | {row['scenario']} | {_path(row['node'])} | "
             f"{row['change']:+.2f} | {both('ran_share', _percent)} | "
             f"{both('starts_per_episode', _number)} | {both('failure_rate', _percent)} | "
-            f"{both('time_share', _percent)} | {both('points_under', _number)} |")
+            f"{both('running_s', _number)} | {both('points_under', _number)} |")
     return lines
 
 

@@ -59,7 +59,7 @@ from bt_servicesim.mission.stopping import (
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.records.html_report import HTML_NAME, write_run_report
-from bt_servicesim.records.profile import PROFILE_NAME
+from bt_servicesim.records.profile import PROFILE_NAME, penalties_explained
 from bt_servicesim.records.trajectory import TRAJECTORY_NAME
 from bt_servicesim.ros import lockstep
 from bt_servicesim.ros.discovery import (
@@ -214,7 +214,8 @@ class MissionRun:
         if self.monitor is not None and tree is not None:
             self.monitor.watch(tree)
         records = RunRecords(node=node, executive=executive, out=self.settings.out,
-                             tree_file=self.settings.tree, live_server=self.live_server)
+                             tree_file=self.settings.tree, live_server=self.live_server,
+                             profile=self.settings.profile)
         stops.defer()  # a signal is raised between the executor's turns, not in a callback
         try:
             try:
@@ -248,7 +249,7 @@ class MissionRun:
         finally:
             if simulator is not None:
                 simulator.stop()
-        self._finish(monitor, code, executive)
+        self._finish(monitor, code, executive, profile=records.profile)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()
         node.destroy_node()
@@ -440,7 +441,8 @@ class MissionRun:
             "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
 
-    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive) -> None:
+    def _finish(self, monitor: RefereeMonitor, code: int, executive: Executive, *,
+                profile: dict[str, Any] | None = None) -> None:
         fields = monitor.report_fields()
         status = ("completed" if fields["completed"] else
                   "interrupted" if code >= 128 else "failed")
@@ -460,6 +462,7 @@ class MissionRun:
             "ticks": getattr(executive, "ticks", None),
             "lockstep_stalls": self.lockstep.stalls if self.lockstep else None,
             "lockstep_dropped": self._lockstep_dropped(),
+            **penalties_explained(profile),
         }
         write_report(self.settings.out / REPORT_NAME, report)
         try:

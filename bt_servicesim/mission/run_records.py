@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import py_trees
 from rclpy.node import Node
@@ -47,8 +48,9 @@ class RunRecords:
     """The run's records in its directory (see the module docstring), made on ``node``."""
 
     def __init__(self, *, node: Node, executive: Executive, out: Path, tree_file: Path,
-                 live_server: LiveServer | None = None) -> None:
-        """``live_server``: also forward the recorded topics to this Foxglove server."""
+                 live_server: LiveServer | None = None, profile: bool = True) -> None:
+        """``live_server``: also forward the recorded topics to this Foxglove server;
+        ``profile``: count the nodes' ticks and write ``profile.json``."""
         self.out = out
         self.tree = behaviour_tree_of(executive)
         self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
@@ -59,13 +61,16 @@ class RunRecords:
         # positions as they come would cost the executive a tenth of its time
         self.phases: list[tuple[float, str]] = []
         self._node = node
+        self._profile = profile
+        self.profile: dict[str, Any] | None = None
+        """The run's profile once written (:meth:`finish`); None before, or without one."""
         self.tree_log: TreeLog | None = None
         self.tree_topic: TreeTopic | None = None
         if self.tree is not None:
             self.tree_log = TreeLog(tree=self.tree, path=out / LOG_NAME,
                                     sim_time_s=lambda: sim_now_s(node.get_clock()),
                                     tree_file=str(tree_file),
-                                    phases=getattr(executive, "phases", None))
+                                    phases=getattr(executive, "phases", None), count=profile)
             self.tree_topic = TreeTopic(node=node, recorder=self.mcap, phase=executive.phase)
             self.tree_log.listeners.append(self.tree_topic.publish)
             self.tree.add_post_tick_handler(self._log_tick)
@@ -92,13 +97,18 @@ class RunRecords:
         if trajectory:
             steps.append((TRAJECTORY_NAME, lambda: self._render_trajectory(title)))
         if self.tree_log is not None:
-            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree),
-                      (PROFILE_NAME, lambda: write_profile(self.out, profile_of_run(self.out)))]
+            steps += [(LOG_NAME, self.tree_log.close), (FINAL_TREE_NAME, self._write_final_tree)]
+            if self._profile:
+                steps.append((PROFILE_NAME, self._write_profile))
         for name, step in steps:
             try:
                 step()
             except Exception as error:  # a record is not worth losing the report for
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
+
+    def _write_profile(self) -> None:
+        self.profile = profile_of_run(self.out)
+        write_profile(self.out, self.profile)
 
     def _close_recording(self) -> None:
         if self.live is not None:

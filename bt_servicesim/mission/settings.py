@@ -62,3 +62,6 @@ class RunSettings:
     """One of :data:`TRAJECTORY_POLICIES`."""
     clock: str = "sim"
     """One of :data:`CLOCKS`; ``system`` only with ``attach``."""
+    profile: bool = True
+    """Count every node's ticks as the tree ticks and write ``profile.json`` at the end
+    (``run --no-profile`` turns both off: for benchmarks that measure what they cost)."""

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from typing import Any
 
 import py_trees
 
@@ -73,6 +74,64 @@ def dot_source(root: py_trees.behaviour.Behaviour) -> str:
     py_trees draws a control it has no symbol for (this project's ``RecoveryNode``) as a grey
     ellipse, like a leaf; here it is a box of its own colour, labelled with its class too.
     """
+    return _dot_graph(root).to_string()
+
+
+HEAT_COLD, HEAT_HOT, NEVER_RAN = (255, 255, 255), (214, 39, 40), "#e0e0e0"
+HEAT_FIGURES = (("ran_share", "ran in", "percent"), ("starts_per_episode", "starts/ep", "number"),
+                ("failure_rate", "fails", "percent"), ("time_share", "time", "percent"),
+                ("points_under", "points/ep", "number"))
+"""The figures a heat map's label shows under each node's name: key, label, format."""
+
+
+def heat_dot_source(root: py_trees.behaviour.Behaviour,
+                    figures: Mapping[str, Mapping[str, Any]], *, measure: str,
+                    title: str) -> str:
+    """The tree's dot graph with each node filled by ``measure`` (white: 0, red: the largest
+    value; grey: no figures, never ran) and its figures in its label.
+
+    ``figures``: a node table's rows (:mod:`bt_servicesim.evaluation.node_tables`) by node key
+    (the behaviour's name, as py_trees' dot graph names its nodes)."""
+    graph = _dot_graph(root)
+    values = [float(row[measure]) for row in figures.values() if row.get(measure) is not None]
+    top = max(values, default=0.0)
+    for node in graph.get_nodes():
+        name = node.get_name().strip('"')
+        row = figures.get(name)
+        if row is None or node.get("label") is None:
+            if node.get("label") is not None:
+                node.set("fillcolor", NEVER_RAN)
+            continue
+        value = row.get(measure)
+        node.set("fillcolor", heat_colour(0.0 if value is None or top <= 0 else value / top))
+        node.set("fontcolor", "black")
+        node.set("style", "filled")
+        node.set("label", f'"{_heat_label(short_label(name), row)}"')
+    graph.set("label", f'"{title}"')
+    graph.set("labelloc", "t")
+    return graph.to_string()
+
+
+def heat_colour(fraction: float) -> str:
+    """White to red, by ``fraction`` (clipped to 0..1)."""
+    fraction = min(1.0, max(0.0, fraction))
+    red, green, blue = (round(cold + (hot - cold) * fraction)
+                        for cold, hot in zip(HEAT_COLD, HEAT_HOT, strict=True))
+    return f"#{red:02x}{green:02x}{blue:02x}"
+
+
+def _heat_label(name: str, row: Mapping[str, Any]) -> str:
+    parts = [name]
+    for key, label, style in HEAT_FIGURES:
+        value = row.get(key)
+        if value is None:
+            continue
+        shown = f"{value:.0%}" if style == "percent" else f"{value:.2f}"
+        parts.append(f"{label} {shown}")
+    return "\\n".join(parts)
+
+
+def _dot_graph(root: py_trees.behaviour.Behaviour) -> Any:
     with _ascii_symbols():
         graph = py_trees.display.dot_tree(root)
     graph.set_name(py_trees.utilities.get_valid_filename(short_label(root.name)) or "tree")
@@ -87,7 +146,7 @@ def dot_source(root: py_trees.behaviour.Behaviour) -> str:
             node.set("label", f'"{short_label(name)}\\n({controls[name]})"')
             node.set("shape", "box")
             node.set("fillcolor", CONTROL_COLOUR)
-    return graph.to_string()
+    return graph
 
 
 def render_graph(dot_text: str, *, image_format: str) -> bytes:

@@ -62,6 +62,9 @@ TREE_TOPIC = "/bt_servicesim/tree"
 GROUND_TRUTH_TOPIC = "/servicesim/ground_truth/odom"
 """The simulator's true robot pose (``nav_msgs/Odometry`` in ``map``): records may draw from it,
 the executive never reads it (a real robot has no such topic)."""
+PENALTY_CAUSES_TOPIC = "/servicesim/referee/penalty_causes"
+"""The simulator's running sums of penalty points by cause (``std_msgs/String`` JSON, latched;
+:mod:`bt_servicesim.records.profile_inputs` reads it): a record, never read by the mission."""
 MARKERS_TOPIC, AREA_MARKERS_TOPIC = "/servicesim/markers", "/servicesim/markers/areas"
 """The simulator's ``visualization_msgs/MarkerArray`` in ``map``: people, guest and plan; the
 target areas (latched), for a 3D viewer such as Foxglove's."""
@@ -125,6 +128,7 @@ RECORDED_TOPICS = (
     RecordedTopic("/tf_static", TFMessage, latched=True),
     RecordedTopic("/servicebot/rfid", ActorNames, sensor=True),
     RecordedTopic("/servicesim/referee", RefereeState, latched=True),
+    RecordedTopic(PENALTY_CAUSES_TOPIC, String, latched=True),
     RecordedTopic("/servicesim/actors", ActorStates),
     RecordedTopic("/servicebot/map", OccupancyGrid, latched=True),
     RecordedTopic(MARKERS_TOPIC, MarkerArray),

@@ -17,13 +17,13 @@ time, and each share goes to the tip (the running leaf) and the phase of that mo
 behaviour was running when the points were lost". A node's figures, keyed by its path in the
 tree (the snapshot log's key, which carries no random UUID):
 
-``ticks``
-    ticks at which the node was seen ticked: each tick it spent RUNNING, plus the tick it
-    finished on. Seen, because the log writes a node only when its status or feedback changed:
-    a node that finishes again with the same status and feedback between two lines is not seen.
-``starts``, ``success``, ``failure``, ``invalid``
-    times it began (from not RUNNING to RUNNING, or finishing with no RUNNING tick), and its
-    outcomes; ``invalid`` counts a RUNNING node stopped from above (preempted, halted).
+``ticks``, ``starts``, ``success``, ``failure``
+    how often it was ticked, began (ticked when not RUNNING), succeeded and failed: the log's
+    counts line (:class:`~bt_servicesim.records.tree_log.TickCounter`, exact). A log without
+    one (cut short) gives what its changes show: a node that ran and finished the same way
+    again between two lines is then not seen;
+``invalid``
+    how often it was stopped from above while RUNNING (preempted, halted).
 ``running_s``, ``tip_s``
     sim seconds it was RUNNING; sim seconds it was the tip.
 ``points_tip``, ``points_under``
@@ -228,12 +228,19 @@ QUIET_FAILURES = frozenset({"FailureIsRunning", "FailureIsSuccess", "Inverter"})
 
 
 def telling_failures(shape: TreeShape) -> set[str]:
-    """The nodes whose failure means something went wrong: not a fallback's child (failing over
-    is what a fallback is for), nor a child of a decorator in :data:`QUIET_FAILURES`."""
+    """The nodes whose failure means something went wrong: a failure climbs through sequences
+    and parallels, and is the normal course when it reaches a fallback (failing over is what a
+    fallback is for) or a decorator in :data:`QUIET_FAILURES` (a watch, an optional step)."""
     nodes = shape.nodes
-    return {node.key for node in nodes
-            if node.parent is None or not (nodes[node.parent].kind == "selector"
-                                           or nodes[node.parent].type in QUIET_FAILURES)}
+    telling = set()
+    for node in nodes:
+        parent = node.parent
+        while parent is not None and nodes[parent].kind in ("sequence", "parallel"):
+            parent = nodes[parent].parent
+        if parent is None or not (nodes[parent].kind == "selector"
+                                  or nodes[parent].type in QUIET_FAILURES):
+            telling.add(node.key)
+    return telling
 
 
 def phase_map(shape: TreeShape, phases: str | None) -> dict[str, str]:
@@ -393,8 +400,11 @@ def _shares(zones: Mapping[str, float]) -> dict[str, float]:
 def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: str | None,
                   bookings: Sequence[Booking] = (), proximity: Sequence[Proximity] = (),
                   checkpoints: Sequence[CheckpointMark] = (), end_s: float | None = None,
-                  tree_file: str | None = None) -> dict[str, Any]:
-    """The profile of one run (``profile.json``'s content; see the module docstring)."""
+                  tree_file: str | None = None,
+                  counts: Mapping[str, Sequence[int]] | None = None) -> dict[str, Any]:
+    """The profile of one run (``profile.json``'s content; see the module docstring).
+
+    ``counts``: the log's counts line (None: not in the log)."""
     counter = NodeCounter(shape=shape, phases=phases)
     last_tick, last_time = 0, 0.0
     for record in records:
@@ -402,6 +412,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
         last_tick, last_time = record.tick, record.sim_time_s
     end = max(last_time, end_s or 0.0)
     counter.finish(end_s=end, end_tick=last_tick)
+    if counts is not None:
+        _use_counts(counter.figures, counts)
     phase_points: dict[str, dict[str, float]] = {}
     tip_points: dict[str, float] = {}
     total: dict[str, float] = {}
@@ -486,6 +498,13 @@ def _fired(shape: TreeShape, figures: Mapping[str, NodeFigures]) -> dict[str, in
     return fired
 
 
+def _use_counts(figures: Mapping[str, NodeFigures],
+                counts: Mapping[str, Sequence[int]]) -> None:
+    """Replace the counts the changes showed with those the tree counted as it ticked."""
+    for key, node in figures.items():
+        node.ticks, node.starts, node.success, node.failure = counts.get(key, (0, 0, 0, 0))
+
+
 def _phase_outcome(figures: NodeFigures | None, last_inside: int | None) -> dict[str, Any]:
     """Whether the phase's own node succeeded, its attempts, and the tick its last attempt
     failed (else, for a phase cut short, that of the last telling failure inside it)."""
@@ -531,3 +550,15 @@ def add_bounds(profile: dict[str, Any], legs: Sequence[Mapping[str, Any]]) -> di
                                     if bound > 0 else None)
     profile["bound_s"] = round(total, 3)
     return profile
+
+
+def penalties_explained(profile: Mapping[str, Any] | None) -> dict[str, Any]:
+    """What ``report.json`` says of the points' causes, from the run's profile: the points by
+    penalty and what it was near (``penalties_by_cause``: ``approximation/walker``...) and by
+    phase (``penalties_by_phase``: phase -> the same); both None without a profile."""
+    if profile is None:
+        return {"penalties_by_cause": None, "penalties_by_phase": None}
+    return {"penalties_by_cause": dict(profile["penalties"]["by_role"]),
+            "penalties_by_phase": {phase["phase"]: dict(phase["penalties_by_role"])
+                                   for phase in profile["phases"]}}
+

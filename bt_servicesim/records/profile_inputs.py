@@ -28,7 +28,7 @@ from rclpy.serialization import deserialize_message
 from servicesim_competition.msg import ActorStates, RefereeState
 from std_msgs.msg import String
 
-from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC
+from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, PENALTY_CAUSES_TOPIC
 from bt_servicesim.records.profile import Booking, CheckpointMark, Proximity
 from bt_servicesim.ros.planar_cdr import odometry_pose
 
@@ -36,7 +36,6 @@ DEFAULT_PHASES = "Mission"
 """The phases' composite of a log that does not name it (the shipped tree's,
 :data:`bt_servicesim.tree.loading.DEFAULT_PHASES`)."""
 
-PENALTY_CAUSES_TOPIC = "/servicesim/referee/penalty_causes"
 REFEREE_TOPIC, ACTORS_TOPIC = "/servicesim/referee", "/servicesim/actors"
 
 
@@ -132,7 +131,7 @@ def profile_of_run(run: Path) -> dict[str, Any]:
                          phases=header.phases or DEFAULT_PHASES,
                          bookings=inputs.attributed, proximity=inputs.proximity,
                          checkpoints=inputs.checkpoints, end_s=inputs.end_s,
-                         tree_file=header.tree_file)
+                         tree_file=header.tree_file, counts=header.counts)
 
 
 def write_profile(run: Path, profile: dict[str, Any]) -> Path:

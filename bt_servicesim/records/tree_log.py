@@ -22,6 +22,11 @@ Format, one JSON object per line:
   qualified name before it is the node's path in the tree, unique already), so two runs of the
   same seed write the same lines.
 
+* last, when the log is closed: ``{"kind": "counts", "nodes": {KEY: [TICKS, STARTS, SUCCESS,
+  FAILURE], ...}}`` for every node ever ticked, counted by :class:`TickCounter` as the tree
+  ticked (a change log cannot see a node that ran and finished the same way again between two
+  lines).
+
 A blackboard value counts as changed when a different object with a different repr is stored
 under its key (ports write new values; a value mutated in place is not noticed). Listeners (the
 MCAP recorder's tree topic) are called with each :class:`TickRecord` as it is written.
@@ -105,6 +110,50 @@ def blackboard_values() -> dict[str, Any]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
 
+_RUNNING, _SUCCESS, _FAILURE = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+
+
+class TickCounter(py_trees.visitors.VisitorBase):
+    """A visitor that counts, per node, its ticks, starts and outcomes as the tree ticks.
+
+    py_trees hands a visitor every behaviour it ticks, just after its tick, however often a
+    tick reaches it. A tick is a start when the node was not RUNNING before it (its status at
+    its last visit, or as the log last saw it: a node stopped from above, never visited, is
+    INVALID). This runs for every node ticked, so it does as little as it can: one dict look-up
+    by the behaviour itself and a few list operations.
+    """
+
+    def __init__(self, behaviours: list[py_trees.behaviour.Behaviour]) -> None:
+        super().__init__(full=False)
+        self._behaviours = behaviours
+        self._tallies: dict[py_trees.behaviour.Behaviour, list[Any]] = {
+            behaviour: [0, 0, 0, 0, behaviour.status] for behaviour in behaviours}
+        """Per behaviour: ticks, starts, successes, failures, and its status when last seen."""
+
+    def run(self, behaviour: py_trees.behaviour.Behaviour) -> None:
+        tally = self._tallies.get(behaviour)
+        if tally is None:
+            return
+        status = behaviour.status
+        tally[0] += 1
+        if tally[4] is not _RUNNING:
+            tally[1] += 1
+        if status is _SUCCESS:
+            tally[2] += 1
+        elif status is _FAILURE:
+            tally[3] += 1
+        tally[4] = status
+
+    def saw(self, index: int, status: Status) -> None:
+        """The log saw node ``index`` (in :func:`walk` order) end a tick with ``status``."""
+        self._tallies[self._behaviours[index]][4] = status
+
+    @property
+    def counts(self) -> list[list[int]]:
+        """Ticks, starts, successes and failures per node, in :func:`walk` order."""
+        return [self._tallies[behaviour][:4] for behaviour in self._behaviours]
+
+
 class TreeLog:
     """Post-tick handler that appends a line to ``path`` whenever the tree changed.
 
@@ -115,12 +164,14 @@ class TreeLog:
         tree_file: the tree file the run loaded, noted in the header
         blackboard: reads the blackboard's current values (default: py_trees' global storage)
         phases: the composite whose children are the mission's phases, noted in the header
+        count: count every node's ticks, starts and outcomes (:class:`TickCounter`) and write
+            them as the last line
     """
 
     def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
                  sim_time_s: Callable[[], float], tree_file: str | None = None,
                  blackboard: Callable[[], dict[str, Any]] = blackboard_values,
-                 phases: str | None = None) -> None:
+                 phases: str | None = None, count: bool = True) -> None:
         self.tree = tree
         self.shape = TreeShape.of(tree.root)
         self.path = path
@@ -139,6 +190,10 @@ class TreeLog:
         self._last_values: dict[str, tuple[Any, str]] = {}
         self._stable_keys: dict[str, str] = {}
         self._records = 0
+        self.counter = TickCounter(self._behaviours)
+        if count:
+            tree.add_visitor(self.counter)
+        self._count = count
         self._stream: TextIO | None = path.open("w", encoding="utf-8")
         header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,
                   "phases": phases, "nodes": self.shape.to_json()}
@@ -182,9 +237,11 @@ class TreeLog:
         if not changed_at and not values and tip == self._last_tip:
             return None
         changed: dict[str, NodeState] = {}
+        saw = self.counter.saw
         for index in changed_at:
             key, state = self._keys[index], states[index]
             self._last_nodes[key] = changed[key] = state
+            saw(index, state[0])
         self._last_states = states
         self._last_tip = tip
         return TickRecord(tick=tick, sim_time_s=self._sim_time_s(), root=self.tree.root.status,
@@ -236,6 +293,11 @@ class TreeLog:
             self._stream.flush()
 
     def close(self) -> None:
+        """Write the counts line and close the file (once)."""
+        if self._stream is not None and self._count:
+            self._write({"kind": "counts", "nodes": {
+                key: counts for key, counts in zip(self._keys, self.counter.counts, strict=True)
+                if counts[0]}})
         if self._stream is not None:
             self._stream.close()
             self._stream = None
@@ -331,13 +393,15 @@ def _read(stream: TextIO) -> TreeHistory:
                        phases=header.phases)
 
 
-@dataclass(frozen=True)
+@dataclass
 class LogHeader:
-    """The log's first line: the tree's shape, its file and its phases' composite."""
+    """The log's first line: the tree's shape, its file and its phases' composite; and, once
+    the records have been read, the counts line (None in a log cut short)."""
 
     shape: TreeShape
     tree_file: str | None
     phases: str | None
+    counts: dict[str, list[int]] | None = None
 
 
 def read_records(path: Path) -> tuple[LogHeader, list[TickRecord]]:
@@ -365,14 +429,19 @@ def _header_and_records(stream: TextIO) -> tuple[LogHeader, Iterator[TickRecord]
 
     def records() -> Iterator[TickRecord]:
         for number, line in lines:
+            if line.get("kind") == "counts":
+                read.counts = {str(key): [int(count) for count in counts]
+                               for key, counts in line.get("nodes", {}).items()}
+                continue
             try:
                 yield TickRecord.from_json(line)
             except (KeyError, TypeError, ValueError) as error:
                 raise ValueError(f"line {number}: malformed tick record ({error!r})") from error
 
     phases = header.get("phases")
-    return (LogHeader(shape=shape, tree_file=header.get("tree_file"),
-                      phases=None if phases is None else str(phases)), records())
+    read = LogHeader(shape=shape, tree_file=header.get("tree_file"),
+                     phases=None if phases is None else str(phases))
+    return read, records()
 
 
 def _json_lines(stream: TextIO) -> Iterator[tuple[int, dict[str, Any]]]:

@@ -1,4 +1,5 @@
-"""A seed is a replayable fact: the same run twice in lockstep gives the same report.
+"""A seed is a replayable fact: the same run twice in lockstep gives the same report, and
+byte-identical tree logs and profiles (py_trees' random port UUIDs kept out of them).
 
 Two equal reports could be luck, so the test also pins what makes them equal: the tree ticked
 exactly once per 0.1 sim s from its first tick to its last, which free running on a busy
@@ -42,6 +43,10 @@ def test_the_same_seed_twice_in_lockstep_gives_the_same_report(tmp_path: Path) -
     assert first["timing"] == second["timing"] == "lockstep"
     assert [c["done"] for c in first["checkpoints"]][:2] == [True, True], first.get("failure")
     assert replayed(first) == replayed(second)
+    for name in ("tree_log.jsonl", "profile.json"):
+        assert (tmp_path / "first" / name).read_bytes() == \
+            (tmp_path / "second" / name).read_bytes(), f"{name} differs"
+    assert first["penalties_by_cause"] == second["penalties_by_cause"] is not None
     for out, report in ((tmp_path / "first", first), (tmp_path / "second", second)):
         times = tick_times(out)
         assert report["ticks"] == len(times) > 500

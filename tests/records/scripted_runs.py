@@ -37,7 +37,8 @@ class ScriptedRun:
     def profile(self) -> dict:
         header, records = read_records(self.log)
         return build_profile(shape=header.shape, records=records, phases=header.phases,
-                             bookings=self.bookings, tree_file=header.tree_file)
+                             bookings=self.bookings, tree_file=header.tree_file,
+                             counts=header.counts)
 
 
 def play(directory: Path, script: Script, *, tree_file: Path = DEFAULT_TREE,

@@ -33,6 +33,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from bt_servicesim.behaviours.actions.localised_pose import LocalisedPoseToBlackboard
 from bt_servicesim.behaviours.actions.topic_readers import RfidToBlackboard
 from bt_servicesim.records.mcap import (
+    PENALTY_CAUSES_TOPIC,
     RECORDED_TOPICS,
     TASK_TOPIC,
     TREE_TOPIC,
@@ -97,6 +98,8 @@ def sample_messages() -> dict[str, Any]:
         "/servicesim/referee": referee,
         "/servicesim/actors": actors,
         "/servicebot/map": grid,
+        PENALTY_CAUSES_TOPIC: String(data='{"sim_time_s": 30.0, "sums": '
+                                          '{"approximation/walker/human_00001": 2.5}}'),
     }
 
 

@@ -54,8 +54,8 @@ def test_the_log_holds_the_blackboard_values_as_they_changed(tmp_path: Path) -> 
 def test_a_line_is_written_only_when_something_changed(tmp_path: Path) -> None:
     run = RecordedRun(tmp_path)
     lines = [json.loads(line) for line in run.path.read_text().splitlines()]
-    assert lines[0]["kind"] == "tree"
-    ticks = lines[1:]
+    assert lines[0]["kind"] == "tree" and lines[-1]["kind"] == "counts"
+    ticks = lines[1:-1]
     assert len(ticks) == run.log.records
     assert ticks[0]["tick"] == 1 and len(ticks[0]["nodes"]) == len(lines[0]["nodes"])
     assert all(0 < len(line["nodes"]) < len(lines[0]["nodes"]) for line in ticks[1:])
@@ -157,7 +157,7 @@ def test_advancing_in_place_gives_the_state_that_applying_gives(tmp_path: Path) 
     the same state a new object from ``apply`` holds."""
     run = RecordedRun(tmp_path)
     history = read_tree_log(run.path)
-    lines = [json.loads(line) for line in run.path.read_text().splitlines()[1:]]
+    lines = [json.loads(line) for line in run.path.read_text().splitlines()[1:-1]]
     latest = TreeState()
     for expected, line in zip(history.states, lines, strict=True):
         before = TreeState(tick=latest.tick, sim_time_s=latest.sim_time_s, root=latest.root,
@@ -173,3 +173,17 @@ def test_advancing_in_place_gives_the_state_that_applying_gives(tmp_path: Path) 
                       tip=latest.tip, nodes={}, blackboard=dict.fromkeys(latest.blackboard))
     latest.advance(gone)
     assert latest.blackboard == {} and latest.tick == gone.tick
+
+
+def test_the_last_line_counts_every_tick_start_and_outcome_of_every_node(
+        tmp_path: Path) -> None:
+    """The change lines cannot see a node that ran and finished the same way again between two
+    lines; the counts line, made as the tree ticked, can."""
+    run = RecordedRun(tmp_path)
+    counts = json.loads(run.path.read_text().splitlines()[-1])["nodes"]
+    root = run.tree.root
+    assert counts[root.name][0] == run.tree.count  # the root is ticked at every tick
+    for key, (ticks, starts, success, failure) in counts.items():
+        assert ticks >= starts >= 1 and success + failure <= ticks, key
+    assert counts[root.name][1:] == [1, 1, 0]  # started once, succeeded once
+
