@@ -21,8 +21,7 @@ from PIL import Image
 from bt_servicesim.evaluation.report import write_results
 from bt_servicesim.evaluation.settings import EvaluationSettings
 from bt_servicesim.records.profile import PROFILE_NAME, Booking, build_profile
-from bt_servicesim.records.tree_log import LOG_NAME, TickRecord, TreeLog
-from bt_servicesim.tree.shape import TreeShape
+from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, read_records
 
 CHECKPOINTS = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
 PHASE_TICKS = {"Pickup": 6, "Dropoff": 8}
@@ -96,14 +95,12 @@ def write_profile(run_dir: Path, *, points: float, end_s: float) -> None:
     """The run's profile as the run writes it (:func:`~bt_servicesim.records.profile.
     build_profile` over its tree log, to the recording's end ``end_s``), with ``points`` booked
     near a walker in two halves."""
-    lines = (run_dir / LOG_NAME).read_text().splitlines()
-    header = json.loads(lines[0])
+    header, records = read_records(run_dir / LOG_NAME)
     bookings = [Booking(sim_time_s=time, sums={"approximation/walker/human_3": share})
                 for time, share in ((0.0, 0.0), (6.0, points / 2), (20.0, points))]
-    profile = build_profile(
-        shape=TreeShape.from_json(header["nodes"]), phases=header["phases"],
-        records=[TickRecord.from_json(json.loads(line)) for line in lines[1:]],
-        bookings=bookings, end_s=end_s, tree_file="fixture.xml")
+    profile = build_profile(shape=header.shape, phases=header.phases, records=records,
+                            bookings=bookings, end_s=end_s, tree_file="fixture.xml",
+                            counts=header.counts)
     (run_dir / PROFILE_NAME).write_text(json.dumps(profile))
 
 
