@@ -270,7 +270,7 @@
           const share = value / top;
           item.style.background = colour(share);
           item.style.color = share > 0.6 ? "#fff" : "";
-          item.querySelector(".value").textContent = value ? `${fixed(value, 1)}${unit(measure)}` : "";
+          item.querySelector(".value").textContent = Math.abs(value) >= 0.05 ? `${fixed(value, 1)}${unit(measure)}` : "";
         }
       });
     };
