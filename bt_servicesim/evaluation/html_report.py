@@ -233,7 +233,7 @@ def _colour(nodes: list[dict[str, Any]], measure: str) -> None:
         share = value / top
         node["colour"] = _heat(share)
         node["ink"] = "#fff" if share > 0.6 else "inherit"
-        node["shown"] = f"{value:.2f}" if value else ""
+        node["shown"] = f"{value:.1f}" if abs(value) >= 0.05 else ""
 
 
 def _heat(share: float) -> str:
