@@ -10,7 +10,7 @@ TESTS ?= tests
 JOBS ?= auto
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
-.PHONY: setup run test lint interfaces graphviz clean
+.PHONY: setup run test lint interfaces graphviz chromium clean
 
 setup: $(VENV)/.installed interfaces graphviz
 
@@ -31,10 +31,19 @@ graphviz:
 	  apt-get update -qq >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz >/dev/null; \
 	else echo "setup: Graphviz is missing: tree images (svg/png) need it; install the 'graphviz' package" >&2; fi
 
+# The HTML report's browser test drives Debian's headless Chromium through its driver; only
+# `make test` needs them, so `make run` does not wait for them.
+chromium:
+	@if command -v chromium >/dev/null && command -v chromedriver >/dev/null; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "setup: installing Chromium and its driver (Debian packages chromium, chromium-driver) for the report's browser test"; \
+	  apt-get update -qq >/dev/null && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null; \
+	else echo "setup: Chromium is missing: the report's browser test needs the 'chromium' and 'chromium-driver' packages" >&2; fi
+
 run: setup
 	$(PY) -m bt_servicesim.run $(ARGS)
 
-test: setup
+test: setup chromium
 	$(VENV)/bin/lint-imports --no-cache
 	$(PY) -m pytest -n $(JOBS) --dist loadgroup $(TESTS)
 

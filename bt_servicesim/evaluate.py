@@ -15,6 +15,8 @@ the same reports, in lockstep the same for the same seed. It writes
 * ``summary.json``: per executive, ``episodes``, ``success_rate``, ``mean_score``,
   ``median_score``, ``mean_sim_time_s``, ``penalties``, ``wall_time_s`` and ``rows`` (every
   episode's ``report.json``, with its scenario set and episode number added);
+* ``report.html``: the same as a page to open, sort and click through, every episode in it
+  (:mod:`bt_servicesim.evaluation.html_report`);
 * ``results.md``: the tables (per executive and set; paired: scores where both completed,
   times to the drop-off where both got there; failure reasons), the plots and the exact
   command; ``results_*.png``: the plots.
@@ -274,7 +276,8 @@ def evaluate(settings: EvaluationSettings, command: EpisodeCommand | None = None
         with contextlib.suppress(OSError, ValueError):  # the terminal may have hung up
             (stream or sys.stderr).write(
                 f"{len(rows)} episodes in {as_minutes(time.monotonic() - started)}{stopped}; "
-                f"results: {settings.out / 'results.md'}\n")
+                f"results: {settings.out / 'results.md'}, "
+                f"page: {settings.out / 'report.html'}\n")
     return rows, stops.first
 
 

@@ -2,7 +2,9 @@
 
 It starts the simulator in its own process (real DDS between them), runs the mission tree on
 sim time, shows progress in the terminal, stops both cleanly on Ctrl-C and writes
-``report.json`` with the score, checkpoints and penalties *as the referee counted them*.
+``report.json`` with the score, checkpoints and penalties *as the referee counted them*, and
+``report.html``, the same as a page with the mission's timeline
+(:mod:`bt_servicesim.records.html_report`).
 
 With ``--groot`` it serves the live tree to Groot2 and ``btview`` (:mod:`bt_servicesim.monitor`).
 

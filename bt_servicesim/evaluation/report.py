@@ -304,8 +304,11 @@ Y_LABELS = {"score": "score", "sim_time_s": "sim seconds",
 
 
 def write_plots(settings: EvaluationSettings, rows: list[dict[str, Any]],
-                directory: Path) -> list[Path]:
-    """The PNGs of :data:`PLOTS` in ``directory``."""
+                directory: Path, *, svgs: dict[str, str] | None = None) -> list[Path]:
+    """The PNGs of :data:`PLOTS` in ``directory``; each also drawn as SVG into ``svgs`` (by
+    name, text kept as text) if given, for report.html to inline."""
+    import io
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -326,6 +329,11 @@ def write_plots(settings: EvaluationSettings, rows: list[dict[str, Any]],
         figure.tight_layout()
         path = directory / f"results_{name}.png"
         figure.savefig(path)
+        if svgs is not None:
+            text = io.StringIO()
+            with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": name}):
+                figure.savefig(text, format="svg")
+            svgs[name] = text.getvalue()
         pyplot.close(figure)
         written.append(path)
     return written
@@ -376,7 +384,8 @@ def _success_bars(axes: Any, settings: EvaluationSettings, rows: list[dict[str, 
 
 
 def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> None:
-    """summary.json, results.md and the plots in ``--out`` (and in ``--docs`` if given).
+    """summary.json, results.md, report.html and the plots in ``--out`` (and results.md and the
+    plots in ``--docs`` if given).
 
     The checkout is described before anything is written: ``--docs`` inside it would
     otherwise make every report say "with uncommitted changes".
@@ -388,10 +397,15 @@ def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> N
     (settings.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     profiles = profile_tables(rows, settings.executives)
     write_profile_tables(settings.out, profiles)
-    write_plots(settings, rows, settings.out)
+    svgs: dict[str, str] = {}
+    write_plots(settings, rows, settings.out, svgs=svgs)
     (settings.out / "results.md").write_text(
         markdown_report(settings, rows, ".", revision=revision, bound_problem=problem,
                         profiles=profiles))
+    from bt_servicesim.evaluation.html_report import write_html_report  # py_trees: not at start
+
+    write_html_report(settings, rows, revision=revision + revision_note(rows, revision),
+                      plots=PLOTS, svgs=svgs, profiles=profiles)
     if settings.docs is not None:
         write_plots(settings, rows, settings.docs / "images")
         (settings.docs / "results.md").write_text(

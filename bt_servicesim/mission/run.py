@@ -57,6 +57,7 @@ from bt_servicesim.mission.stopping import (
 )
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
+from bt_servicesim.records.html_report import HTML_NAME, write_run_report
 from bt_servicesim.records.profile import PROFILE_NAME, penalties_explained
 from bt_servicesim.records.trajectory import TRAJECTORY_NAME
 from bt_servicesim.ros import lockstep
@@ -168,9 +169,10 @@ class MissionRun:
 
     def _clear_what_an_earlier_run_left(self) -> None:
         """In a directory reused with ``--overwrite``: the records a run writes only sometimes
-        (what it raised, the picture, which a completed run draws only when asked) would be taken
-        for this run's. Everything else a run writes it writes anew."""
-        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME):
+        (what it raised, the picture, which a completed run draws only when asked, the profile)
+        and the page written at the end would be taken for this run's. Everything else a run
+        writes it writes anew."""
+        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME, HTML_NAME):
             (self.settings.out / name).unlink(missing_ok=True)
 
     def _node(self) -> ExecutiveNode:
@@ -462,6 +464,11 @@ class MissionRun:
             **penalties_explained(profile),
         }
         write_report(self.settings.out / REPORT_NAME, report)
+        try:
+            write_run_report(self.settings.out, report)
+        except Exception as error:  # the page is not worth losing the run's end for
+            print(f"warning: could not write {self.settings.out / HTML_NAME}: {error}",
+                  file=sys.stderr)
         verdict = "completed" if report["completed"] else f"failed ({self.failure})"
         print(f"mission {verdict}: score {report['score']:.1f}, "
               f"{report['sim_time_s']:.1f} s sim, {report['wall_time_s']:.1f} s wall; "

@@ -31,6 +31,11 @@ tree (the snapshot log's key, which carries no random UUID):
 ``fired`` (a ``Retry`` or a ``RecoveryNode`` only)
     how often it went round again: a retry's child failures it did not pass on; a recovery
     node's recovery starts (its second child's).
+
+The profile's ``timeline`` keeps the moments these figures are summed from, for a page to draw
+over sim time: ``segments``, ``[start, end, tip, phase]`` for each stretch with one tip, and
+``bookings``, ``[sim time, cause, points]`` for the points booked between two samples (by
+penalty and what it was near, as ``by_role``), at the later sample's time.
 """
 
 from __future__ import annotations
@@ -412,7 +417,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
     phase_points: dict[str, dict[str, float]] = {}
     tip_points: dict[str, float] = {}
     total: dict[str, float] = {}
-    for segment, change in spread(increments(bookings), counter.segments):
+    booked = increments(bookings)
+    for segment, change in spread(booked, counter.segments):
         phase = segment.phase if segment is not None else NO_PHASE
         _add(phase_points.setdefault(phase, {}), change)
         _add(total, change)
@@ -462,6 +468,18 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
                         **counter.figures[key].to_json(),
                         **({"fired": fired[key]} if key in fired else {})}
                   for key, node in zip(shape.keys, shape.nodes, strict=True)},
+        "timeline": timeline(counter.segments, booked),
+    }
+
+
+def timeline(segments: Sequence[Segment], booked: Sequence[tuple[float, float, Mapping[
+        str, float]]]) -> dict[str, list[list[Any]]]:
+    """The profile's ``timeline`` (see the module docstring)."""
+    return {
+        "segments": [[round(segment.start_s, 3), round(segment.end_s, 3), segment.tip,
+                      segment.phase] for segment in segments],
+        "bookings": [[round(end, 3), cause, round(points, 3)] for _, end, change in booked
+                     for cause, points in sorted(by_role(change).items())],
     }
 
 
