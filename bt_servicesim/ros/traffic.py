@@ -247,8 +247,8 @@ def _pass_on(done: Future[Any], handed: Future[Any]) -> None:
         return
     if done.cancelled():
         handed.cancel()
-    elif done.exception() is not None:
-        handed.set_exception(done.exception())
+    elif (exception := done.exception()) is not None:
+        handed.set_exception(exception)
     else:
         handed.set_result(done.result())
 
@@ -258,9 +258,9 @@ def _waiting(subscription: Subscription[Any], *, message_only: bool) -> list[tup
     taken: list[tuple[Any, ...]] = []
     while True:
         try:
-            with subscription.handle:
-                message_info = subscription.handle.take_message(subscription.msg_type,
-                                                                subscription.raw)
+            with subscription.handle:  # None once the queue is empty (rclpy's stub omits it)
+                message_info: tuple[Any, Any] | None = subscription.handle.take_message(
+                    subscription.msg_type, subscription.raw)
         except InvalidHandle:
             return taken
         if message_info is None:
