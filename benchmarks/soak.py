@@ -49,15 +49,9 @@ from pathlib import Path
 from ros_harness import isolate
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, OneLineArgumentParser
-from bt_servicesim.evaluation.episodes import (
-    StopSignals,
-    descendants,
-    parent_death_signal,
-    start_time,
-    stop_process_tree,
-)
+from bt_servicesim.evaluation.process_tree import descendants, start_time, stop_process_tree
 from bt_servicesim.mission.report import read_report
-from bt_servicesim.mission.stopping import Terminated
+from bt_servicesim.mission.stopping import StopSignals, Terminated, parent_death_signal
 
 SHM = Path("/dev/shm")
 SEGMENT_LOCK = re.compile(r"^(fastdds_[0-9a-f]{16})_el$")

@@ -45,7 +45,7 @@ STILL_DRIVING = ("RobotInPickUpArea",)
 
 
 def build_parser() -> OneLineArgumentParser:
-    from bt_servicesim.tree.loading import DEFAULT_TREE
+    from bt_servicesim.tree.files import DEFAULT_TREE
 
     parser = OneLineArgumentParser(prog="benchmarks/tick_cost.py",
                                    description="Tick cost of the mission tree.")

@@ -41,7 +41,8 @@ from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, STARTUP_LIMIT_S
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.loading import DEFAULT_TREE, MissionTreeError
+from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.loading import MissionTreeError
 
 PROG = "python -m bt_servicesim.warm_worker"
 RESET_SERVICE = "/servicesim/reset"

@@ -158,7 +158,7 @@ class TreeLog:
         is made by the interpreter's built-ins (``map``, ``compress``) rather than a Python
         loop over the whole tree: a tick changes a few of the tree's hundred and more nodes.
         """
-        states = list(map(_STATE, self._behaviours))
+        states: list[NodeState | None] = list(map(_STATE, self._behaviours))
         changed_at = list(compress(range(len(states)), map(ne, states, self._last_states)))
         tip = self._tip_key()
         values = self._blackboard_changes()
@@ -185,6 +185,7 @@ class TreeLog:
         """
         current = self._blackboard()
         keys, values = list(current), list(current.values())
+        moved: Iterator[str]
         if keys == self._last_keys:
             moved = compress(keys, map(is_not, values, self._last_objects))
         else:

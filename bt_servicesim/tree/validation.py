@@ -112,7 +112,7 @@ def _node_problems(element: ElementTree.Element, cls: type) -> Iterator[str]:
             yield f'{attribute}="{value}" is not {article} {expected.__name__}'
 
 
-def _constructor_hints(cls: type) -> dict[str, type]:
+def _constructor_hints(cls: type[object]) -> dict[str, type]:
     """The constructor's int, float and bool arguments, by name."""
     try:
         hints = typing.get_type_hints(cls.__init__)
@@ -123,7 +123,7 @@ def _constructor_hints(cls: type) -> dict[str, type]:
             if name in parameters and hint in (int, float, bool)}
 
 
-def _seeds_from_name(cls: type) -> bool:
+def _seeds_from_name(cls: type[object]) -> bool:
     """Whether ``cls`` takes a ``seed`` and so, given none, seeds itself from its name."""
     try:
         return "seed" in inspect.signature(cls.__init__).parameters

@@ -63,8 +63,8 @@ class _TopicReader(ActionNode, register=False):
         topic: the topic to subscribe to
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {}
     MESSAGE_TYPE: ClassVar[Any]
     QOS: ClassVar[QoSProfile | int] = qos_profile_sensor_data
 
@@ -111,7 +111,7 @@ class RfidToBlackboard(_TopicReader):
     """
 
     MESSAGE_TYPE = ActorNames
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "actors_in_range": PortInformation(data_type=list[str], required=False),
         "rfid_age": PortInformation(data_type=float, required=False),
     }
@@ -163,7 +163,7 @@ class MapToBlackboard(_TopicReader):
 
     MESSAGE_TYPE = OccupancyGrid
     QOS = MAP_QOS
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "occupancy": PortInformation(data_type=OccupancyGrid2D, required=False),
     }
 
@@ -206,7 +206,7 @@ class CostmapToBlackboard(_TopicReader):
 
     MESSAGE_TYPE = OccupancyGrid
     QOS = MAP_QOS
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "costmap": PortInformation(data_type=Costmap2D, required=False),
     }
 
