@@ -34,7 +34,7 @@ import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, OneLineArgumentParser
 from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, STARTUP_LIMIT_S, RunSettings
@@ -43,6 +43,10 @@ from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
 from bt_servicesim.tree.files import DEFAULT_TREE
 from bt_servicesim.tree.loading import MissionTreeError
+
+if TYPE_CHECKING:  # rclpy is imported once the worker runs ROS
+    from rclpy.client import Client
+    from servicesim_competition.srv import ResetEpisode
 
 PROG = "python -m bt_servicesim.warm_worker"
 RESET_SERVICE = "/servicesim/reset"
@@ -229,7 +233,8 @@ class _Resets:
         self.node = Node("bt_servicesim_warm_worker", start_parameter_services=False)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.client = self.node.create_client(ResetEpisode, RESET_SERVICE)
+        self.client: Client[ResetEpisode.Request, ResetEpisode.Response] = (
+            self.node.create_client(ResetEpisode, RESET_SERVICE))
         self.request_type = ResetEpisode.Request
         return self
 

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator
 from typing import Any
 
 import py_trees
@@ -122,7 +122,7 @@ class SeedStateMachine:
         self._initial_pose: Publisher[PoseWithCovarianceStamped] | None = None
         self._ticker: Any = None
         self._clock: SimStopwatch | None = None
-        self._body: Iterator[None] | None = None
+        self._body: Generator[None, None, None] | None = None
         self._pending_call: tuple[Client[Any, Any], Future[Any]] | None = None
         self._clearing_missing = False
         self._goal: GoalInFlight | None = None
@@ -198,7 +198,7 @@ class SeedStateMachine:
             self._ticker = None
 
     # ---------------------------------------------------------------- the four states
-    def _run_states(self) -> Iterator[None]:
+    def _run_states(self) -> Generator[None, None, None]:
         """Every state ends in "succeeded" in the seed, so the transitions are a straight line."""
         bodies = (self._begin_task, self._pickup, self._drop_off, self._return_to_start)
         for name, body in zip(SEED_STATES, bodies, strict=True):

@@ -26,7 +26,7 @@ from __future__ import annotations
 import bisect
 import json
 import reprlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import compress
 from operator import attrgetter, is_not, ne
@@ -115,7 +115,7 @@ class TreeLog:
         self._keys = self.shape.keys
         self._key_of = {id(behaviour): key
                         for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
-        self._last_states: list[NodeState | None] = [None] * len(self._behaviours)
+        self._last_states: Sequence[NodeState | None] = [None] * len(self._behaviours)
         self._last_keys: list[str] = []
         self._last_objects: list[Any] = []
         self._last_nodes: dict[str, NodeState] = {}
@@ -158,7 +158,7 @@ class TreeLog:
         is made by the interpreter's built-ins (``map``, ``compress``) rather than a Python
         loop over the whole tree: a tick changes a few of the tree's hundred and more nodes.
         """
-        states: list[NodeState | None] = list(map(_STATE, self._behaviours))
+        states: list[NodeState] = list(map(_STATE, self._behaviours))
         changed_at = list(compress(range(len(states)), map(ne, states, self._last_states)))
         tip = self._tip_key()
         values = self._blackboard_changes()

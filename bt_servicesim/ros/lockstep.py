@@ -55,7 +55,6 @@ from typing import Any
 
 from rclpy.client import Client
 from rclpy.clock import ROSClock
-from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos import ReliabilityPolicy as Reliability
@@ -65,6 +64,7 @@ from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
 from bt_servicesim.ros.node_features import LockstepHost, lockstep_of
+from bt_servicesim.ros.spinning import Spinner
 
 __all__ = ["LockstepClient", "LockstepTicker", "offered"]
 
@@ -94,7 +94,7 @@ DUE_TOLERANCE_NS = 10_000_000
 """A period's sim time within this of a tick's due time counts as reaching it."""
 
 
-def offered(node: Node, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+def offered(node: Node, executor: Spinner, *, wait_s: float = OFFER_WAIT_S) -> bool:
     """Whether the backend offers lockstep: its join service appears within ``wait_s``."""
     client: Client[Any, Any] = node.create_client(LockstepJoin, JOIN_SERVICE)
     try:
@@ -207,7 +207,7 @@ class LockstepClient:
         run then went on free running: a seed's replay decided by a race)."""
 
     # ------------------------------------------------------------------ join
-    def join(self, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+    def join(self, executor: Spinner, *, wait_s: float = OFFER_WAIT_S) -> bool:
         """Join the simulator's lockstep; whether it took us (bounded in wall time)."""
         client = self._joining
         if client is None:
@@ -246,7 +246,7 @@ class LockstepClient:
         if time_source is not None and hasattr(time_source, "detach_node"):
             time_source.detach_node()
 
-    def _take_what_came_before(self, executor: Executor, joined_at: LockstepPeriod) -> None:
+    def _take_what_came_before(self, executor: Spinner, joined_at: LockstepPeriod) -> None:
         """Take what the simulator sent before it answered the join, so that the offsets
         count it as before the join.
 

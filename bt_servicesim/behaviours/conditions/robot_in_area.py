@@ -41,7 +41,8 @@ class RobotInArea(ConditionNode):
     def check(self) -> bool:
         """Compare the pose with the box."""
         try:
-            box, pose = self.get_input("box"), self.get_input("robot_pose")
+            box: Box = self.get_input("box")
+            pose: Pose2D = self.get_input("robot_pose")
         except NoDataAvailable as error:
             self.feedback_message = f"cannot check the area: {error}"
             return False
