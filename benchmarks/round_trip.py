@@ -40,7 +40,7 @@ from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.ros.messages import pose_to_msg
 
 if TYPE_CHECKING:  # rclpy is imported once the domain is set
-    from rclpy.client import Client
+    from rclpy.client import Client as ServiceClient
     from servicesim_competition.srv import RoomInfo
     from std_srvs.srv import Empty
 
@@ -85,9 +85,9 @@ class Client:
         self.node = Node(f"benchmark_round_trip_{os.getpid()}_{next(_NUMBERS)}")
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.room_info: Client[RoomInfo.Request, RoomInfo.Response] = self.node.create_client(
+        self.room_info: ServiceClient[RoomInfo.Request, RoomInfo.Response] = self.node.create_client(
             RoomInfo, "/servicesim/room_info")
-        self.clear: Client[Empty.Request, Empty.Response] = self.node.create_client(
+        self.clear: ServiceClient[Empty.Request, Empty.Response] = self.node.create_client(
             Empty, "/servicebot/move_base/clear_costmaps")
         self.navigate: NavigationClient = ActionClient(self.node, NavigateToPose,
                                                        "/servicebot/navigate_to_pose")
