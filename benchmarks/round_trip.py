@@ -85,8 +85,8 @@ class Client:
         self.node = Node(f"benchmark_round_trip_{os.getpid()}_{next(_NUMBERS)}")
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.room_info: ServiceClient[RoomInfo.Request, RoomInfo.Response] = self.node.create_client(
-            RoomInfo, "/servicesim/room_info")
+        self.room_info: ServiceClient[RoomInfo.Request, RoomInfo.Response] = (
+            self.node.create_client(RoomInfo, "/servicesim/room_info"))
         self.clear: ServiceClient[Empty.Request, Empty.Response] = self.node.create_client(
             Empty, "/servicebot/move_base/clear_costmaps")
         self.navigate: NavigationClient = ActionClient(self.node, NavigateToPose,
