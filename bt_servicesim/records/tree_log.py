@@ -82,12 +82,12 @@ class TickRecord:
         )
 
 
-def short_repr(value: Any) -> str:
+def short_repr(value: object) -> str:
     """A blackboard value as one short line."""
     return " ".join(_SHORT.repr(value).split())
 
 
-def blackboard_values() -> dict[str, Any]:
+def blackboard_values() -> dict[str, object]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
 
@@ -104,7 +104,7 @@ class TreeLog:
 
     def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
                  sim_time_s: Callable[[], float], tree_file: str | None = None,
-                 blackboard: Callable[[], dict[str, Any]] = blackboard_values) -> None:
+                 blackboard: Callable[[], dict[str, object]] = blackboard_values) -> None:
         self.tree = tree
         self.shape = TreeShape.of(tree.root)
         self.path = path
@@ -117,10 +117,10 @@ class TreeLog:
                         for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
         self._last_states: Sequence[NodeState | None] = [None] * len(self._behaviours)
         self._last_keys: list[str] = []
-        self._last_objects: list[Any] = []
+        self._last_objects: list[object] = []
         self._last_nodes: dict[str, NodeState] = {}
         self._last_tip: str | None = None
-        self._last_values: dict[str, tuple[Any, str]] = {}
+        self._last_values: dict[str, tuple[object, str]] = {}
         self._records = 0
         self._stream: TextIO | None = path.open("w", encoding="utf-8")
         header = {"kind": "tree", "version": FORMAT_VERSION, "tree_file": tree_file,

@@ -89,16 +89,15 @@ class ExecutiveNode(Node):
         """The first exception a guarded callback raised, as one line; None while none did."""
         self.callback_traceback: str | None = None
 
-    def guarded(self, callback: Callable[..., Any]) -> Callable[..., Any]:
+    def guarded(self, callback: Callable[..., None]) -> Callable[..., None]:
         """``callback``, but an exception it raises is kept (the first) instead of escaping."""
-        def call(*args: Any) -> Any:
+        def call(*args: object) -> None:
             try:
-                return callback(*args)
+                callback(*args)
             except Exception as error:  # anything escaping kills the process: keep it instead
                 if (stop := stop_behind(error)) is not None:
                     raise stop from error
                 self.note_error(error, where=getattr(callback, "__qualname__", repr(callback)))
-                return None
 
         return call
 

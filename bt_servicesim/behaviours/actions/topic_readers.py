@@ -65,7 +65,7 @@ class _TopicReader(ActionNode, register=False):
 
     INPUT_PORTS: Ports = {}
     OUTPUT_PORTS: Ports = {}
-    MESSAGE_TYPE: ClassVar[Any]
+    MESSAGE_TYPE: ClassVar[type]
     QOS: ClassVar[QoSProfile | int] = qos_profile_sensor_data
 
     def __init__(self, name: str, topic: str, **kwargs: Any) -> None:
@@ -125,7 +125,7 @@ class RfidToBlackboard(_TopicReader):
     ) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
         self.stale_after = float(stale_after)
-        self._names: tuple[Any, list[str]] = (None, [])
+        self._names: tuple[object, list[str]] = (None, [])
 
     def update(self) -> Status:
         """Write the list, emptied once it is stale; always SUCCESS."""
@@ -171,7 +171,7 @@ class MapToBlackboard(_TopicReader):
         self, name: str = "MapToBlackboard", topic: str = "/servicebot/map", **kwargs: Any
     ) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
-        self._written: Any = None
+        self._written: object = None
 
     def _on_message(self, message: Any) -> None:
         self._received_s = sim_now_s(self._require_node().get_clock())
@@ -215,7 +215,7 @@ class CostmapToBlackboard(_TopicReader):
                  **kwargs: Any) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
         self.global_frame = global_frame
-        self._written: Any = None
+        self._written: object = None
         self._refused = ""
 
     def _on_message(self, message: Any) -> None:
