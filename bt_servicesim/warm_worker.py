@@ -46,7 +46,10 @@ from bt_servicesim.tree.loading import MissionTreeError
 
 if TYPE_CHECKING:  # rclpy is imported once the worker runs ROS
     from rclpy.client import Client
+    from rclpy.task import Future
     from servicesim_competition.srv import ResetEpisode
+
+    from bt_servicesim.mission.simulator_process import SimulatorProcess
 
 PROG = "python -m bt_servicesim.warm_worker"
 RESET_SERVICE = "/servicesim/reset"
@@ -242,7 +245,7 @@ class _Resets:
         self.executor.shutdown()
         self.node.destroy_node()
 
-    def wait_for_service(self, simulator: Any) -> bool:
+    def wait_for_service(self, simulator: SimulatorProcess) -> bool:
         deadline = time.monotonic() + STARTUP_LIMIT_S
         while not self.client.service_is_ready():
             if simulator.exit_code() is not None or time.monotonic() > deadline:
@@ -250,11 +253,12 @@ class _Resets:
             self.executor.spin_once(timeout_sec=0.05)
         return True
 
-    def ask(self, arguments: list[str]) -> Any:
+    def ask(self, arguments: list[str]) -> Future[ResetEpisode.Response]:
         """Ask the simulator to reset to these arguments; the answer's future."""
         return self.client.call_async(self.request_type(arguments=arguments))
 
-    def answer(self, future: Any, simulator: Any) -> str | None:
+    def answer(self, future: Future[ResetEpisode.Response],
+               simulator: SimulatorProcess) -> str | None:
         """None once the reset asked for is done, else the simulator's refusal;
         :class:`SimulatorLostError` if it died or did not answer."""
         deadline = time.monotonic() + RESET_WAIT_S
