@@ -51,7 +51,7 @@ import struct
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from rclpy.client import Client
 from rclpy.clock import ROSClock
@@ -63,10 +63,11 @@ from rclpy.time import Time
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
-from bt_servicesim.ros.node_features import LockstepHost, lockstep_of
+from bt_servicesim.ros.node_features import ErrorKeeper
 from bt_servicesim.ros.spinning import Spinner
+from bt_servicesim.ros.traffic import Traffic
 
-__all__ = ["LockstepClient", "LockstepTicker", "offered"]
+__all__ = ["LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of", "offered"]
 
 JOIN_SERVICE = "/servicesim/lockstep/join"
 PERIOD_TOPIC = "/servicesim/lockstep/period"
@@ -92,6 +93,22 @@ PIPELINE_REACH = 2
 the one it steps while the client ticks, and the one that done lets it step."""
 DUE_TOLERANCE_NS = 10_000_000
 """A period's sim time within this of a tick's due time counts as reaching it."""
+
+
+@runtime_checkable
+class LockstepHost(ErrorKeeper, Protocol):
+    """A node lockstep can run on (:mod:`bt_servicesim.ros.node_features`): it counts its
+    traffic and holds its lockstep client."""
+
+    traffic: Traffic
+    """What the node sent and received."""
+    lockstep: LockstepClient | None
+    """The lockstep client once joined, else None (the node runs free)."""
+
+
+def lockstep_of(node: object) -> LockstepClient | None:
+    """The lockstep client ``node`` has joined with, if it is a host that has one."""
+    return node.lockstep if isinstance(node, LockstepHost) else None
 
 
 def offered(node: Node, executor: Spinner, *, wait_s: float = OFFER_WAIT_S) -> bool:

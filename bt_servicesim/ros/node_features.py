@@ -4,26 +4,22 @@ The tickers, shared subscriptions, lockstep and the executive take any rclpy nod
 plain node, a tool's, or the run's :class:`~bt_servicesim.ros.node.ExecutiveNode`. Only the
 last keeps what a callback raised instead of letting it kill the process, counts its traffic
 and joins lockstep, and each of those is a feature the code must do without on another node.
-So each is a :class:`typing.Protocol` here, checked with ``isinstance`` where a node comes in:
-the type checker sees what a node offers, and a node that offers it need not inherit from
-anything (``ExecutiveNode`` matches by its attributes alone).
+So each is a :class:`typing.Protocol`, checked with ``isinstance`` where a node comes in: the
+type checker sees what a node offers, and a node that offers it need not inherit from anything
+(``ExecutiveNode`` matches by its attributes alone).
 
-* :class:`ErrorKeeper`: keeps the first error a callback or a tick raised, for the run to fail
-  the mission with; elsewhere the caller logs or raises it.
-* :class:`LockstepHost`: counts what passes its doors (:mod:`bt_servicesim.ros.traffic`) and
-  holds its :class:`~bt_servicesim.ros.lockstep.LockstepClient` once joined; elsewhere the
-  node runs free on its clock and hands every message on as it comes.
+* :class:`ErrorKeeper` (here): keeps the first error a callback or a tick raised, for the run
+  to fail the mission with; elsewhere the caller logs or raises it.
+* :class:`~bt_servicesim.ros.lockstep.LockstepHost` (beside the client it hosts): counts what
+  passes its doors and holds its lockstep client once joined; elsewhere the node runs free on
+  its clock and hands every message on as it comes.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
-if TYPE_CHECKING:
-    from bt_servicesim.ros.lockstep import LockstepClient
-    from bt_servicesim.ros.traffic import Traffic
-
-__all__ = ["ErrorKeeper", "LockstepHost", "keep_error", "lockstep_of"]
+__all__ = ["ErrorKeeper", "keep_error"]
 
 
 @runtime_checkable
@@ -34,24 +30,9 @@ class ErrorKeeper(Protocol):
         """Keep ``error``, raised in ``where``, unless one is kept already."""
 
 
-@runtime_checkable
-class LockstepHost(ErrorKeeper, Protocol):
-    """A node lockstep can run on: it counts its traffic and holds its lockstep client."""
-
-    traffic: Traffic
-    """What the node sent and received."""
-    lockstep: LockstepClient | None
-    """The lockstep client once joined, else None (the node runs free)."""
-
-
 def keep_error(node: object, error: BaseException, *, where: str) -> bool:
     """Keep ``error`` on ``node`` if it is an :class:`ErrorKeeper`; whether it was kept."""
     if isinstance(node, ErrorKeeper):
         node.note_error(error, where=where)
         return True
     return False
-
-
-def lockstep_of(node: object) -> LockstepClient | None:
-    """The lockstep client ``node`` has joined with, if it is a host that has one."""
-    return node.lockstep if isinstance(node, LockstepHost) else None

@@ -46,8 +46,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 
+from bt_servicesim.ros.lockstep import LockstepHost
 from bt_servicesim.ros.node import ExecutiveNode, reliable
-from bt_servicesim.ros.node_features import LockstepHost
 
 __all__ = ["Reader", "SharedSubscription", "queued_raw_messages", "shared_subscription"]
 

@@ -32,7 +32,8 @@ from rclpy.clock import JumpThreshold, ROSClock
 from rclpy.duration import Duration
 from rclpy.node import Node
 
-from bt_servicesim.ros.node_features import keep_error, lockstep_of
+from bt_servicesim.ros.lockstep import lockstep_of
+from bt_servicesim.ros.node_features import keep_error
 from bt_servicesim.ros.sim_clock import clock_now_ns
 
 __all__ = ["SimTicker", "Ticker", "sim_ticker"]

@@ -8,9 +8,9 @@ from typing import Any
 import pytest
 from rclpy.node import Node
 
-from bt_servicesim.ros.lockstep import LockstepClient
+from bt_servicesim.ros.lockstep import LockstepClient, LockstepHost, lockstep_of
 from bt_servicesim.ros.node import ExecutiveNode
-from bt_servicesim.ros.node_features import ErrorKeeper, LockstepHost, keep_error, lockstep_of
+from bt_servicesim.ros.node_features import ErrorKeeper, keep_error
 
 
 def test_the_executive_node_keeps_errors_and_hosts_lockstep(ros_context: Any) -> None:
