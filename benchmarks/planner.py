@@ -57,9 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.pairs < 1:
         build_parser().error(f"--pairs {args.pairs}: must be 1 or more")
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # no ROS used; policy
-    from servicesim_sim.costmap import INSCRIBED, Costmap
-    from servicesim_sim.planner import Planner
-    from servicesim_sim.world import DEFAULT_WORLD, WorldError, load_world
+    from servicesim_sim.navigation.costmap import INSCRIBED, Costmap
+    from servicesim_sim.navigation.planner import Planner
+    from servicesim_sim.world.files import DEFAULT_WORLD, WorldError, load_world
 
     try:
         world = load_world(args.world or DEFAULT_WORLD)

@@ -72,7 +72,7 @@ if TYPE_CHECKING:  # rclpy is imported once the domain is set
     from rclpy.node import Node
 
 LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
-"""Read by the simulator (``servicesim_sim/lockstep.py``): 0 waits for each tick."""
+"""Read by the simulator (``servicesim_sim/lockstep/server.py``): 0 waits for each tick."""
 TIMINGS = {"lockstep": ("lockstep",), "free": ("free running",),
            "both": ("lockstep", "free running"),
            "all": ("lockstep", "lockstep, taking turns", "free running")}

@@ -6,7 +6,7 @@ placed), so a world that loads but cannot be played is one line too. The argumen
 :mod:`servicesim_sim.arguments`'s, which the reset service takes as well.
 
 A stop signal (Ctrl-C, SIGTERM, SIGHUP) ends a running simulator with status 0
-(:func:`servicesim_sim.node.run_simulator`); one that comes while it is still starting (its
+(:func:`servicesim_sim.ros.node.run_simulator`); one that comes while it is still starting (its
 imports, the world, ROS) ends it in one line with 128 + the signal, as an interrupted command.
 One the command was started with ignored (``nohup``'s SIGHUP) stays ignored.
 """
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from types import FrameType
 
 from servicesim_sim.arguments import EXIT_BAD_INPUT, PROG, build_parser
-from servicesim_sim.stop_signals import handled, note_ignored_at_start
+from servicesim_sim.process.stop_signals import handled, note_ignored_at_start
 
 
 class StoppedWhileStarting(BaseException):
@@ -59,9 +59,9 @@ def _play(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if not os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE"):
         os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    from servicesim_sim.environment import apply_environment_defaults
+    from servicesim_sim.process.environment import apply_environment_defaults
     apply_environment_defaults()  # loopback by default; no shared memory left behind
-    from servicesim_sim.node import run_simulator
+    from servicesim_sim.ros.node import run_simulator
 
     return run_simulator(settings, engine=engine)
 

@@ -1,7 +1,7 @@
 """The simulator's command-line arguments, for its command and for an episode reset.
 
 One parser serves both ways a simulator is told what to play: ``python -m servicesim_sim``'s
-command line, and the reset service (:mod:`servicesim_sim.episodes`), whose request carries the
+command line, and the reset service (:mod:`servicesim_sim.ros.episodes`), whose request carries the
 same arguments, so that a reset episode is played from exactly what a cold start would be. The
 command exits with status 2 and one line on a bad argument; a reset is refused with that line
 (:class:`RefusingArgumentParser`) and the simulator plays on.
@@ -28,7 +28,7 @@ class OneLineArgumentParser(argparse.ArgumentParser):
 
 def build_parser(parser_class: type[argparse.ArgumentParser] = OneLineArgumentParser
                  ) -> argparse.ArgumentParser:
-    from servicesim_sim.camera import RATE_HZ
+    from servicesim_sim.model.camera import RATE_HZ
 
     parser = parser_class(prog=PROG, description="The ServiceSim simulator node.")
     parser.add_argument("--world", help="world file (default: the ServiceSim office)")

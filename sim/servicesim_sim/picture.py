@@ -28,10 +28,10 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrow, Patch, Rectangle
 
-from servicesim_sim.engine import SimEngine
-from servicesim_sim.people import CrowdError
-from servicesim_sim.scenario import ScenarioError, make_scenario
-from servicesim_sim.world import (
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.people import CrowdError
+from servicesim_sim.model.scenario import ScenarioError, make_scenario
+from servicesim_sim.world.files import (
     DEFAULT_WORLD,
     AreaBox,
     OccupancyMap,

@@ -18,10 +18,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from servicesim_sim.engine import SimEngine
-from servicesim_sim.people import CrowdError
-from servicesim_sim.scenario import Difficulty, ScenarioError, make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, World, WorldError, load_world
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.people import CrowdError
+from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, World, WorldError, load_world
 
 
 class SettingsError(ValueError):
@@ -53,7 +53,7 @@ _KNOBS = {
 def settings_from_arguments(args: argparse.Namespace, *,
                             load: Callable[[str | Path], World] = load_world) -> SimSettings:
     """The checked settings; ``load`` loads the world file (an episode reset keeps the worlds
-    it loaded: :class:`~servicesim_sim.episodes.WorldShelf`)."""
+    it loaded: :class:`~servicesim_sim.ros.episodes.WorldShelf`)."""
     if args.seed is not None and args.seed < 0:
         raise SettingsError(f"--seed {args.seed}: must be 0 or more")
     if not args.speed >= 0.0:

@@ -2,22 +2,22 @@
 
 Design intent: an evaluation asks how far each mission ran from the physical limit. The limit
 is the task sim time no executive can beat: the shortest route that meets the rules, driven at
-the robot's top speed (:data:`servicesim_sim.robot.MAX_SPEED`), plus the waits the rules force.
-It is computed from the same scenario the simulator plays for the same (world, seed, sim
-args) (:func:`servicesim_sim.scenario.make_scenario`), with the simulator's own constants, so
-it needs nothing the executive may know and never runs the simulator.
+the robot's top speed (:data:`servicesim_sim.model.robot.MAX_SPEED`), plus the waits the rules
+force. It is computed from the same scenario the simulator plays for the same (world, seed,
+sim args) (:func:`servicesim_sim.model.scenario.make_scenario`), with the simulator's own
+constants, so it needs nothing the executive may know and never runs the simulator.
 
-The route, checkpoint by checkpoint (the referee's rules, :mod:`servicesim_sim.engine`):
+The route, checkpoint by checkpoint (the referee's rules, :mod:`servicesim_sim.model.engine`):
 
 1. from the start pose until the robot's origin is in the pick-up area (checkpoint 1);
-2. on until it is within :data:`~servicesim_sim.engine.PICKUP_RANGE_M` (2 m, straight-line
+2. on until it is within :data:`~servicesim_sim.model.engine.PICKUP_RANGE_M` (2 m, straight-line
    distance, walls or not) of the waiting guest (a pick-up is valid only after checkpoint 1);
 3. on until the robot's origin has been in the drop-off area: the drop-off needs the guest's
    origin inside it, and the guest walks the robot's trail (the default ``trail`` guest), so
    the robot was there first; but a guest picked up walks straight to where the robot stood
    first, and if that walk crosses the area (adjoining areas) the drop-off may come at once.
    The ``straight`` guest walks through walls and is lost 4 m behind
-   (:data:`~servicesim_sim.guest.LOST_DISTANCE`), so for it the robot need only come within
+   (:data:`~servicesim_sim.model.guest.LOST_DISTANCE`), so for it the robot need only come within
    4 m of the area;
 4. back until its origin is in the start area (checkpoint 4).
 
@@ -32,10 +32,10 @@ guest pushed there by a robot closing in (it steps aside) or cutting across a lo
 could in principle enter the area where the robot never was; no executive does so on purpose.
 
 The route's length is a lower bound on the shortest path by construction
-(:mod:`servicesim_sim.geodesic`): one search per checkpoint, each starting where the last one
-reached (its area's nodes, at their distances), on the corner lattice of the cells the robot's
-body fits in. Each leg is the bound path's share; they add up to the bound plus the junctions'
-slack (a few centimetres).
+(:mod:`servicesim_sim.navigation.geodesic`): one search per checkpoint, each starting where the
+last one reached (its area's nodes, at their distances), on the corner lattice of the cells the
+robot's body fits in. Each leg is the bound path's share; they add up to the bound plus the
+junctions' slack (a few centimetres).
 
 ``python -m servicesim_sim.task_bound --seed 7 --difficulty hard`` prints one bound as JSON; with
 ``--episodes FILE`` (a JSON list of ``{"world", "seed", "sim_args"}``) a list of them, one per
@@ -55,13 +55,13 @@ from typing import Any
 
 import numpy as np
 
-from servicesim_sim.engine import PICKUP_RANGE_M
-from servicesim_sim.geodesic import LatticeGraph, Search
-from servicesim_sim.guest import LOST_DISTANCE
-from servicesim_sim.referee import CHECKPOINT_NAMES
-from servicesim_sim.robot import BODY_RADIUS, MAX_SPEED, WallClearance
-from servicesim_sim.scenario import Scenario
-from servicesim_sim.world import AreaBox, World, load_world
+from servicesim_sim.model.engine import PICKUP_RANGE_M
+from servicesim_sim.model.guest import LOST_DISTANCE
+from servicesim_sim.model.referee import CHECKPOINT_NAMES
+from servicesim_sim.model.robot import BODY_RADIUS, MAX_SPEED, WallClearance
+from servicesim_sim.model.scenario import Scenario
+from servicesim_sim.navigation.geodesic import LatticeGraph, Search
+from servicesim_sim.world.files import AreaBox, World, load_world
 
 PROG = "python -m servicesim_sim.task_bound"
 EXIT_BAD_INPUT = 2
@@ -238,7 +238,7 @@ class BoundInputError(ValueError):
 
 def build_parser() -> argparse.ArgumentParser:
     """The simulator's own arguments (a task is what they make it), and ``--episodes``."""
-    from servicesim_sim.__main__ import build_parser as simulator_parser
+    from servicesim_sim.arguments import build_parser as simulator_parser
 
     parser = simulator_parser()
     parser.prog = PROG
@@ -263,7 +263,7 @@ class Bounder:
         return self._worlds[resolved]
 
     def bound(self, args: argparse.Namespace) -> dict[str, Any]:
-        from servicesim_sim.scenario import ScenarioError, make_scenario
+        from servicesim_sim.model.scenario import ScenarioError, make_scenario
         from servicesim_sim.settings import SettingsError, settings_from_arguments
 
         try:

@@ -33,7 +33,7 @@ from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 
-from servicesim_sim.world import DEFAULT_WORLD, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 from tests.fakes import run_module
 
 LIVE_TOPICS = ("/tf", "/servicesim/markers", "/servicesim/markers/areas")

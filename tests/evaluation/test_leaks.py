@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from bt_servicesim.ros import environment as executive_environment
-from servicesim_sim import environment as simulator_environment
+from servicesim_sim.process import environment as simulator_environment
 
 SWEEPS: dict[str, Callable[..., list[str]]] = {
     "executive": executive_environment.remove_dead_segments,
@@ -34,7 +34,7 @@ import os, re, sys, threading, time
 if sys.argv[1] == "executive":
     from bt_servicesim.ros.environment import apply_localhost_defaults as defaults
 else:
-    from servicesim_sim.environment import apply_environment_defaults as defaults
+    from servicesim_sim.process.environment import apply_environment_defaults as defaults
 defaults()
 import rclpy
 from rclpy.action import ActionClient

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from bt_servicesim.ros import environment as executive_environment
-from servicesim_sim import environment as simulator_environment
+from servicesim_sim.process import environment as simulator_environment
 
 NAMESPACE = "{http://www.eprosima.com}"
 PROFILES = {"executive": executive_environment.FAST_DDS_PROFILE,

@@ -1,6 +1,6 @@
 """The scene's ``MarkerArray`` as rclpy messages: the reference the simulator's hand-serialised
-bytes (``servicesim_sim.marker_messages``) are tested against, and what the marker tests read as
-a viewer would. A DELETEALL per cleared namespace, the DELETEs, then the ADDs."""
+bytes (``servicesim_sim.wire.marker_messages``) are tested against, and what the marker tests
+read as a viewer would. A DELETEALL per cleared namespace, the DELETEs, then the ADDs."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point
 from visualization_msgs.msg import Marker, MarkerArray
 
-from servicesim_sim.marker_messages import MAP_FRAME
-from servicesim_sim.markers import Shape, Update
+from servicesim_sim.model.markers import Shape, Update
+from servicesim_sim.wire.marker_messages import MAP_FRAME
 
 
 def marker_array(update: Update, *, now: Time) -> MarkerArray:

@@ -9,7 +9,7 @@ from geometry_msgs.msg import Point
 from rclpy.serialization import deserialize_message, serialize_message
 from servicesim_competition.msg import ActorNames, ActorStates
 
-from servicesim_sim.actor_messages import NAMES_KEPT, ActorNamesBytes, ActorStatesBytes
+from servicesim_sim.wire.actor_messages import NAMES_KEPT, ActorNamesBytes, ActorStatesBytes
 
 PEOPLE = [("human_55686", "guest", -16.5, 10.025), ("human_00001", "walker", 1e-9, -3.0),
           ("a", "idler", 7.25, 2.0), ("abcd", "walker", -0.0, 1e6), ("", "idler", 3.0, 4.0)]

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from servicesim_sim.scenario import Difficulty
+from servicesim_sim.model.scenario import Difficulty
 from servicesim_sim.settings import SimSettings, playable_engine
-from servicesim_sim.world import DEFAULT_WORLD, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 
 SIM = [sys.executable, "-m", "servicesim_sim"]
 OFFICE_MAP = DEFAULT_WORLD.parent / "map.yaml"

@@ -16,7 +16,7 @@ from rclpy.node import Node
 from scipy import ndimage
 from sensor_msgs.msg import Image
 
-from servicesim_sim.camera import (
+from servicesim_sim.model.camera import (
     CEILING,
     FLOOR,
     RATE_HZ,
@@ -24,10 +24,10 @@ from servicesim_sim.camera import (
     outfit,
     render_front_camera,
 )
-from servicesim_sim.node import SimulatorNode
-from servicesim_sim.scenario import Difficulty
+from servicesim_sim.model.scenario import Difficulty
+from servicesim_sim.ros.node import SimulatorNode
 from servicesim_sim.settings import SimSettings
-from servicesim_sim.world import DEFAULT_WORLD, OccupancyMap, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, OccupancyMap, load_world
 
 RESOLUTION = 0.05
 GUEST = "human_20843"

@@ -10,8 +10,8 @@ import pytest
 from nav_msgs.msg import OccupancyGrid
 from rclpy.serialization import deserialize_message, serialize_message
 
-from servicesim_sim.costmap import FREE, INSCRIBED, LETHAL, MAX_INFLATED, GridFrame
-from servicesim_sim.costmap_message import (
+from servicesim_sim.navigation.costmap import FREE, INSCRIBED, LETHAL, MAX_INFLATED, GridFrame
+from servicesim_sim.wire.costmap_message import (
     OccupancyValues,
     occupancy_values,
     serialised_occupancy_grid,

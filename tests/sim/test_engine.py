@@ -11,10 +11,10 @@ from functools import cache
 import numpy as np
 import pytest
 
-from servicesim_sim.engine import TF_ERROR, SimEngine
-from servicesim_sim.office import SHIPPED_DRIFT_TIMES
-from servicesim_sim.scenario import Difficulty, make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, World, load_world
+from servicesim_sim.model.engine import TF_ERROR, SimEngine
+from servicesim_sim.model.scenario import Difficulty, make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
+from servicesim_sim.world.office import SHIPPED_DRIFT_TIMES
 
 
 @cache

@@ -22,8 +22,8 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from servicesim_competition.srv import NewTask, ResetEpisode, TaskInfo
 
-from servicesim_sim.scenario import Difficulty, make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, load_world
+from servicesim_sim.model.scenario import Difficulty, make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 
 ANSWER_WAIT_S = 60.0  # a generous bound on an answer on a loaded machine; not a benchmark
 

@@ -15,7 +15,7 @@ from rclpy.node import Node
 from rclpy.task import Future
 from std_srvs.srv import Empty
 
-from servicesim_sim.executor import DrainingExecutor
+from servicesim_sim.process.executor import DrainingExecutor
 
 
 class ParkedCoroutine:

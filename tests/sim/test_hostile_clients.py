@@ -32,15 +32,15 @@ from servicesim_competition.srv import RoomInfo
 from std_srvs.srv import Empty
 
 from bt_servicesim.ros.environment import delete_participant
-from servicesim_sim.engine import SimEngine
-from servicesim_sim.executor import DrainingExecutor
-from servicesim_sim.goals import GoalPose, GoalRefusal, goal_in_map, yaw_of
-from servicesim_sim.navigation import NavigateToPoseError
-from servicesim_sim.node import SimulatorNode
-from servicesim_sim.planner import ComputePathToPoseError
-from servicesim_sim.scenario import Difficulty, make_scenario
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.scenario import Difficulty, make_scenario
+from servicesim_sim.navigation.goals import GoalPose, GoalRefusal, goal_in_map, yaw_of
+from servicesim_sim.navigation.navigator import NavigateToPoseError
+from servicesim_sim.navigation.planner import ComputePathToPoseError
+from servicesim_sim.process.executor import DrainingExecutor
+from servicesim_sim.ros.node import SimulatorNode
 from servicesim_sim.settings import SimSettings
-from servicesim_sim.world import DEFAULT_WORLD, World, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -393,7 +393,7 @@ def test_a_flood_is_served_over_several_drains_without_stopping_the_loop(
 
 
 def test_a_reply_dds_refuses_costs_that_reply_not_the_simulator(ros_context: Context) -> None:
-    from servicesim_sim.executor import RCLError
+    from servicesim_sim.process.executor import RCLError
 
     def refuse() -> None:
         raise RCLError("failed to send response: cannot publish data")

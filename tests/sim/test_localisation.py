@@ -20,8 +20,8 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
-from servicesim_sim.engine import NavigationState, SimEngine
-from servicesim_sim.localisation import (
+from servicesim_sim.model.engine import NavigationState, SimEngine
+from servicesim_sim.model.localisation import (
     CONVERGENCE_RADIUS_M,
     AmclModel,
     WheelOdometry,
@@ -29,11 +29,11 @@ from servicesim_sim.localisation import (
     compose,
     inverse,
 )
-from servicesim_sim.node import LATCHED, SimulatorNode
-from servicesim_sim.scan import LidarSpec, Scanner
-from servicesim_sim.scenario import Difficulty, make_scenario
+from servicesim_sim.model.scan import LidarSpec, Scanner
+from servicesim_sim.model.scenario import Difficulty, make_scenario
+from servicesim_sim.ros.node import LATCHED, SimulatorNode
 from servicesim_sim.settings import SimSettings
-from servicesim_sim.world import DEFAULT_WORLD, World, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 from tests.sim.test_node import Graph
 
 SPAWN = (10.975, 3.75, 3.14)  # the shipped task's start pose: far from the origin, facing west

@@ -21,7 +21,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from servicesim_competition.msg import LockstepPeriod
 
-from servicesim_sim.lockstep import JOIN_SERVICE, PERIOD_TOPIC
+from servicesim_sim.lockstep.server import JOIN_SERVICE, PERIOD_TOPIC
 
 JOINING_CLIENT = textwrap.dedent(f"""
     import rclpy, time
@@ -92,7 +92,7 @@ def periods_seen_beyond(period: int, *, context: Any, limit_s: float) -> bool:
 
 def test_the_simulator_runs_one_period_ahead_unless_told_to_take_turns(
         monkeypatch: Any) -> None:
-    from servicesim_sim.lockstep import LAG_VARIABLE, pipeline_lag
+    from servicesim_sim.lockstep.server import LAG_VARIABLE, pipeline_lag
 
     monkeypatch.delenv(LAG_VARIABLE, raising=False)
     assert pipeline_lag() == 1
@@ -112,7 +112,7 @@ def test_a_join_is_answered_once_every_reader_acknowledged_what_was_published(
     from servicesim_competition.srv import LockstepJoin
     from std_msgs.msg import String
 
-    from servicesim_sim import lockstep
+    from servicesim_sim.lockstep import server as lockstep
 
     node = Node("acknowledged_join", context=ros_context)
     asked: list[tuple[str, float]] = []

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import random
 
-from servicesim_sim.lockstep_gate import Admission, LockstepGate
+from servicesim_sim.lockstep.gate import Admission, LockstepGate
 
 ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
 

@@ -10,7 +10,7 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 
-from servicesim_sim.lockstep_message import (
+from servicesim_sim.lockstep.message import (
     AnnouncementBytes,
     Done,
     DoneReader,

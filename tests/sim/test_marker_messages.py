@@ -20,9 +20,8 @@ from rclpy.serialization import deserialize_message, serialize_message
 from visualization_msgs.msg import Marker, MarkerArray
 
 from bt_servicesim.records.mcap import complete_definition
-from servicesim_sim.engine import SimEngine
-from servicesim_sim.marker_messages import MarkerArrayBytes
-from servicesim_sim.markers import (
+from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.markers import (
     PEOPLE_NS,
     PLAN_NS,
     Kind,
@@ -34,8 +33,9 @@ from servicesim_sim.markers import (
     person_shape,
     plan_shape,
 )
-from servicesim_sim.scenario import make_scenario
-from servicesim_sim.world import DEFAULT_WORLD, AreaBox, World, load_world
+from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.wire.marker_messages import MarkerArrayBytes
+from servicesim_sim.world.files import DEFAULT_WORLD, AreaBox, World, load_world
 from tests.sim.marker_reference import marker_array
 
 STAMPS = [(0, 0), (7, 500_000_000), (233, 960_000_001)]

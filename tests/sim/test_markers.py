@@ -6,7 +6,7 @@ from __future__ import annotations
 from builtin_interfaces.msg import Time
 from visualization_msgs.msg import Marker
 
-from servicesim_sim.markers import (
+from servicesim_sim.model.markers import (
     AREA_NAMES_NS,
     AREAS_NS,
     GUEST_COLOUR,
@@ -21,7 +21,7 @@ from servicesim_sim.markers import (
     Update,
     areas_update,
 )
-from servicesim_sim.world import AreaBox
+from servicesim_sim.world.files import AreaBox
 from tests.sim.marker_reference import marker_array
 
 AREAS = {"Cafe": AreaBox(0.0, 0.0, 4.0, 2.0), "Lobby": AreaBox(5.0, 1.0, 6.0, 3.0),

@@ -15,15 +15,22 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.costmap import INSCRIBED, LETHAL, MAX_INFLATED, Costmap, Inflation, Lidar
-from servicesim_sim.navigation import (
+from servicesim_sim.navigation.costmap import (
+    INSCRIBED,
+    LETHAL,
+    MAX_INFLATED,
+    Costmap,
+    Inflation,
+    Lidar,
+)
+from servicesim_sim.navigation.navigator import (
     FollowPathError,
     NavigateToPoseError,
     Navigator,
     PolylinePath,
 )
-from servicesim_sim.planner import ComputePathToPoseError, Planner, path_length
-from servicesim_sim.world import OccupancyMap
+from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
+from servicesim_sim.world.files import OccupancyMap
 
 RESOLUTION = 0.05
 FOOTPRINT = (0.5, 0.4)  # length x width, metres

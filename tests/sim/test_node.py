@@ -25,12 +25,12 @@ from rosgraph_msgs.msg import Clock
 from servicesim_competition.msg import RefereeState, Score
 from servicesim_competition.srv import Drift, NewTask, PickUpGuest, RoomInfo, TaskInfo
 
-from servicesim_sim.costmap import PersonMark
-from servicesim_sim.executor import DrainingExecutor
-from servicesim_sim.node import GLOBAL_COSTMAP_TOPIC, SimulatorNode
-from servicesim_sim.scenario import Difficulty
+from servicesim_sim.model.scenario import Difficulty
+from servicesim_sim.navigation.costmap import PersonMark
+from servicesim_sim.process.executor import DrainingExecutor
+from servicesim_sim.ros.node import GLOBAL_COSTMAP_TOPIC, SimulatorNode
 from servicesim_sim.settings import SimSettings
-from servicesim_sim.world import DEFAULT_WORLD, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, load_world
 
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -226,7 +226,7 @@ def test_navigation_succeeds_aborts_without_a_path_and_cancels(graph: Graph) -> 
 
 def test_a_message_dds_refuses_is_dropped_with_a_warning_and_the_loop_goes_on(
         ros_context: Context) -> None:
-    from servicesim_sim.node import RCLError
+    from servicesim_sim.ros.node import RCLError
 
     settings = SimSettings(world=load_world(DEFAULT_WORLD), seed=None, speed=0.0,
                            difficulty=Difficulty.default(), camera_rate_hz=0.0)

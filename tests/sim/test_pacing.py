@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from servicesim_sim.pacing import MAX_LAG_WALL_S, MIN_LAG_SIM_S, Pacer
+from servicesim_sim.process.pacing import MAX_LAG_WALL_S, MIN_LAG_SIM_S, Pacer
 
 
 class FakeClock:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from servicesim_sim.people import (
+from servicesim_sim.model.people import (
     IDLER,
     WALKER,
     WALKER_STOP_DISTANCE,
@@ -25,7 +25,7 @@ from servicesim_sim.people import (
     Person,
     Walker,
 )
-from servicesim_sim.world import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, IdlingArea, OccupancyMap, World, load_world
 
 RESOLUTION = 0.05
 ORIGIN = (-2.0, -2.0)
@@ -445,7 +445,7 @@ def test_office_idlers_stand_in_its_idling_areas_and_some_near_the_shipped_pick_
 def test_many_lines_at_once_answer_as_each_line_alone() -> None:
     """The routes' corner cutting checks lines in batches; each answer must be the one the
     line alone gets, or the same seed would draw other routes."""
-    from servicesim_sim.people import Clearance
+    from servicesim_sim.model.people import Clearance
 
     clearance = Clearance.of(office_map())
     walkable = clearance.metres >= 0.3
@@ -461,7 +461,7 @@ def test_many_lines_at_once_answer_as_each_line_alone() -> None:
 
 
 def test_a_map_measures_its_clearance_once_and_no_episode_can_change_it() -> None:
-    from servicesim_sim.people import Clearance
+    from servicesim_sim.model.people import Clearance
 
     occupancy = office_map()
     first, again = Clearance.of(occupancy), Clearance.of(occupancy)

@@ -12,7 +12,7 @@ from matplotlib.patches import FancyArrow, Rectangle
 from PIL import Image
 
 from servicesim_sim import picture
-from servicesim_sim.world import DEFAULT_WORLD, AreaBox, OccupancyMap, World, load_world
+from servicesim_sim.world.files import DEFAULT_WORLD, AreaBox, OccupancyMap, World, load_world
 
 PEOPLE = [("human_10001", "guest", 1.0, 2.0), ("human_10002", "walker", 3.0, 4.0),
           ("human_10003", "walker", 5.0, 6.0), ("human_10004", "idler", 7.0, 8.0)]

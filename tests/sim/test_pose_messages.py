@@ -17,7 +17,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from tf2_msgs.msg import TFMessage
 
-from servicesim_sim.pose_messages import (
+from servicesim_sim.wire.pose_messages import (
     ClockBytes,
     Link,
     OdometryBytes,

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from servicesim_sim import referee as rules
-from servicesim_sim.guest import STOP_DISTANCE, Guest, GuestState
-from servicesim_sim.referee import Referee
+from servicesim_sim.model import referee as rules
+from servicesim_sim.model.guest import STOP_DISTANCE, Guest, GuestState
+from servicesim_sim.model.referee import Referee
 
 
 def started() -> Referee:

@@ -17,11 +17,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from servicesim_sim.geodesic import step_directions, worst_excess_ratio
-from servicesim_sim.robot import MAX_SPEED
-from servicesim_sim.scenario import Difficulty, Scenario, make_scenario
+from servicesim_sim.model.robot import MAX_SPEED
+from servicesim_sim.model.scenario import Difficulty, Scenario, make_scenario
+from servicesim_sim.navigation.geodesic import step_directions, worst_excess_ratio
 from servicesim_sim.task_bound import TaskBoundError, main, task_bound
-from servicesim_sim.world import DEFAULT_WORLD, AreaBox, OccupancyMap, TaskSpec, World, load_world
+from servicesim_sim.world.files import (
+    DEFAULT_WORLD,
+    AreaBox,
+    OccupancyMap,
+    TaskSpec,
+    World,
+    load_world,
+)
 
 RESOLUTION = 0.05
 TIGHT = 0.97  # the bound is within 3 % of a hand-drawn shortest route's time

@@ -12,8 +12,8 @@ import yaml
 from PIL import Image
 from scipy import ndimage
 
-from servicesim_sim import office
-from servicesim_sim.world import (
+from servicesim_sim.world import office
+from servicesim_sim.world.files import (
     DEFAULT_WORLD,
     AreaBox,
     IdlingArea,

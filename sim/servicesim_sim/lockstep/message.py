@@ -1,0 +1,166 @@
+"""The lockstep announcement (``servicesim_competition/LockstepPeriod``), serialised by hand,
+and the clients' done messages (``LockstepDone``), read by hand.
+
+Design intent: the simulator announces every period, and from one period to the next only
+numbers change: the period, its sim time, and the counts. The names (topics and endpoints,
+sorted) change only when the node publishes on a topic or answers on an endpoint for the first
+time. So the announcement is a CDR template (:class:`~servicesim_sim.wire.cdr.CdrTemplate`) of the
+names, laid out again only when their number changes (names are only ever added), and each
+period copies it with the numbers packed in. Sorting the names, building an rclpy message of
+them and letting ``Publisher.publish`` convert every string again each period cost the loop
+about 60 % of its DDS write's own time. ``tests/sim/test_lockstep_message.py`` reads the
+bytes back with rclpy and compares them, field for field and in length, with rclpy's own
+serialisation.
+
+A done message comes every period from every client; taking it as an rclpy message (rclpy
+converts it from C, string by string) cost about three times taking its bytes, and
+:class:`DoneReader` reads the few fields the gate needs from those. Bytes in any other
+encoding than little-endian CDR are read by rclpy instead.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Collection, Mapping
+from dataclasses import dataclass
+
+from rclpy.serialization import deserialize_message
+from servicesim_competition.msg import LockstepDone
+
+from servicesim_sim.wire.cdr import ENCAPSULATION, CdrTemplate
+
+__all__ = ["AnnouncementBytes", "Done", "DoneReader", "read_done"]
+
+_HEAD = struct.Struct("<QiI")  # period, sim_time (sec, nanosec)
+_DONE_HEAD = struct.Struct("<I4xQI")  # client, (padding), period, the endpoints' count
+_COUNT = struct.Struct("<I")
+
+
+class _Layout:
+    """The template for one set of names: where the period and each count go."""
+
+    def __init__(self, topics: list[str], endpoints: list[str]) -> None:
+        self.topics, self.endpoints = topics, endpoints
+        self.messages = struct.Struct(f"<{len(topics)}Q")
+        self.answers = struct.Struct(f"<{len(endpoints)}Q")
+        template = CdrTemplate()
+        self.head = template.slot(_HEAD, alignment=8)
+        template.strings(topics)
+        template.count(len(topics))
+        self.messages_at = template.slot(self.messages, alignment=8)
+        template.strings(endpoints)
+        template.count(len(endpoints))
+        self.answers_at = template.slot(self.answers, alignment=8)
+        self.template = template.done()
+
+
+class AnnouncementBytes:
+    """Encodes announcements; keeps the layout of the names until new names come."""
+
+    def __init__(self) -> None:
+        self._layout: _Layout | None = None
+        self._sizes: tuple[int, int, int] = (-1, -1, -1)
+
+    def encode(self, *, period: int, sim_time_ns: int, messages: Mapping[str, int],
+               served: Collection[str], answers: Mapping[str, int]) -> bytes:
+        """The announcement of ``period``: ``messages`` per topic, and ``answers`` per
+        endpoint for every endpoint served or answered on (0 where none was sent yet).
+
+        ``messages``, ``served`` and ``answers`` only ever grow (names are never removed), so
+        their sizes tell when the names changed.
+        """
+        layout = self._layout_for(messages, served, answers)
+        out = bytearray(layout.template)
+        _HEAD.pack_into(out, layout.head, period, *divmod(sim_time_ns, 1_000_000_000))
+        layout.messages.pack_into(out, layout.messages_at,
+                                  *[messages[topic] for topic in layout.topics])
+        layout.answers.pack_into(out, layout.answers_at,
+                                 *[answers.get(endpoint, 0) for endpoint in layout.endpoints])
+        return bytes(out)
+
+    def _layout_for(self, messages: Mapping[str, int], served: Collection[str],
+                    answers: Mapping[str, int]) -> _Layout:
+        sizes = (len(messages), len(served), len(answers))
+        if self._layout is None or sizes != self._sizes:
+            self._layout = _Layout(sorted(messages), sorted(set(served) | set(answers)))
+            self._sizes = sizes
+        return self._layout
+
+
+@dataclass(frozen=True)
+class Done:
+    """What a client's done message says."""
+
+    client: int
+    period: int
+    requests: dict[str, int]
+    """The requests sent on each endpoint since the client joined."""
+    leaving: bool
+
+
+class DoneReader:
+    """Reads ``LockstepDone`` messages' serialised bytes (by rclpy unless they are in
+    little-endian CDR, or not as this reader expects).
+
+    A client names the same endpoints in every done message, so the names read last are
+    kept with their bytes: when the next message holds the same bytes in the same place,
+    only the numbers around them are read.
+    """
+
+    def __init__(self) -> None:
+        self._names: tuple[bytes, list[str], int] = (b"", [], -1)
+        """The names' bytes (from the first name's length on), the names, their count."""
+
+    def read(self, data: bytes) -> Done:
+        if data[:len(ENCAPSULATION)] == ENCAPSULATION:
+            try:
+                return self._read_little_endian(memoryview(data)[len(ENCAPSULATION):])
+            except (struct.error, IndexError, UnicodeDecodeError):
+                pass
+        return done_of(deserialize_message(data, LockstepDone))
+
+    def _read_little_endian(self, body: memoryview) -> Done:
+        """The fields in CDR order; each aligned to its size from the body's start."""
+        client, period, count = _DONE_HEAD.unpack_from(body, 0)
+        at = _DONE_HEAD.size
+        known, endpoints, known_count = self._names
+        if count == known_count and body[at:at + len(known)] == known:
+            at += len(known)
+        else:
+            endpoints, at = _read_names(body, at, count)
+            self._names = (bytes(body[_DONE_HEAD.size:at]), endpoints, count)
+        at += -at % 4
+        (count,) = _COUNT.unpack_from(body, at)
+        at += 4
+        if count:
+            at += -at % 8
+        requests = struct.unpack_from(f"<{count}Q", body, at)
+        at += 8 * count
+        return Done(client=client, period=period, leaving=body[at] != 0,
+                    requests=dict(zip(endpoints, requests, strict=False)))
+
+
+def _read_names(body: memoryview, at: int, count: int) -> tuple[list[str], int]:
+    """``count`` strings from ``at`` on; the offset after them."""
+    names = []
+    for _ in range(count):
+        at += -at % 4
+        (size,) = _COUNT.unpack_from(body, at)
+        if size == 0 or at + 4 + size > len(body):
+            raise IndexError("a string beyond the message")
+        names.append(str(body[at + 4:at + 3 + size], "utf-8"))
+        at += 4 + size
+    return names, at
+
+
+def read_done(data: bytes) -> Done:
+    """One ``LockstepDone`` message's serialised bytes, read (see :class:`DoneReader`)."""
+    return DoneReader().read(data)
+
+
+def done_of(message: LockstepDone) -> Done:
+    """A ``LockstepDone`` message, read."""
+    return Done(client=int(message.client), period=int(message.period),
+                leaving=bool(message.leaving),
+                requests=dict(zip(message.endpoints, (int(n) for n in message.requests),
+                                  strict=False)))

@@ -1,0 +1,500 @@
+"""The simulated world, stepped at a fixed physics step in sim time, with no ROS in it.
+
+:class:`SimEngine` owns the robot, the guest, the crowd, navigation and the referee, and applies
+the competition's rules; the ROS node (:mod:`servicesim_sim.ros.node`) only turns its state into
+messages and requests into calls. Keeping ROS out makes the rules testable in microseconds and
+the engine deterministic: every random draw comes from generators seeded by the scenario.
+
+One :meth:`SimEngine.step` is ``dt`` sim seconds: the robot drives (navigation's command, else
+the last ``cmd_vel``, which persists as with ``gazebo_ros_diff_drive``: there is no timeout),
+the guest follows, the crowd walks, the guest drifts at the scheduled world times or falls too
+far behind, the referee checks the checkpoints that depend on where things are (1 and 4), and
+contact and approximation penalties are booked from the start of the world.
+
+The referee's services play the original's rules (``Checkpoint.cc``, ``CP_PickUp.cc``,
+``CP_DropOff.cc``, ``FollowActorPlugin.cc``): a pick-up or drop-off before its checkpoint
+started is a failed attempt (before ``new_task`` too); one after its checkpoint is done answers
+success with no penalty, and still acts on the guest (a pick-up within reach makes them follow
+again, a drop-off makes them stop); ``drift`` always answers true and arms a drift that fires
+once the guest follows and is more than 1.2 m from the robot.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from servicesim_sim.model import referee as rules
+from servicesim_sim.model.camera import render_front_camera
+from servicesim_sim.model.guest import (
+    DRIFT_TIME_TOLERANCE,
+    LOST_DISTANCE,
+    STOP_DISTANCE,
+    Guest,
+    GuestState,
+)
+from servicesim_sim.model.localisation import (
+    IDENTITY,
+    AmclModel,
+    Estimate,
+    Pose,
+    WheelOdometry,
+    between,
+    compose,
+)
+from servicesim_sim.model.people import Crowd
+from servicesim_sim.model.referee import Referee
+from servicesim_sim.model.robot import BODY_RADIUS, Robot, WallClearance
+from servicesim_sim.model.scan import Scanner, surface_clearance
+from servicesim_sim.model.scenario import Scenario
+from servicesim_sim.navigation.navigator import Navigator
+from servicesim_sim.world.files import OccupancyMap, World
+
+PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
+ROBOT_NAME = "servicebot"
+RFID_RANGE_M = 2.0
+PICKUP_RANGE_M = 2.0
+PERSON_BODY_RADIUS = 0.25  # a person's collision box (0.44 x 0.60 m) as a disc
+PERSON_APPROXIMATION_M = 0.75  # ghost cylinder radius, centred on the base (servicebot.urdf)
+OBJECT_APPROXIMATION_M = 0.35  # ghost cylinder radius, centred on the base (servicebot.urdf)
+CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
+CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
+CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
+TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
+NAV_ABORT_WINDOW_S = (1.0, 10.0)  # when a randomly aborted goal gives up
+
+
+_WALL_CLEARANCES: weakref.WeakKeyDictionary[OccupancyMap, WallClearance] = (
+    weakref.WeakKeyDictionary())
+
+
+def wall_clearance(occupancy_map: OccupancyMap) -> WallClearance:
+    """The map's :class:`WallClearance`, computed once per loaded map (a third of a second).
+
+    Episodes a reset plays on one world (:mod:`servicesim_sim.ros.episodes` keeps its worlds)
+    share it; its grid is made read-only, so an episode cannot change what the next one gets.
+    """
+    walls = _WALL_CLEARANCES.get(occupancy_map)
+    if walls is None:
+        walls = WallClearance(occupancy_map)
+        walls.grid.setflags(write=False)
+        _WALL_CLEARANCES[occupancy_map] = walls
+    return walls
+
+
+@dataclass(frozen=True)
+class NavigationState:
+    status: str  # "running", "succeeded", "aborted", "canceled"
+    error_code: int = 0
+    error_msg: str = ""
+    distance_remaining: float = 0.0
+    recoveries: int = 0
+
+
+class SimEngine:
+    """One world, one scenario; see the module docstring."""
+
+    def __init__(self, *, world: World, scenario: Scenario,
+                 dt: float = PHYSICS_STEP_S) -> None:
+        self.world, self.scenario, self.dt = world, scenario, dt
+        self.sim_time = 0.0
+        self.task_started_at: float | None = None
+        self.referee = Referee()
+        walls = wall_clearance(world.map)
+        task = scenario.task
+        self.robot = Robot(x=task.start_x, y=task.start_y, yaw=task.start_yaw, walls=walls)
+        self.guest = Guest(name=task.guest_name, x=task.guest_x, y=task.guest_y,
+                           yaw=task.guest_yaw, wall_clearance=walls.at,
+                           path=scenario.difficulty.guest_path)
+        self.crowd = Crowd(world.map, rng=np.random.default_rng(scenario.people_seed),
+                           walkers=world.people.walkers, idlers=world.people.idlers,
+                           taken_names={task.guest_name}, keep_clear=self._keep_clear(),
+                           occupied=[(task.guest_x, task.guest_y, PERSON_BODY_RADIUS),
+                                     (task.start_x, task.start_y, BODY_RADIUS)],
+                           idling_areas=world.idling_areas,
+                           walker_patience_s=world.people.walker_patience_s)
+        self._knobs = np.random.default_rng(scenario.knob_seed)
+        difficulty = scenario.difficulty
+        self.odometry = WheelOdometry(drift=difficulty.odom_drift,
+                                      rng=np.random.default_rng([scenario.knob_seed, 2]))
+        self.localisation = AmclModel(noise=difficulty.localisation_noise,
+                                      rng=np.random.default_rng([scenario.knob_seed, 3]))
+        self._estimate_due = False
+        self.scanner = Scanner(clearance=surface_clearance(
+            walls.grid, origin=(world.map.origin_x, world.map.origin_y),
+            resolution=world.map.resolution), person_radius=PERSON_BODY_RADIUS)
+        self._scan_noise = np.random.default_rng([scenario.knob_seed, 4])
+        self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1))
+        self._ticket = 0
+        self._localised = False
+        self._refused: dict[int, NavigationState] = {}
+        self._cmd_vel = (0.0, 0.0)
+        self._nav_driving = False
+        self._next_control = 0.0
+        self._drifts = list(scenario.drift_times)
+        self._drift_armed = False
+        self._seen_revision = -1
+        self._steps = 0
+        self._nobody_near_until = -math.inf
+
+    def _keep_clear(self) -> list[tuple[float, float, float]]:
+        """Where walker routes do not go (idlers may stand there, as in the original)."""
+        task, areas = self.scenario.task, self.world.areas
+        discs = [(task.start_x, task.start_y, 1.5), (task.guest_x, task.guest_y, 1.5)]
+        for name in (task.pick_up, task.drop_off, task.start_area):
+            x, y = areas[name].centre
+            discs.append((x, y, 2.0))
+        return discs
+
+    # ------------------------------------------------------------------ the task
+    @property
+    def task_started(self) -> bool:
+        return self.referee.started
+
+    def task_running(self) -> bool:
+        return self.referee.running
+
+    def new_task(self) -> tuple[bool, str]:
+        if self.referee.started:
+            state = "is running" if self.referee.running else "has ended"
+            return False, f"a task {state}; one task per simulator run"
+        self.referee.start()
+        self.task_started_at = self.sim_time
+        self._check_area_checkpoints()
+        return True, "task started"
+
+    def pickup(self, guest_name: str, robot_name: str) -> tuple[bool, str]:
+        referee = self.referee
+        if not referee.checkpoint_started(rules.PICK_UP_GUEST):
+            referee.failed_pickup()  # booked even before new_task; scored once it starts
+            return False, ("no task is running" if not referee.started
+                           else "checkpoint 1 (reach the pick-up area) is not done")
+        if referee.checkpoint_done[rules.PICK_UP_GUEST]:
+            return True, self._pick_up_again(guest_name, robot_name)
+        reason = self._pickup_refusal(guest_name, robot_name)
+        if reason:
+            referee.failed_pickup()
+            return False, reason
+        self.guest.start_following(self.robot.x, self.robot.y)
+        referee.reach(rules.PICK_UP_GUEST)
+        return True, f"{guest_name} follows {robot_name}"
+
+    def _pick_up_again(self, guest_name: str, robot_name: str) -> str:
+        """Checkpoint 2 is done: the answer is success whatever happens; the guest follows
+        (again) only if the names are right and the robot is within reach."""
+        if self._pickup_refusal(guest_name, robot_name) or self.guest.following:
+            return "checkpoint 2 is done; the guest's state is unchanged"
+        self.guest.start_following(self.robot.x, self.robot.y)
+        return f"checkpoint 2 is done; {guest_name} follows {robot_name} again"
+
+    def _pickup_refusal(self, guest_name: str, robot_name: str) -> str:
+        if robot_name != ROBOT_NAME:
+            return f"unknown robot {robot_name!r}"
+        if guest_name != self.guest.name:
+            return f"{guest_name!r} is not the guest"
+        distance = self.guest.distance_to(self.robot.x, self.robot.y)
+        if distance > PICKUP_RANGE_M:
+            return f"the guest is {distance:.2f} m away (more than {PICKUP_RANGE_M} m)"
+        return ""
+
+    def dropoff(self, guest_name: str) -> tuple[bool, str]:
+        referee = self.referee
+        if referee.checkpoint_done[rules.DROP_OFF_GUEST]:
+            if guest_name == self.guest.name and self.guest.following:
+                self.guest.stop_following(GuestState.DROPPED_OFF)
+            return True, "checkpoint 3 is done"
+        reason = self._dropoff_refusal(guest_name)
+        if reason:
+            referee.failed_dropoff()  # booked even before new_task; scored once it starts
+            return False, reason
+        self.guest.stop_following(GuestState.DROPPED_OFF)
+        referee.reach(rules.DROP_OFF_GUEST)
+        return True, f"{guest_name} dropped off in {self.scenario.task.drop_off}"
+
+    def _dropoff_refusal(self, guest_name: str) -> str:
+        if not self.referee.running:
+            return "no task is running"
+        if guest_name != self.guest.name:
+            return f"{guest_name!r} is not the guest"
+        if self.referee.current != rules.DROP_OFF_GUEST or not self.guest.following:
+            return "the guest is not following the robot"
+        box = self.world.areas[self.scenario.task.drop_off]
+        if not box.contains(self.guest.x, self.guest.y):
+            return (f"the guest at ({self.guest.x:.2f}, {self.guest.y:.2f}) is outside "
+                    f"{self.scenario.task.drop_off}")
+        return ""
+
+    def force_drift(self) -> tuple[bool, str]:
+        """The debug ``drift``: always true; the drift fires once the guest follows and is
+        more than 1.2 m from the robot (now, or after the next pick-up)."""
+        self._drift_armed = True
+        return True, "drift armed"
+
+    def _drift(self) -> None:
+        self.guest.stop_following(GuestState.DRIFTED)
+        self.referee.guest_stopped_following(too_fast=False)
+
+    # ---------------------------------------------------------------- the robot
+    def set_initial_pose(self, x: float, y: float, yaw: float) -> None:
+        """Localisation input: the estimate starts at (x, y, yaw) in map (AMCL's initialpose)."""
+        self._localised = True
+        self.localisation.set_initial_pose((x, y, yaw), odom=self.odometry.pose,
+                                           truth=self.robot.pose)
+        self._estimate_due = True
+
+    def command_velocity(self, v: float, w: float) -> None:
+        """Drive with (v, w) until the next command, as ``gazebo_ros_diff_drive`` does (no
+        timeout); a non-finite twist stops the robot.
+
+        Clamping alone would not do: ``min(0.5, nan)`` is 0.5, full speed ahead.
+        """
+        if not (math.isfinite(v) and math.isfinite(w)):
+            v = w = 0.0
+        self._cmd_vel = (v, w)
+
+    def robot_pose(self) -> tuple[float, float, float]:
+        """The true pose in map: ground truth, for the referee, records and tests only."""
+        return self.robot.pose
+
+    def odometry_pose(self) -> Pose:
+        """The wheel odometry: the pose in ``odom``, zero at the spawn pose."""
+        return self.odometry.pose
+
+    def estimated_pose(self) -> Pose | None:
+        """The localisation's map pose now (map -> odom -> base), None before an initial pose."""
+        return self.localisation.pose(self.odometry.pose)
+
+    def new_estimate(self) -> Estimate | None:
+        """The estimate AMCL would publish on ``amcl_pose`` since the last call, if any."""
+        due, self._estimate_due = self._estimate_due, False
+        return self.localisation.estimate if due else None
+
+    def map_to_odom(self) -> tuple[float, float, float]:
+        """The odom frame's pose (x, y, yaw) in map: the transform map -> odom.
+
+        The one place that knows where odometry's origin lies; everything given in ``odom``
+        (navigation goals) reaches ``map`` through it. It is the localisation's, as AMCL
+        broadcasts it; the identity before an initial pose (nothing is localised then, and
+        navigation refuses every goal).
+        """
+        return self.localisation.map_to_odom or IDENTITY
+
+    def robot_velocity(self) -> tuple[float, float]:
+        return self.robot.v, self.robot.w
+
+    def navigate(self, x: float, y: float, yaw: float) -> int:
+        """Start a goal (preempting any other); the ticket names it in later calls."""
+        self._ticket += 1
+        if not self._localised:
+            self._refused[self._ticket] = NavigationState(
+                status="aborted", error_code=TF_ERROR,
+                error_msg="robot not localised: publish /servicebot/initialpose first")
+            return self._ticket
+        x, y, yaw = self._true_goal((x, y, yaw))
+        abort_after = None
+        if self._knobs.random() < self.scenario.difficulty.nav_abort_probability:
+            abort_after = float(self._knobs.uniform(*NAV_ABORT_WINDOW_S))
+        self.navigator.start(x, y, yaw, now=self.sim_time, abort_after_s=abort_after)
+        self._next_control = self.sim_time
+        return self._ticket
+
+    def _true_goal(self, goal: Pose) -> Pose:
+        """Where the robot truly stands when its estimate reaches ``goal`` (in map).
+
+        Nav2 drives its estimate to the goal; the robot follows the truth here, so the goal is
+        moved by the estimate's error now (none when the estimate is the truth).
+        """
+        estimate = self.estimated_pose()
+        if estimate is None:
+            return goal
+        return compose(self.robot.pose, between(estimate, goal))
+
+    def cancel_navigation(self, ticket: int) -> None:
+        if ticket == self._ticket:
+            self.navigator.cancel()
+
+    def navigation_state(self, ticket: int) -> NavigationState:
+        if ticket in self._refused:
+            return self._refused[ticket]
+        if ticket != self._ticket:
+            return NavigationState(status="canceled", error_msg="preempted by a newer goal")
+        navigator = self.navigator
+        return NavigationState(status=navigator.status, error_code=navigator.error_code,
+                               error_msg=navigator.error_msg,
+                               distance_remaining=navigator.distance_remaining,
+                               recoveries=navigator.recoveries)
+
+    def clear_costmaps(self) -> None:
+        self.navigator.clear_costmaps()
+
+    # ------------------------------------------------------------------ stepping
+    def step(self) -> None:
+        dt = self.dt
+        v, w = self._drive_command()
+        self.robot.step(dt, v=v, w=w)
+        self.odometry.update(v=self.robot.v, w=self.robot.w, dt=dt)
+        if self.localisation.update(odom=self.odometry.pose, truth=self.robot.pose):
+            self._estimate_due = True
+        self.guest.record_robot(self.robot.x, self.robot.y)
+        self.guest.step(dt, robot_x=self.robot.x, robot_y=self.robot.y)
+        self._steps += 1
+        if self._steps % CROWD_PERIOD_STEPS == 0:
+            self.crowd.step(dt * CROWD_PERIOD_STEPS, robot=self.robot.pose,
+                            others=[(self.guest.x, self.guest.y)])
+        self.sim_time += dt
+        self.referee.advance(dt)
+        if self.referee.running:
+            self._check_area_checkpoints()
+        self._check_guest()
+        self._book_contacts(dt)
+
+    def _drive_command(self) -> tuple[float, float]:
+        """Navigation's controller publishes on ``cmd_vel`` too: at 20 Hz while a goal runs, and
+        a zero twist when it ends (as Nav2's controller server does). Otherwise the last
+        command persists."""
+        if self.navigator.status == "running":
+            self._nav_driving = True
+            if self.sim_time >= self._next_control - 1e-9:
+                self._next_control = self.sim_time + CONTROLLER_PERIOD_S
+                self._cmd_vel = self.navigator.command(
+                    pose=self.robot.pose, people=self._obstacles(), now=self.sim_time)
+        elif self._nav_driving:
+            self._nav_driving = False
+            self._cmd_vel = (0.0, 0.0)
+        return self._cmd_vel
+
+    def _obstacles(self) -> list[tuple[float, float]]:
+        """Everyone, the guest included, following or not: the costmap marks those the lidar
+        sees (±120°), as Nav2's would. A guest walking behind the robot is out of its view; a
+        robot that turns back towards them sees them and does not drive into them."""
+        return [(person.x, person.y) for person in self.crowd.people] + [
+            (self.guest.x, self.guest.y)]
+
+    def _check_area_checkpoints(self) -> None:
+        referee, areas = self.referee, self.world.areas
+        x, y = self.robot.x, self.robot.y
+        if (referee.current == rules.GO_TO_PICK_UP
+                and areas[self.scenario.task.pick_up].contains(x, y)):
+            referee.reach(rules.GO_TO_PICK_UP)
+        if (referee.current == rules.RETURN_TO_START
+                and areas[self.scenario.task.start_area].contains(x, y)):
+            referee.reach(rules.RETURN_TO_START)
+
+    def _check_guest(self) -> None:
+        """The original's order (``FollowActorPlugin.cc``): a guest more than 4 m behind stops
+        following ("too fast"); else a drift fires whatever the distance while a scheduled
+        world time is within 0.5 s (either side: a guest picked up again inside that second
+        drifts again, as the original keeps its times), or, when armed by the ``drift``
+        service, once the guest is more than 1.2 m from the robot. A scheduled drift whose
+        second passes with nobody following is skipped."""
+        guest = self.guest
+        while self._drifts and self.sim_time > self._drifts[0] + DRIFT_TIME_TOLERANCE:
+            self._drifts.pop(0)  # its second is over
+        due = bool(self._drifts) and self.sim_time >= self._drifts[0] - DRIFT_TIME_TOLERANCE
+        if not guest.following:
+            return
+        distance = guest.distance_to(self.robot.x, self.robot.y)
+        if distance > LOST_DISTANCE:
+            guest.stop_following(GuestState.LOST)
+            self.referee.guest_stopped_following(too_fast=True)
+        elif due or (self._drift_armed and distance > STOP_DISTANCE):
+            self._drift_armed = False
+            self._drift()
+
+    def _book_contacts(self, dt: float) -> None:
+        """Contact and approximation depths, as the original's ``PenaltyChecker`` took them.
+
+        Approximation: the depth of a ghost cylinder centred on the base (0.75 m for people,
+        0.35 m for objects) into each person's body and into the nearest wall. Contact: the
+        depth of the robot's body into them. Booked from the start of the world.
+        """
+        clearance = self.robot.walls.at(self.robot.x, self.robot.y)  # centre to nearest wall
+        if clearance >= OBJECT_APPROXIMATION_M and not self._anyone_may_be_near():
+            return  # nobody and nothing near: the common case, nothing to book
+        distances = self._person_distances()
+        # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
+        # constant minus a distance), without np.clip's wrappers, every step someone is near;
+        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
+        touching = np.maximum(BODY_RADIUS + PERSON_BODY_RADIUS - distances, 0.0)
+        self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
+                             object_depth=max(0.0, BODY_RADIUS - clearance), dt=dt)
+        approach = np.minimum(
+            np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
+            PERSON_APPROXIMATION_M)
+        self.referee.approximation(
+            person_depth=float(np.add.reduce(approach, axis=None)),
+            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
+            dt=dt)
+
+    def _anyone_may_be_near(self) -> bool:
+        """Whether someone's body may be within the people's ghost cylinder.
+
+        When the nearest person is farther, nobody can come within it before the gap closes
+        at :data:`CLOSING_SPEED_BOUND`, so the people need not be looked at again until then.
+        """
+        if self.sim_time < self._nobody_near_until:
+            return False
+        gap = self._nearest_person_distance() - (PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS)
+        if gap < 0.0:
+            return True
+        self._nobody_near_until = self.sim_time + gap / CLOSING_SPEED_BOUND
+        return False
+
+    def _nearest_person_distance(self) -> float:
+        """Distance from the robot's origin to the nearest person's origin (plain floats:
+        this runs every step)."""
+        x, y = self.robot.x, self.robot.y
+        nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
+                       for person in self.crowd.people),
+                      default=math.inf)
+        nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
+        return math.sqrt(nearest)
+
+    def _person_distances(self) -> np.ndarray:
+        """Distance from the robot's origin to each person's origin."""
+        xs = [person.x for person in self.crowd.people] + [self.guest.x]
+        ys = [person.y for person in self.crowd.people] + [self.guest.y]
+        return np.hypot(np.asarray(xs) - self.robot.x, np.asarray(ys) - self.robot.y)
+
+    # ------------------------------------------------------------------ sensors
+    def rfid_names(self) -> list[str] | None:
+        """Everyone within 2 m, in the world's order (walkers, idlers, then the guest, as the
+        original's world file lists its actors and ``VicinityPlugin.cc`` reports them); None
+        (nothing published) when nobody is, or a reading is lost."""
+        x, y = self.robot.x, self.robot.y
+        names = [name for name, _, px, py in self.people_states()
+                 if math.hypot(px - x, py - y) <= RFID_RANGE_M]
+        if not names or self._knobs.random() < self.scenario.difficulty.rfid_dropout:
+            return None
+        return names
+
+    def people_states(self) -> list[tuple[str, str, float, float]]:
+        return [*self.crowd.states(), (self.guest.name, "guest", self.guest.x, self.guest.y)]
+
+    def guest_state(self) -> str:
+        return self.guest.state.value
+
+    def scan_ranges(self) -> np.ndarray:
+        """One lidar sweep from the true pose (:mod:`servicesim_sim.model.scan`)."""
+        people = [(x, y) for _, _, x, y in self.people_states()]
+        return self.scanner.ranges(self.robot.pose, people, rng=self._scan_noise)
+
+    def camera_image(self) -> np.ndarray:
+        return render_front_camera(robot=self.robot.pose, people=self.people_states(),
+                                   guest_name=self.guest.name, occupancy_map=self.world.map)
+
+    # ------------------------------------------------------------------ referee
+    def score(self) -> float:
+        return self.referee.score()
+
+    def referee_report(self) -> dict[str, object]:
+        return self.referee.report()
+
+    def referee_changed(self) -> bool:
+        """Whether a referee event happened since the last call."""
+        changed = self.referee.revision != self._seen_revision
+        self._seen_revision = self.referee.revision
+        return changed
