@@ -35,7 +35,7 @@ import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 import rclpy
@@ -90,6 +90,9 @@ from servicesim_sim.wire.pose_messages import (
 )
 
 RCLError = rclpy_implementation.RCLError
+NavigationGoal: TypeAlias = ServerGoalHandle[
+    NavigateToPose.Goal, NavigateToPose.Result, NavigateToPose.Feedback]
+"""A NavigateToPose goal as the action server holds it."""
 IO_PERIOD_S = 0.1  # ROS input/output every 0.1 s sim: /clock, odom, RFID at 10 Hz
 PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
 COSTMAP_PERIOD_STEPS = 10  # the global costmap every 1 s sim: Nav2's publish_frequency 1.0
@@ -163,8 +166,8 @@ class SimulatorNode:
             world=settings.world, scenario=make_scenario(settings.world, seed=settings.seed,
                                                          difficulty=settings.difficulty))
         self.steps_per_io = max(1, round(IO_PERIOD_S / self.engine.dt))
-        self._sleepers: list[tuple[float, Future]] = []
-        self._active_goal: ServerGoalHandle | None = None
+        self._sleepers: list[tuple[float, Future[bool]]] = []
+        self._active_goal: NavigationGoal | None = None
         self._navigations: list[_Navigation] = []
         self._io_count = 0
         self._had_client = False
@@ -258,9 +261,9 @@ class SimulatorNode:
                           for kind, name, callback in services]
 
     # ------------------------------------------------------------- sim sleep
-    def sim_sleep(self, seconds: float) -> Future:
+    def sim_sleep(self, seconds: float) -> Future[bool]:
         """A future completed by the loop once ``seconds`` of sim time have passed."""
-        future = Future()
+        future: Future[bool] = Future()
         self._sleepers.append((self.engine.sim_time + max(seconds, 0.0), future))
         return future
 
@@ -357,7 +360,7 @@ class SimulatorNode:
             self.node.get_logger().warning(f"{service}: refused: {reason}")
 
     # ----------------------------------------------------------- navigation
-    def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
+    def _on_goal_accepted(self, goal_handle: NavigationGoal) -> None:
         """One goal at a time, as Nav2: the new goal preempts whatever runs, at once."""
         self._active_goal = goal_handle
         for navigation in self._navigations:
@@ -365,7 +368,7 @@ class SimulatorNode:
         self._navigations.clear()
         goal_handle.execute()
 
-    async def _navigate(self, goal_handle: ServerGoalHandle) -> NavigateToPose.Result:
+    async def _navigate(self, goal_handle: NavigationGoal) -> NavigateToPose.Result:
         """Start the goal and wait for its result, which :meth:`_advance_navigation` sets.
 
         The goal is followed by the loop itself, once per I/O period, rather than by this
@@ -769,11 +772,11 @@ def _preemption_result() -> NavigateToPose.Result:
 class _Navigation:
     """A NavigateToPose goal the loop follows; ``result`` completes the goal's coroutine."""
 
-    handle: ServerGoalHandle
+    handle: NavigationGoal
     ticket: int
     started: float
     feedback_due: float
-    result: Future = field(default_factory=Future)
+    result: Future[NavigateToPose.Result] = field(default_factory=Future)
 
 
 def simulator_ros_node(name: str = "servicesim") -> Node:
