@@ -27,7 +27,7 @@ answered garbage is stopped and replaced, its episode recorded as failed with th
 Ctrl-C, SIGTERM and SIGHUP all stop an evaluation the same way: the episodes under way are
 stopped as above, none is left running or writing, the results of the episodes played are
 written, and the exit status is 128 + the signal's number. Statistics are defined in
-``docs/evaluation.md``.
+``docs/reference/evaluation.md``.
 """
 
 from __future__ import annotations

@@ -1,13 +1,14 @@
 """``python -m bt_servicesim.warm_worker``: one simulator and one executive, episode after episode.
 
-An evaluation's warm pair (docs/evaluation.md, "Warm episodes"). A cold episode is a whole
+An evaluation's warm pair (docs/reference/evaluation.md, "Warm episodes"). A cold episode is a whole
 ``python -m bt_servicesim.run``: two interpreters and their imports, DDS discovery between them,
 the waits for the simulator's servers, the teardown -- about two thirds of a short mission's
 wall time. This process pays that once: it claims a ROS domain, starts its simulator, brings
 rclpy up, and then plays the episodes it is sent one after the other. For each it
 
 1. resets the simulator to the episode's world, seed and knobs (``/servicesim/reset``,
-   docs/simulator.md, "Episode reset"), which rebuilds the episode exactly as a start would;
+   docs/reference/simulator.md, "Episode reset"), which rebuilds the episode exactly as a start
+   would;
 2. runs the mission as ``run`` does (:class:`~bt_servicesim.mission.run.MissionRun`), on a new
    executive node with a new tree, blackboard and clients, with the process's output going to
    the episode's ``run.log``, and writes the same ``report.json`` and records, with the

@@ -1,8 +1,8 @@
 """The evaluation's results: ``summary.json``, a Markdown report and plots.
 
 The Markdown names the exact command, the commit it ran on (and whether the checkout had
-uncommitted changes), and every figure's definition is in docs/evaluation.md, so the generated
-docs/results.md can be read on its own.
+uncommitted changes), and every figure's definition is in docs/reference/evaluation.md, so the
+generated docs/results.md can be read on its own.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
              f"seeds, {settings.jobs} at once; speed {settings.speed:g}, mission time limit "
              f"{settings.time_limit_s:g} sim s, episode wall-time limit "
              f"{settings.episode_timeout_s:g} s{_tree_note(settings)}. Definitions: "
-             "[evaluation.md](evaluation.md).", "",
+             "[evaluation.md](reference/evaluation.md).", "",
              "## Per executive and scenario set", "", *_not_run_note(settings, rows),
              "The interval is the success rate's 95 % Wilson score interval over the distinct "
              "missions (one per seed; every episode of the default set plays the shipped task, "

@@ -2,7 +2,7 @@
 
 Each set is a list of episodes on the same footing for every executive: the shipped task, or
 seeded random tasks with the simulator's difficulty knobs as the set names them
-(docs/evaluation.md describes them).
+(docs/reference/evaluation.md describes them).
 """
 
 from __future__ import annotations

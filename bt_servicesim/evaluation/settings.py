@@ -18,9 +18,7 @@ from bt_servicesim.ros.domain import DOMAINS
 from bt_servicesim.tree.files import DEFAULT_TREE
 
 #: Episodes run flat out by default: every episode runs in lockstep with our simulator, which
-#: waits for each tick, so a busy machine makes an episode slower, never different. (Before
-#: lockstep the default was 20x real time: flat out, a loaded executive fell sim seconds
-#: behind and the evaluation measured the machine.)
+#: waits for each tick, so a busy machine makes an episode slower, never different.
 DEFAULT_SPEED = 0.0
 
 
@@ -41,9 +39,10 @@ STOP_GRACE_S = 10.0  # wall seconds a stopped episode gets to write its report
 
 
 EPISODE_CPU_S_PER_SIM_S = 0.048
-"""CPU seconds an episode spends per sim second, simulator and executive together, in lockstep
-(``benchmarks/sim_rtf.py --speed 0 --timing both`` on a quiet machine, 2026-11-24: executive
-22.1-23.9 ms, simulator 24.9-26.7 ms)."""
+"""CPU seconds an episode spends per sim second, simulator and executive together, in lockstep:
+an upper figure of what ``benchmarks/sim_rtf.py --speed 0 --timing both`` prints per process
+(docs/reference/performance.md), for the warning that a ``--speed`` asks for more cores than
+the machine has."""
 
 
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
@@ -102,9 +101,8 @@ def load_warning(*, jobs: int, speed: float, cores: int) -> str | None:
     second (simulator and executive together); asked for more than the machine has, the
     episodes run slower than ``--speed`` says. Every episode runs in lockstep with our
     simulator, so that changes no result. At speed 0 (flat out, the default) nothing is asked
-    for but the cores there are: more episodes than cores share them (on two cores ``--jobs 3``
-    played as many episodes an hour as ``--jobs 2``, docs/evaluation.md), so there is nothing
-    to warn about.
+    for but the cores there are, and more episodes than cores only share them, so there is
+    nothing to warn about.
     """
     if speed <= 0.0:
         return None

@@ -32,7 +32,7 @@ def played(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """The summary of one executive's rows (see ``docs/evaluation.md`` for the definitions).
+    """The summary of one executive's rows (``docs/reference/evaluation.md`` defines each figure).
 
     Episodes a stopped evaluation did not play to an outcome are counted as ``not_run`` and
     left out of every statistic; their rows are kept. (:func:`summary_of` also counts the

@@ -1,6 +1,6 @@
 """Warm pairs: a simulator and an executive process kept alive from one episode to the next.
 
-The evaluation's side of :mod:`bt_servicesim.warm_worker` (docs/evaluation.md, "Warm
+The evaluation's side of :mod:`bt_servicesim.warm_worker` (docs/reference/evaluation.md, "Warm
 episodes"). A :class:`WarmPair` starts the worker (which starts its simulator) the first time
 it is asked to play, sends it one episode at a time on its stdin and reads the worker's one
 reply line per episode from a pipe of its own, within the episode's wall-time limit.

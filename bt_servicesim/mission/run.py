@@ -10,12 +10,11 @@ a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS traffi
 They are written on every way out, Ctrl-C included; a record that cannot be written costs a
 warning line, never the report.
 
-The executive's node is spun by rclpy's experimental C++ ``EventsExecutor``. It takes a message
-for about a quarter of the CPU rclpy's ``SingleThreadedExecutor`` needs (49 against 207 µs,
-measured on this project's machine with the simulator's burst of five scores and an odometry
-message every 2 ms), and at 50 times real time the executive's share of the machine was
-mostly that per-message work. Two things it does differently are handled here: it runs no
-timers on ROS time (Kilted), so the executives tick from the clock itself
+The executive's node is spun by rclpy's experimental C++ ``EventsExecutor``, which takes a
+message for about a quarter of the CPU rclpy's ``SingleThreadedExecutor`` needs: at high speed
+the executive's share of the machine is mostly that per-message work. Two things it does
+differently are handled here: it runs no timers on ROS time (Kilted), so the executives tick
+from the clock itself
 (:mod:`bt_servicesim.ros.sim_ticker`); and it catches SIGINT and SIGTERM itself to shut the
 context down, so the run puts Python's handlers back: Ctrl-C must reach the run as
 ``KeyboardInterrupt``, which stops the tree and cancels what is in flight first. While the node

@@ -10,11 +10,10 @@ themselves; their values are never overwritten.
 On loopback it also gives Fast DDS two shorter periods (``fastdds_profile.xml``, the default
 profile unless the user names one with ``FASTDDS_DEFAULT_PROFILES_FILE`` or keeps one in the
 working directory): participants announce themselves every 0.5 s and reliable writers ask their
-readers what they lack every 0.1 s, instead of every 3 s. With Fast DDS's own periods, one run's
-start in about seven waited 3 s for the simulator's participant, whose first announcements it
-had missed, and one in twelve waited 2.7 s at the lockstep join for a latched message sent again
-only at the next heartbeat; and every join waited for a heartbeat before the simulator had the
-acknowledgements it answers a join after (docs/evaluation.md, "Fast DDS's periods").
+readers what they lack every 0.1 s, instead of every 3 s: with 3 s, a start that missed the
+other participant's first announcements, or a latched message, waits seconds for the next, and
+every lockstep join waits for a heartbeat before the simulator has the acknowledgements it
+answers a join after (docs/reference/evaluation.md, "Fast DDS's periods").
 rmw_fastrtps still puts its loopback-only transports and every ROS QoS on top of the profile.
 
 On loopback, rmw_fastrtps gives every participant (one per process) Fast DDS's shared-memory
@@ -27,11 +26,11 @@ deleting it leaves it there for good. Called for this process (no ``environment`
   what a process killed outright (SIGKILL) could not remove, the next process removes;
 * has the process delete its participant on its way out (:func:`shut_ros_down_at_exit`, at
   exit): rclpy leaves that to the garbage collector, which at interpreter exit does not always
-  get to it -- a run that ended cleanly left its segment about one time in three.
+  get to it, so a run that ended cleanly could leave its segment behind.
 
 (``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` would avoid the segments altogether, but rmw_fastrtps
 replaces Fast DDS's builtin transports with its own, shared memory included, whenever discovery
-is ``LOCALHOST``: see docs/evaluation.md, "Leaks".)
+is ``LOCALHOST``: see docs/reference/evaluation.md, "Leaks".)
 """
 
 from __future__ import annotations

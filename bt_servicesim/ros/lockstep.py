@@ -1,48 +1,29 @@
 """Lockstep with a simulator that offers it: the executive's side of the extension protocol.
 
-The simulator (docs/simulator.md, "Lockstep") announces the end of each period with how much it
-has published on each topic and answered on each endpoint so far, and does not step past the
-period until every joined client has said it is done with it. A :class:`LockstepClient` ticks
-the executive exactly once per announced period, and only once everything the announcement
-counts that this node can receive has arrived -- the messages on every topic it subscribes
-to reliably, the answers to its requests -- so a tick never depends on which message DDS
-happened to deliver first. After the tick it sends its *done* with the number of requests it
-has sent since it joined (those its callbacks sent between ticks included), and the simulator
-serves them before it steps on. Work the tick only records (the tree's log, its snapshot
-topic) can wait until the done has gone out (:meth:`LockstepClient.after_done`): the simulator
-then goes on with the next period while the client writes it down, instead of waiting for it.
+The protocol is described once, in docs/reference/simulator.md, "Lockstep". Here is its client:
+a :class:`LockstepClient` joins, then ticks the executive exactly once per period the simulator
+announces, in order, none skipped, and only once everything the announcement counts that this
+node can receive has arrived (the messages on every topic it subscribes to reliably, the
+answers to its requests), so a tick never depends on which message DDS delivered first. After
+the tick it sends its *done* with the requests it has sent since it joined; what the tick only
+records waits until the done has gone out (:meth:`LockstepClient.after_done`).
 
-The simulator steps its next period while the client ticks on the last one (a one-period
-pipeline, docs/simulator.md "Lockstep"), so messages and answers of period *k*+1 reach the
-node while it waits for, or ticks on, period *k*. The node holds them
-(:meth:`~bt_servicesim.ros.traffic.Traffic.hold`) from the join on: before the tick for *k*
-the client hands on exactly what announcement *k* counts, reader by reader (by topic name),
-then endpoint by endpoint (by name), each in the order it arrived (one writer's order, which
-DDS keeps); whatever came after waits for the tick of its own period. Announcements are
-ticked one by one, in order, none skipped.
+Invariants the client keeps:
 
-Counting happens in the node (:mod:`bt_servicesim.ros.traffic`). Counts of messages are
-cumulative since the simulator started, so at the join the client learns its offsets: the
-simulator, holding the period it joined at, has nothing more in flight once a short settle
-has passed, and what the client has then received stands for everything announced so far.
-Answers are totals per endpoint: the client takes every answer on an endpoint it has a client
-for as its own (the evaluation runs one executive per simulator).
+* what arrives early (the simulator steps period *k*+1 while the client ticks on *k*) is held
+  in the node (:mod:`bt_servicesim.ros.traffic`) and handed on before the tick of its own
+  period, reader by reader, then endpoint by endpoint, each in arrival order;
+* the node's clock is set to the period's sim time before the tick;
+* a client the simulator stopped waiting for learns it exactly, from an announcement more than
+  two periods past its last done: it hands on what it held, stops saying done, ticks free on
+  the newest announcement and reports that the run will not replay
+  (:attr:`LockstepClient.dropped_at`);
+* answers are totals per endpoint: every answer on an endpoint this node has a client for is
+  taken as its own (one executive per simulator).
 
-A client the simulator gave up waiting for (this project's simulator drops one that has not
-said done within 10 s of wall time: a stopped process, a debugger's breakpoint, a starved
-machine) learns so exactly, from the periods announced: while it is joined, the
-simulator announces at most two periods past the last one it said done for (the pipeline's one
-period, and the one its done lets the simulator step). An announcement beyond that means the
-simulator went on without it, so the client stops holding (what it held is handed on at once),
-no longer says done, and follows the newest announcement as free running follows ``/clock``:
-the tree ticks on, periods it could not keep up with skipped, and the run reports that it will
-not replay (:attr:`LockstepClient.dropped_at`). Held on, it would tick every period the
-simulator, now free, raced through, hold every message of them, and fall further behind for
-ever (one run held 15 GB before it was stopped).
-
-Lockstep is an extension only this project's simulator offers: :func:`offered` finds out
-within a bounded wall time, and a backend without it (Gazebo, a real robot) is run free, on
-:class:`~bt_servicesim.ros.sim_ticker.SimTicker`, exactly as before.
+:func:`offered` finds out, within a bounded wall time, whether the backend offers lockstep; a
+backend without it (Gazebo, a real robot) is run free on
+:class:`~bt_servicesim.ros.sim_ticker.SimTicker`.
 """
 
 from __future__ import annotations

@@ -30,11 +30,10 @@ node runs guarded (:meth:`ExecutiveNode.guarded`); what it raised is kept in
 :attr:`ExecutiveNode.callback_error` for the run to fail the mission with, and the process goes
 on. Destroying publishers or subscriptions that carry QoS-event callbacks while discovery
 churns crashes it too (ros2/rclpy#1644): this node gives none of its entities event callbacks
-unless asked to (``tests/ros/test_events_executor_safety.py`` runs both cases). The guard costs
-about 80 ns a message (a Python call and a ``try``; 77-85 ns over three runs of two million
-calls, on this project's 2-core machine), against the 49 µs the ``EventsExecutor`` takes per
-message and the 207 µs of rclpy's Python executor, which has neither crash: keeping the
-``EventsExecutor``, guarded, stays about four times cheaper.
+unless asked to (``tests/ros/test_events_executor_safety.py`` runs both cases). The guard (a
+Python call and a ``try``) is a small fraction of what the ``EventsExecutor`` takes per message,
+which is itself a fraction of what rclpy's Python executor takes, crashes and all
+(docs/reference/performance.md).
 """
 
 from __future__ import annotations
@@ -181,9 +180,9 @@ def stop_behind(error: BaseException) -> BaseException | None:
 
 MIN_READER_DEPTH = 10
 """The fewest messages a subscription of this node keeps: in lockstep the simulator publishes
-its next period while the node is still taking the last one's (docs/simulator.md,
+its next period while the node is still taking the last one's (docs/reference/simulator.md,
 "Lockstep"), so a reader must keep two periods' worth (the referee's score comes five times
-a period) or lose one, and lockstep counts every message. A latched reader kept one."""
+a period) or lose one, and lockstep counts every message. A latched reader's usual depth is one."""
 
 
 def deep_enough(qos: QoSProfile | int) -> QoSProfile | int:

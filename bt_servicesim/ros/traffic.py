@@ -12,14 +12,13 @@ name followed by ``:goal``, ``:cancel``, ``:result`` or ``:feedback``; a topic t
 publishes by the topic's name. A request's answer is counted when its future completes.
 The lockstep protocol's own topics and service are never counted.
 
-*Holding* (:meth:`Traffic.hold`, in lockstep): the simulator steps its next period while the
-executive ticks on the last one, so messages and answers of a period the executive has not
-reached yet arrive early. Held, they are counted on arrival but handed on only by
-:meth:`Traffic.release`, up to the counts of the period about to be ticked: the message to the
-reader's callback, the answer to the future the request's caller holds (a future of its own,
-completed on release, not rclpy's), the feedback to the goal's feedback callback. A held
-reader's arrival also takes whatever else waits in the subscription's queue, so a burst costs
-one wake-up. :meth:`Traffic.stop_holding` hands on everything still held.
+*Holding* (:meth:`Traffic.hold`, in lockstep; why: docs/reference/simulator.md, "The
+pipeline"): what arrives is counted on arrival but handed on only by :meth:`Traffic.release`,
+up to the counts of the period about to be ticked: the message to the reader's callback, the
+answer to the future the request's caller holds (a future of its own, completed on release,
+not rclpy's), the feedback to the goal's feedback callback. A held reader's arrival also takes
+whatever else waits in the subscription's queue, so a burst costs one wake-up.
+:meth:`Traffic.stop_holding` hands on everything still held.
 """
 
 from __future__ import annotations

@@ -106,7 +106,7 @@ def test_the_simulator_runs_one_period_ahead_unless_told_to_take_turns(
 def test_a_join_is_answered_once_every_reader_acknowledged_what_was_published(
         ros_context: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     """What the simulator sent before a join must be in the client's readers before the answer
-    (docs/simulator.md, "Lockstep"): every publisher is waited on, within one deadline; a
+    (docs/reference/simulator.md, "Joining"): every publisher is waited on, within one deadline; a
     reader that does not acknowledge in time does not keep the client out."""
     from rclpy.publisher import Publisher
     from servicesim_competition.srv import LockstepJoin

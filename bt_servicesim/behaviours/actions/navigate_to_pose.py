@@ -40,8 +40,8 @@ __all__ = ["SERVER_CHECK_AFTER_S", "NavigateToPose"]
 SERVER_CHECK_AFTER_S = 1.0
 """Sim seconds without word from the server (acceptance, feedback, result) after which a tick
 looks whether it is still on the ROS graph. While feedback comes (Nav2's and the simulator's
-several times a sim second) the server plainly is; looking at the graph on every tick cost a
-running navigation about 40 µs a tick."""
+several times a sim second) the server plainly is, and looking at the graph costs tens of
+microseconds, too much for every tick."""
 
 _STATUS_NAMES = {
     GoalStatus.STATUS_ABORTED: "aborted",
