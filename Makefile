@@ -45,11 +45,13 @@ run: setup
 
 test: setup chromium
 	$(VENV)/bin/lint-imports --no-cache
+	$(PY) -m mypy
 	$(PY) -m pytest -n $(JOBS) --dist loadgroup $(TESTS)
 
 lint: setup
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/lint-imports --no-cache
+	$(PY) -m mypy
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

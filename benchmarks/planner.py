@@ -19,10 +19,14 @@ import os
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
+from typing import TypeVar
 
 import numpy as np
 
 from bt_servicesim.cli import OneLineArgumentParser
+
+T = TypeVar("T")
 
 HEADLINE = ((10.9, 3.75), (-20.1, 10.0))
 
@@ -42,7 +46,7 @@ def milliseconds(seconds: list[float]) -> str:
             f"p99 {np.percentile(ms, 99):6.1f} ms  max {ms.max():6.1f} ms")
 
 
-def timed(action: Callable[[], object]) -> tuple[float, object]:
+def timed(action: Callable[[], T]) -> tuple[float, T]:
     started = time.perf_counter()
     result = action()
     return time.perf_counter() - started, result
@@ -83,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     picks = rng.integers(len(free_rows), size=(args.pairs, 2))
     pairs = [(frame.centre_of(int(free_rows[a]), int(free_cols[a])),
               frame.centre_of(int(free_rows[b]), int(free_cols[b]))) for a, b in picks]
-    results = [timed(lambda pair=pair: planner.plan(*pair)) for pair in pairs]
+    results = [timed(partial(planner.plan, *pair)) for pair in pairs]
     found = sum(1 for _, result in results if result.waypoints is not None)
     print(f"{args.pairs} random pairs ({found} with a path, the rest cut off): "
           + milliseconds([seconds for seconds, _ in results]))
@@ -96,7 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             costmap.clear()
         else:
             costmap.observe(*pair[0], 0.0, people, now=float(index))
-        changed.append(timed(lambda pair=pair: planner.plan(*pair))[0])
+        changed.append(timed(partial(planner.plan, *pair))[0])
     print("after a costmap change each time:  " + milliseconds(changed))
     return 0
 

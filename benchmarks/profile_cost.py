@@ -27,6 +27,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +60,7 @@ def tick_cost(rounds: int) -> None:
             for count in (False, True):
                 tree, clock, _script = scripted_mission(DEFAULT_TREE, 300)
                 log = TreeLog(tree=tree, path=Path(scratch) / "tree_log.jsonl",
-                              sim_time_s=lambda clock=clock: clock.nanoseconds / 1e9,
+                              sim_time_s=partial(_seconds, clock),
                               count=count)
                 tree.add_post_tick_handler(log)
                 durations[count] += _ticks(tree, clock)
@@ -67,6 +68,10 @@ def tick_cost(rounds: int) -> None:
     print("tick, scripted shipped mission with its snapshot log:")
     for count, label in ((False, "without the tick counter"), (True, "with the tick counter")):
         print(f"  {label:26} {microseconds(durations[count])}")
+
+
+def _seconds(clock: Any) -> float:
+    return float(clock.nanoseconds) / 1e9
 
 
 def _ticks(tree: Any, clock: Any) -> list[float]:

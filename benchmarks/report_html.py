@@ -159,7 +159,7 @@ def write_episode(run_dir: Path, *, executive: str, scenario: str, episode: int,
     (run_dir / "report.json").write_text(json.dumps(row, indent=2))
     if executive == "bt":
         header = tree_header()
-        ticks = tick_lines(lines=log_lines, end_s=row["sim_time_s"])
+        ticks = tick_lines(lines=log_lines, end_s=sum(durations))
         (run_dir / "tree_log.jsonl").write_text(
             "\n".join(json.dumps(line) for line in [header, *ticks]) + "\n")
         profile = profile_of(header, ticks, points=score - 500.0)

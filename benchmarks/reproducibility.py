@@ -21,6 +21,7 @@ one line and exit status 2.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import shlex
@@ -67,7 +68,7 @@ def judged(report: dict[str, Any]) -> tuple[Any, ...]:
             report.get("penalties"), report.get("score"))
 
 
-def command_for(args: Any, scenario: str, speed: float, index: int) -> list[str]:
+def command_for(args: argparse.Namespace, scenario: str, speed: float, index: int) -> list[str]:
     seeded, sim_args = SETS[scenario]
     command = [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", repr(speed),
                "--executive", args.executive, "--time-limit", repr(args.time_limit)]
@@ -113,7 +114,7 @@ def keep_if_odd(root: Path, first: dict[str, Any], second: dict[str, Any],
     return kept
 
 
-def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
+def measure(args: argparse.Namespace, scenario: str, speed: float) -> dict[str, Any]:
     """Run the pairs of one set and speed; print and return the figures."""
     identical, differing, started = 0, [], time.monotonic()
     stalled = completed = 0
@@ -144,7 +145,8 @@ def measure(args: Any, scenario: str, speed: float) -> dict[str, Any]:
             "wall_s": round(wall_s, 1), "differing": differing}
 
 
-def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[str, Any]]) -> None:
+def write_json(path: Path, args: argparse.Namespace, argv: Sequence[str],
+               results: list[dict[str, Any]]) -> None:
     """The figures so far, written whole (a temporary file renamed over ``path``)."""
     document = {
         "command": shlex.join(["python", "benchmarks/reproducibility.py", *argv]),
@@ -157,7 +159,7 @@ def write_json(path: Path, args: Any, argv: Sequence[str], results: list[dict[st
     write_figures(path, document)
 
 
-def timing_of(args: Any) -> str:
+def timing_of(args: argparse.Namespace) -> str:
     return "free running" if args.free_running else "lockstep"
 
 

@@ -19,12 +19,18 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bt_servicesim.mission.stopping import parent_death_signal
 from bt_servicesim.ros.domain import DomainClaim, claim_domain
+from bt_servicesim.ros.spinning import Spinner
+
+if TYPE_CHECKING:  # rclpy is imported once the domain is set
+    from rclpy.client import Client
+    from rclpy.node import Node
+    from servicesim_competition.srv import NewTask
 
 REPO = Path(__file__).resolve().parents[1]
 _claims: list[DomainClaim] = []  # held until the process ends
@@ -71,7 +77,7 @@ class Simulator:
         self.log.unlink(missing_ok=True)
 
 
-def spin_until(executor: Any, done: Callable[[], bool], limit_s: float,
+def spin_until(executor: Spinner, done: Callable[[], bool], limit_s: float,
                what: str, simulator: Simulator | None = None) -> None:
     """Spin until ``done()``; exit with a message naming ``what`` after ``limit_s`` wall s."""
     deadline = time.monotonic() + limit_s
@@ -83,15 +89,17 @@ def spin_until(executor: Any, done: Callable[[], bool], limit_s: float,
         executor.spin_once(timeout_sec=0.05)
 
 
-def start_task(node: Any, executor: Any, simulator: Simulator) -> None:
+def start_task(node: Node, executor: Spinner, simulator: Simulator) -> None:
     """Call ``new_task``: until a task starts the simulator runs at most at real time."""
     from servicesim_competition.srv import NewTask
 
-    client = node.create_client(NewTask, "/servicesim/new_task")
+    client: Client[NewTask.Request, NewTask.Response] = node.create_client(
+        NewTask, "/servicesim/new_task")
     spin_until(executor, client.service_is_ready, 60.0, "/servicesim/new_task", simulator)
     answer = client.call_async(NewTask.Request())
     spin_until(executor, answer.done, 30.0, "the new_task answer", simulator)
-    if not answer.result().pick_up_location:
+    started = answer.result()
+    if started is None or not started.pick_up_location:
         raise SystemExit("the simulator refused new_task")
     node.destroy_client(client)
 

@@ -25,7 +25,8 @@ import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from functools import partial
+from typing import TYPE_CHECKING, Any
 
 from ros_harness import (
     Simulator,
@@ -37,6 +38,13 @@ from ros_harness import (
 
 from bt_servicesim.cli import OneLineArgumentParser
 from bt_servicesim.ros.messages import pose_to_msg
+
+if TYPE_CHECKING:  # rclpy is imported once the domain is set
+    from rclpy.client import Client as ServiceClient
+    from servicesim_competition.srv import RoomInfo
+    from std_srvs.srv import Empty
+
+    from bt_servicesim.ros.navigate_to_pose import NavigationClient
 
 _NUMBERS = itertools.count()
 FAR_GOAL = (-20.1, 10.0)  # across the building from the shipped start
@@ -77,9 +85,12 @@ class Client:
         self.node = Node(f"benchmark_round_trip_{os.getpid()}_{next(_NUMBERS)}")
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.room_info = self.node.create_client(RoomInfo, "/servicesim/room_info")
-        self.clear = self.node.create_client(Empty, "/servicebot/move_base/clear_costmaps")
-        self.navigate = ActionClient(self.node, NavigateToPose, "/servicebot/navigate_to_pose")
+        self.room_info: ServiceClient[RoomInfo.Request, RoomInfo.Response] = (
+            self.node.create_client(RoomInfo, "/servicesim/room_info"))
+        self.clear: ServiceClient[Empty.Request, Empty.Response] = self.node.create_client(
+            Empty, "/servicebot/move_base/clear_costmaps")
+        self.navigate: NavigationClient = ActionClient(self.node, NavigateToPose,
+                                                       "/servicebot/navigate_to_pose")
         self.goal_type = NavigateToPose.Goal
 
     def wait_until_ready(self) -> None:
@@ -141,7 +152,7 @@ def actions(client: Client, calls: int) -> None:
     accepts, cancels, results, reached = [], [], [], 0
     for _ in range(calls):
         far = client.goal(*FAR_GOAL, 0.0)
-        seconds, handle = client.timed(lambda far=far: client.navigate.send_goal_async(far),
+        seconds, handle = client.timed(partial(client.navigate.send_goal_async, far),
                                        "goal acceptance")
         accepts.append(seconds)
         cancels.append(client.timed(handle.cancel_goal_async, "cancel")[0])

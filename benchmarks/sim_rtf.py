@@ -60,11 +60,16 @@ import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ros_harness import Simulator, isolate, spin_until, start_task
 
 from bt_servicesim.cli import OneLineArgumentParser
+
+if TYPE_CHECKING:  # rclpy is imported once the domain is set
+    from builtin_interfaces.msg import Time
+    from rclpy.executors import Executor
+    from rclpy.node import Node
 
 LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
 """Read by the simulator (``servicesim_sim/lockstep/server.py``): 0 waits for each tick."""
@@ -141,11 +146,13 @@ class Stamps:
         return sim1 - sim0, wall1 - wall0, (sim1 - sim0) / max(wall1 - wall0, 1e-9)
 
 
-def seconds_of(stamp: Any) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
+def seconds_of(stamp: Time) -> float:
+    """A ``builtin_interfaces/Time`` in seconds."""
+    seconds: float = stamp.sec + stamp.nanosec * 1e-9
+    return seconds
 
 
-def measure_alone(node: Any, executor: Any, *, speed: float, seconds: float) -> None:
+def measure_alone(node: Node, executor: Executor, *, speed: float, seconds: float) -> None:
     from rosgraph_msgs.msg import Clock
 
     stamps = Stamps()
@@ -333,7 +340,7 @@ def run_domain(out: Path, run: subprocess.Popen[bytes]) -> int:
     raise SystemExit("the run wrote no report naming its ROS domain")
 
 
-def watch_mission(node: Any, executor: Any,
+def watch_mission(node: Node, executor: Executor,
                   run: subprocess.Popen[bytes]) -> tuple[Stamps, ProcessCpu]:
     """The referee's stamps over the task and the processes' CPU, until the run ends."""
     from servicesim_competition.msg import RefereeState

@@ -49,15 +49,9 @@ from pathlib import Path
 from ros_harness import isolate
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, OneLineArgumentParser
-from bt_servicesim.evaluation.episodes import (
-    StopSignals,
-    descendants,
-    parent_death_signal,
-    start_time,
-    stop_process_tree,
-)
+from bt_servicesim.evaluation.process_tree import descendants, start_time, stop_process_tree
 from bt_servicesim.mission.report import read_report
-from bt_servicesim.mission.stopping import Terminated
+from bt_servicesim.mission.stopping import StopSignals, Terminated, parent_death_signal
 
 SHM = Path("/dev/shm")
 SEGMENT_LOCK = re.compile(r"^(fastdds_[0-9a-f]{16})_el$")
@@ -207,7 +201,7 @@ class Episode:
 
 def own_segments(pid: int) -> set[str]:
     """The segments whose lock ``pid`` holds open (its own participant's)."""
-    found = set()
+    found: set[str] = set()
     try:
         descriptors = os.listdir(f"/proc/{pid}/fd")
     except OSError:
@@ -348,10 +342,9 @@ def print_episodes(episodes: list[Episode], wall_s: float) -> None:
             print(f"peak RSS of the {kind} per episode: first {peaks[0]:.0f} MB, last "
                   f"{peaks[-1]:.0f} MB, max {max(peaks):.0f} MB, median "
                   f"{statistics.median(peaks):.0f} MB")
-    cpus = [(episode.cpu_s, float(episode.report["sim_time_s"])) for episode in episodes
+    cpus = [(episode.cpu_s, float(sim_s)) for episode in episodes
             if episode.cpu_s is not None and episode.report
-            and isinstance(episode.report.get("sim_time_s"), int | float)
-            and float(episode.report["sim_time_s"]) > 0]
+            and isinstance(sim_s := episode.report.get("sim_time_s"), int | float) and sim_s > 0]
     if cpus:
         print(f"CPU per episode (run and simulator): median "
               f"{statistics.median(cpu for cpu, _ in cpus):.1f} s, first {cpus[0][0]:.1f} s, "

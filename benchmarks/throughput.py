@@ -21,6 +21,7 @@ else ran); nothing here is asserted. Bad arguments give one line and exit status
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import shlex
@@ -61,7 +62,7 @@ def build_parser() -> OneLineArgumentParser:
     return parser
 
 
-def settings_for(args: Any, out: Path) -> EvaluationSettings:
+def settings_for(args: argparse.Namespace, out: Path) -> EvaluationSettings:
     return EvaluationSettings(
         episodes=args.episodes, scenarios=(args.scenario,), executives=(args.executive,),
         jobs=args.jobs, seed=args.first_seed, out=out, speed=args.speed,
@@ -98,7 +99,7 @@ def sim_time_line(rows: list[dict[str, Any]]) -> str:
             f"the longest, seed {seed}, {longest:.0f} s ({share:.0%} of it)")
 
 
-def figures(args: Any, argv: Sequence[str], *, load_start: float,
+def figures(args: argparse.Namespace, argv: Sequence[str], *, load_start: float,
             modes: dict[str, tuple[list[dict[str, Any]], float]]) -> dict[str, Any]:
     """What ``--json`` writes (read back by ``bt_servicesim.evaluation.throughput``)."""
     cold, warm = modes["cold"][0], modes["warm"][0]
@@ -114,7 +115,7 @@ def figures(args: Any, argv: Sequence[str], *, load_start: float,
     }
 
 
-def keep(cold: dict[str, Any], warm: dict[str, Any], args: Any) -> str:
+def keep(cold: dict[str, Any], warm: dict[str, Any], args: argparse.Namespace) -> str:
     """Where the two episodes that disagree are kept for a look (with ``--out`` they stay
     where they are; the temporary directory goes, so they are copied out of it)."""
     if args.out is not None:
@@ -126,7 +127,7 @@ def keep(cold: dict[str, Any], warm: dict[str, Any], args: Any) -> str:
     return f"both kept in {kept}"
 
 
-def check(args: Any, parser: OneLineArgumentParser) -> None:
+def check(args: argparse.Namespace, parser: OneLineArgumentParser) -> None:
     """Refuse bad arguments in one line before any episode starts."""
     if args.episodes < 1 or not 1 <= args.jobs <= 16:
         parser.error("--episodes must be 1 or more and --jobs within 1..16")

@@ -26,16 +26,21 @@ import subprocess
 import sys
 import time
 import xml.etree.ElementTree as ElementTree
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib.metadata import version
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from ros_harness import REPO, isolate
 
 from bt_servicesim.cli import OneLineArgumentParser
+
+if TYPE_CHECKING:  # imported where they are used: the tree and the monitor cost their import
+    from bt_servicesim.monitor.groot2_server import Groot2Server
+    from bt_servicesim.tree.lean_tree import LeanBehaviourTree
+    from tests.mission_script import ManualClock, Script
 
 sys.path.insert(0, str(REPO))  # tests.mission_script, the scripted leaves the tree tests use
 
@@ -45,7 +50,7 @@ STILL_DRIVING = ("RobotInPickUpArea",)
 
 
 def build_parser() -> OneLineArgumentParser:
-    from bt_servicesim.tree.loading import DEFAULT_TREE
+    from bt_servicesim.tree.files import DEFAULT_TREE
 
     parser = OneLineArgumentParser(prog="benchmarks/tick_cost.py",
                                    description="Tick cost of the mission tree.")
@@ -65,7 +70,8 @@ def microseconds(seconds: Sequence[float]) -> str:
             f"p99 {np.percentile(us, 99):7.1f} µs  (n={len(us)})")
 
 
-def timed_ticks(tree: Any, ticks: int | None, after_tick: Any = None) -> list[float]:
+def timed_ticks(tree: LeanBehaviourTree, ticks: int | None,
+                after_tick: Callable[[], None] | None = None) -> list[float]:
     """Tick until the root finishes (or ``ticks`` times); the wall time of each tick."""
     import py_trees
 
@@ -87,7 +93,8 @@ def navigation_leaves(tree_file: Path) -> list[str]:
     return sorted({element.get("name", "") for element in root.iter(NAVIGATION_TAG)})
 
 
-def scripted_mission(tree_file: Path, drive_ticks: int) -> tuple[Any, Any, Any]:
+def scripted_mission(tree_file: Path,
+                     drive_ticks: int) -> tuple[LeanBehaviourTree, ManualClock, Script]:
     """The tree file with scripted leaves, set up on a manual clock: (tree, clock, script)."""
     import py_trees
     from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
@@ -160,7 +167,7 @@ def monitored(tree_file: Path, drive_ticks: int, rounds: int) -> None:
               f" {figure.requests / figure.seconds:5.1f} requests answered a second")
 
 
-def wait_for_client(server: Any, client: subprocess.Popen[bytes]) -> None:
+def wait_for_client(server: Groot2Server, client: subprocess.Popen[bytes]) -> None:
     """Until the client polls (its tree request and two status polls), or exit if it quit."""
     while server.requests < 3:
         if client.poll() is not None:
@@ -168,7 +175,7 @@ def wait_for_client(server: Any, client: subprocess.Popen[bytes]) -> None:
         time.sleep(0.05)
 
 
-def monitored_round(tree_file: Path, drive_ticks: int, server: Any,
+def monitored_round(tree_file: Path, drive_ticks: int, server: Groot2Server | None,
                     figures: MonitorFigures) -> None:
     """One scripted mission, watched by ``server`` unless it is ``None``."""
     tree, clock, _ = scripted_mission(tree_file, drive_ticks)

@@ -81,7 +81,7 @@ EXIT_OK, EXIT_NO_GRAPHVIZ, EXIT_BAD_INPUT = 0, 1, 2
 
 def build_parser() -> argparse.ArgumentParser:
     from bt_servicesim.cli import OneLineArgumentParser
-    from bt_servicesim.tree.loading import DEFAULT_TREE
+    from bt_servicesim.tree.files import DEFAULT_TREE
 
     parser = OneLineArgumentParser(prog="python -m bt_servicesim.dump",
                             description="Draw a mission tree file.")

@@ -35,14 +35,22 @@ import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, OneLineArgumentParser
 from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, STARTUP_LIMIT_S, RunSettings
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.loading import DEFAULT_TREE, MissionTreeError
+from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.loading import MissionTreeError
+
+if TYPE_CHECKING:  # rclpy is imported once the worker runs ROS
+    from rclpy.client import Client
+    from rclpy.task import Future
+    from servicesim_competition.srv import ResetEpisode
+
+    from bt_servicesim.mission.simulator_process import SimulatorProcess
 
 PROG = "python -m bt_servicesim.warm_worker"
 RESET_SERVICE = "/servicesim/reset"
@@ -229,7 +237,8 @@ class _Resets:
         self.node = Node("bt_servicesim_warm_worker", start_parameter_services=False)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.client = self.node.create_client(ResetEpisode, RESET_SERVICE)
+        self.client: Client[ResetEpisode.Request, ResetEpisode.Response] = (
+            self.node.create_client(ResetEpisode, RESET_SERVICE))
         self.request_type = ResetEpisode.Request
         return self
 
@@ -237,7 +246,7 @@ class _Resets:
         self.executor.shutdown()
         self.node.destroy_node()
 
-    def wait_for_service(self, simulator: Any) -> bool:
+    def wait_for_service(self, simulator: SimulatorProcess) -> bool:
         deadline = time.monotonic() + STARTUP_LIMIT_S
         while not self.client.service_is_ready():
             if simulator.exit_code() is not None or time.monotonic() > deadline:
@@ -245,11 +254,12 @@ class _Resets:
             self.executor.spin_once(timeout_sec=0.05)
         return True
 
-    def ask(self, arguments: list[str]) -> Any:
+    def ask(self, arguments: list[str]) -> Future[ResetEpisode.Response]:
         """Ask the simulator to reset to these arguments; the answer's future."""
         return self.client.call_async(self.request_type(arguments=arguments))
 
-    def answer(self, future: Any, simulator: Any) -> str | None:
+    def answer(self, future: Future[ResetEpisode.Response],
+               simulator: SimulatorProcess) -> str | None:
         """None once the reset asked for is done, else the simulator's refusal;
         :class:`SimulatorLostError` if it died or did not answer."""
         deadline = time.monotonic() + RESET_WAIT_S

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator
 from typing import Any
 
 import py_trees
@@ -46,7 +46,6 @@ from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav2_msgs.action import NavigateToPose
 from rclpy.action import ActionClient
-from rclpy.action.client import ClientGoalHandle
 from rclpy.client import Client
 from rclpy.node import Node
 from rclpy.publisher import Publisher
@@ -57,6 +56,11 @@ from std_srvs.srv import Empty
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.ros.initial_pose import INITIAL_POSE_QOS, initial_pose_message
 from bt_servicesim.ros.messages import pose_from_msg, pose_to_msg
+from bt_servicesim.ros.navigate_to_pose import (
+    NavigationClient,
+    NavigationGoalHandle,
+    NavigationResult,
+)
 from bt_servicesim.ros.sim_clock import SimStopwatch, sim_now_s
 from bt_servicesim.ros.sim_ticker import sim_ticker
 
@@ -113,13 +117,13 @@ class SeedStateMachine:
         self._jitter = random.Random(0 if seed is None else seed).uniform  # never OS entropy
         self._state = "-"
         self._activity = ""
-        self._clients: dict[str, Client] = {}
-        self._navigator: ActionClient | None = None
-        self._initial_pose: Publisher | None = None
+        self._clients: dict[str, Client[Any, Any]] = {}
+        self._navigator: NavigationClient | None = None
+        self._initial_pose: Publisher[PoseWithCovarianceStamped] | None = None
         self._ticker: Any = None
         self._clock: SimStopwatch | None = None
-        self._body: Iterator[None] | None = None
-        self._pending_call: tuple[Client, Future] | None = None
+        self._body: Generator[None, None, None] | None = None
+        self._pending_call: tuple[Client[Any, Any], Future[Any]] | None = None
         self._clearing_missing = False
         self._goal: GoalInFlight | None = None
         self._task: Any = None
@@ -194,7 +198,7 @@ class SeedStateMachine:
             self._ticker = None
 
     # ---------------------------------------------------------------- the four states
-    def _run_states(self) -> Iterator[None]:
+    def _run_states(self) -> Generator[None, None, None]:
         """Every state ends in "succeeded" in the seed, so the transitions are a straight line."""
         bodies = (self._begin_task, self._pickup, self._drop_off, self._return_to_start)
         for name, body in zip(SEED_STATES, bodies, strict=True):
@@ -345,7 +349,7 @@ class SeedStateMachine:
     def _now(self) -> float:
         return sim_now_s(self.node.get_clock())
 
-    def _require_navigator(self) -> ActionClient:
+    def _require_navigator(self) -> NavigationClient:
         if self._navigator is None:
             raise RuntimeError("SeedStateMachine: call setup() before start()")
         return self._navigator
@@ -358,10 +362,10 @@ class TaskRefusedError(RuntimeError):
 class GoalInFlight:
     """One NavigateToPose goal: its acceptance, then its result, polled without blocking."""
 
-    def __init__(self, acceptance: Future) -> None:
+    def __init__(self, acceptance: Future[NavigationGoalHandle]) -> None:
         self.acceptance = acceptance
-        self.handle: ClientGoalHandle | None = None
-        self.outcome: Future | None = None
+        self.handle: NavigationGoalHandle | None = None
+        self.outcome: Future[NavigationResult] | None = None
 
     def result(self) -> Any:
         """The wrapped result (``status``, ``result``) once there is one; None until then."""
@@ -395,7 +399,7 @@ class _Rejected:
 REJECTED = _Rejected()
 
 
-def _cancel_once_accepted(future: Future) -> None:
+def _cancel_once_accepted(future: Future[NavigationGoalHandle]) -> None:
     """Cancel a goal whose acceptance arrives after it was abandoned."""
     if future.cancelled() or future.exception() is not None:
         return

@@ -44,7 +44,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from distributed import Client, Event, Future, Variable, get_client, get_worker
+from dask.typing import Key
+from distributed import Client, Event, Future, Variable, Worker, get_client, get_worker
 
 from bt_servicesim.cli import UsageError
 from bt_servicesim.evaluation.episodes import (
@@ -79,6 +80,8 @@ LOST = "the cluster's scheduler was lost"
 """The failure of an episode under way when the client lost the scheduler (a ``not_run`` row)."""
 
 Row = dict[str, Any]
+Played = tuple[Row, bytes] | None
+"""What a worker sends back: the row and the run directory packed, or None if stopped first."""
 
 
 def lost(client: Client) -> bool:
@@ -172,7 +175,7 @@ class ClusterBatch:
         self.local = EpisodeRunner(settings, command)  # what an earlier evaluation kept
         self.token = f"bt_servicesim-{uuid.uuid4().hex[:12]}"
         self.stop = Event(f"{self.token}-stop", client=client)
-        self.under_way: dict[Future, tuple[int, Episode]] = {}
+        self.under_way: dict[Future[Played], tuple[int, Episode]] = {}
         self.rows: list[tuple[int, Row]] = []
 
     def run(self, episodes: Iterable[Episode], stops: StopSignals) -> None:
@@ -199,7 +202,8 @@ class ClusterBatch:
         """Episodes the workers can run at once: their threads, all together (at least one,
         which waits on the scheduler for a worker to join); none if the scheduler cannot say."""
         try:
-            return max(1, sum(self.client.nthreads().values()))
+            threads: dict[str, int] = self.client.nthreads()
+            return max(1, sum(threads.values()))
         except Exception:  # the scheduler is being lost: the caller looks again
             return 0
 
@@ -232,7 +236,7 @@ class ClusterBatch:
             if row is not None:
                 self.record(number, row)
 
-    def take(self, future: Future, number: int, episode: Episode) -> Row | None:
+    def take(self, future: Future[Played], number: int, episode: Episode) -> Row | None:
         """The episode's row, its run directory unpacked under ``--out``."""
         try:
             played = future.result()
@@ -299,7 +303,7 @@ def pack(directory: Path) -> bytes:
 
 
 def play_episode(settings: EvaluationSettings, command: EpisodeCommand, episode: Episode,
-                 stop_name: str, attempts_name: str) -> tuple[Row, bytes] | None:
+                 stop_name: str, attempts_name: str) -> Played:
     """On a worker: play the episode as the local pool does, in a scratch directory; its row
     and run directory, or None if the evaluation was stopped before it started."""
     client = get_client()
@@ -372,7 +376,7 @@ def _watching(stop: Event, stopping: threading.Event) -> Iterator[None]:
         watcher.join()
 
 
-def _stop_asked(stop: Event, worker: Any, key: Any) -> bool:
+def _stop_asked(stop: Event, worker: Worker, key: Key) -> bool:
     """Whether the episode must stop: the evaluation set the stop event (waited for on the
     scheduler, :data:`WATCH_S` at most), the scheduler no longer wants the task's result (its
     client is gone), or the scheduler is lost (nobody can take the episode back)."""

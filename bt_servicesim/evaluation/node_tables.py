@@ -62,6 +62,13 @@ class Episode:
     def group(self) -> tuple[str, str]:
         return str(self.row.get("executive")), str(self.row.get("scenario"))
 
+    @property
+    def figures(self) -> Mapping[str, Any]:
+        """The profile of an episode that has one (every episode of a group has)."""
+        if self.profile is None:
+            raise ValueError(f"episode {self.row.get('out')!r} has no profile")
+        return self.profile
+
 
 def load_episodes(rows: Iterable[Mapping[str, Any]]) -> list[Episode]:
     """The played rows with the profiles their runs wrote (``None`` where there is none)."""
@@ -93,10 +100,10 @@ def node_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     rows = []
     for (executive, scenario), group in sorted(_groups(episodes).items()):
         count = len(group)
-        sim_time = sum(float(episode.profile["sim_time_s"]) for episode in group) or 1.0
+        sim_time = sum(float(episode.figures["sim_time_s"]) for episode in group) or 1.0
         figures: dict[str, list[Mapping[str, Any]]] = {}
         for episode in group:
-            for key, node in episode.profile["nodes"].items():
+            for key, node in episode.figures["nodes"].items():
                 figures.setdefault(key, []).append(node)
         for key, nodes in figures.items():
             first = nodes[0]
@@ -123,18 +130,18 @@ def recovery_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     """The ``recoveries`` table: every Retry and RecoveryNode (see the module docstring)."""
     rows = []
     for (executive, scenario), group in sorted(_groups(episodes).items()):
-        keys = [key for key, node in group[0].profile["nodes"].items() if "fired" in node]
+        keys = [key for key, node in group[0].figures["nodes"].items() if "fired" in node]
         for key in keys:
             fired = [episode for episode in group
-                     if episode.profile["nodes"].get(key, {}).get("fired", 0) > 0]
+                     if episode.figures["nodes"].get(key, {}).get("fired", 0) > 0]
             succeeded = [episode for episode in fired if _phase_succeeded(episode, key)]
-            node = group[0].profile["nodes"][key]
+            node = group[0].figures["nodes"][key]
             rows.append({
                 "executive": executive, "scenario": scenario, "node": key,
                 "label": node.get("label", key), "type": node.get("type", ""),
                 "phase": node.get("phase", "-"), "episodes": len(group),
                 "fired_share": _r(len(fired) / len(group)),
-                "fired_per_episode": _r(sum(episode.profile["nodes"].get(key, {}).get("fired", 0)
+                "fired_per_episode": _r(sum(episode.figures["nodes"].get(key, {}).get("fired", 0)
                                             for episode in group) / len(group)),
                 "phase_succeeded_after": _r(len(succeeded) / len(fired)) if fired else None,
             })
@@ -142,9 +149,9 @@ def recovery_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
 
 
 def _phase_succeeded(episode: Episode, key: str) -> bool:
-    phase = episode.profile["nodes"][key].get("phase")
+    phase = episode.figures["nodes"][key].get("phase")
     return any(entry["phase"] == phase and entry.get("succeeded")
-               for entry in episode.profile["phases"])
+               for entry in episode.figures["phases"])
 
 
 # ------------------------------------------------------------------------------------ phases
@@ -154,7 +161,7 @@ def phase_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     for (executive, scenario), group in sorted(_groups(episodes).items()):
         by_phase: dict[str, list[tuple[Episode, Mapping[str, Any]]]] = {}
         for episode in group:
-            for entry in episode.profile["phases"]:
+            for entry in episode.figures["phases"]:
                 if entry["phase"] != "-":  # not a phase: before the first tick, after the last
                     by_phase.setdefault(entry["phase"], []).append((episode, entry))
         for phase, entries in by_phase.items():
@@ -177,7 +184,7 @@ def phase_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
                 "points": _r(sum(entry["points"] for _, entry in entries) / count),
                 **{f"points {cause}": _r(points / count) for cause, points in sorted(
                     causes.items())},
-                **_zones(episode.profile.get("proxemics", {}).get(phase, {})
+                **_zones(episode.figures.get("proxemics", {}).get(phase, {})
                          for episode, _ in entries),
             })
     return rows
@@ -227,7 +234,7 @@ def cause_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     for (executive, scenario), group in sorted(_groups(episodes).items()):
         causes: dict[str, float] = {}
         for episode in group:
-            for cause, points in episode.profile["penalties"]["by_role"].items():
+            for cause, points in episode.figures["penalties"]["by_role"].items():
                 causes[cause] = causes.get(cause, 0.0) + points
         total = sum(causes.values())
         for cause, points in sorted(causes.items(), key=lambda item: -item[1]):

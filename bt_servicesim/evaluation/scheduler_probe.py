@@ -23,7 +23,7 @@ import sys
 from typing import Any
 from urllib.parse import urlsplit
 
-from distributed.protocol import dumps, loads
+from distributed.protocol.core import dumps, loads
 from distributed.protocol.utils import pack_frames, unpack_frames
 
 __all__ = ["MAX_ANSWER_BYTES", "ProbeError", "server_kind"]

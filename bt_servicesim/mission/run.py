@@ -35,6 +35,7 @@ from typing import Any
 
 import rclpy
 from rclpy.action import ActionClient
+from rclpy.client import Client
 from rclpy.executors import Executor
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
@@ -68,6 +69,7 @@ from bt_servicesim.ros.discovery import (
 )
 from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import clock_now_ns, sim_now_s
+from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.tree.executive import Executive
 
 TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
@@ -259,7 +261,7 @@ class MissionRun:
             self.lockstep.leave()
             self._left_lockstep = True
 
-    def _run(self, node: ExecutiveNode, executor: Executor, monitor: RefereeMonitor,
+    def _run(self, node: ExecutiveNode, executor: Spinner, monitor: RefereeMonitor,
              executive: Executive, records: RunRecords) -> int:
         refused = self._wait_for_simulator(node, executor)
         if refused is not None:
@@ -326,13 +328,14 @@ class MissionRun:
             return f"the mission tree ended with {executive.outcome.name}"
         return "the mission did not end"
 
-    def _wait_for_simulator(self, node: Node, executor: Executor) -> int | None:
+    def _wait_for_simulator(self, node: Node, executor: Spinner) -> int | None:
         """Until /clock runs and the referee answers; an exit code if the simulator refused."""
-        client = node.create_client(NewTask, "/servicesim/new_task")
+        client: Client[NewTask.Request, NewTask.Response] = node.create_client(
+            NewTask, "/servicesim/new_task")
         deadline = time.monotonic() + STARTUP_LIMIT_S
         while not (client.service_is_ready() and node.get_clock().now().nanoseconds > 0):
             code = None if self.simulator is None else self.simulator.exit_code()
-            if code is not None:
+            if self.simulator is not None and code is not None:
                 self.failure = self.simulator.describe_exit()
                 print(f"python -m bt_servicesim.run: error: {self.failure}", file=sys.stderr)
                 return EXIT_BAD_INPUT if code == EXIT_BAD_INPUT else EXIT_FAILED
@@ -345,7 +348,7 @@ class MissionRun:
         return None
 
     def _lockstep_offer(self, node: ExecutiveNode,
-                        executor: Executor) -> lockstep.LockstepClient | None:
+                        executor: Spinner) -> lockstep.LockstepClient | None:
         """A lockstep client if the backend offers lockstep (and the run wants it), else None.
 
         Decided before the tree sets up: in lockstep every subscription is reliable, so that
@@ -372,7 +375,7 @@ class MissionRun:
         return STARTUP_LIMIT_S if self.simulator is not None else lockstep.OFFER_WAIT_S
 
     def _join_lockstep(self, client: lockstep.LockstepClient | None,
-                       executor: Executor) -> None:
+                       executor: Spinner) -> None:
         if client is None:
             return
         if client.join(executor, wait_s=self._lockstep_wait_s()):
@@ -382,7 +385,7 @@ class MissionRun:
             print("free running: the simulator did not answer the lockstep join", flush=True)
 
     @staticmethod
-    def _wait_for_servers(node: Node, executor: Executor) -> None:
+    def _wait_for_servers(node: Node, executor: Spinner) -> None:
         """Until every service and action the executive set up a client for has a server.
 
         A client is "ready" once its requests reach the server; the server's answers reach
@@ -399,7 +402,7 @@ class MissionRun:
 
         MissionRun._spin_until(executor, every_server_ready, SERVER_WAIT_LIMIT_S)
 
-    def _await_discovery(self, node: Node, executor: Executor) -> None:
+    def _await_discovery(self, node: Node, executor: Spinner) -> None:
         """Until the backend has discovered every reader the executive set up (a probe on
         /clock, or /tf on the system clock, :mod:`bt_servicesim.ros.discovery`); bounded,
         then said and gone on with."""
@@ -484,11 +487,11 @@ class MissionRun:
                 "sim_time_s": dropped.sim_time.sec + dropped.sim_time.nanosec / 1e9}
 
     @staticmethod
-    def _spin_for(executor: Executor, seconds: float) -> None:
+    def _spin_for(executor: Spinner, seconds: float) -> None:
         MissionRun._spin_until(executor, lambda: False, seconds)
 
     @staticmethod
-    def _spin_until(executor: Executor, done: Any, seconds: float) -> None:
+    def _spin_until(executor: Spinner, done: Callable[[], bool], seconds: float) -> None:
         deadline = time.monotonic() + seconds
         while not done() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)

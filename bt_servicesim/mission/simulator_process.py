@@ -95,7 +95,8 @@ class SimulatorProcess:
         if self._process is not None:
             return
         parent = os.getpid()
-        command, passed = self.command, ()
+        command = self.command
+        passed: tuple[int, ...] = ()
         if announce_checks:
             self._checks, write_end = os.pipe()
             command, passed = [*self.command, CHECKED_FD_OPTION, str(write_end)], (write_end,)

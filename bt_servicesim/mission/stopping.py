@@ -48,7 +48,10 @@ import sys
 import threading
 from collections.abc import Callable
 from types import FrameType, TracebackType
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    from rclpy.executors import Executor
 
 from bt_servicesim.cli import output_closed
 
@@ -210,7 +213,7 @@ class WatchedOutput:
     def __init__(self, stream: TextIO, *, on_closed: Callable[[], None]) -> None:
         while isinstance(stream, WatchedOutput):  # a nested StopSignals: the inner one decides
             stream = stream._stream
-        self._stream = stream
+        self._stream: TextIO = stream
         self._on_closed = on_closed
         self.closed_by_reader = False
 
@@ -246,7 +249,7 @@ class BetweenSpins:
     other attribute is the executor's own.
     """
 
-    def __init__(self, executor: Any, stops: StopSignals) -> None:
+    def __init__(self, executor: Executor, stops: StopSignals) -> None:
         self._executor = executor
         self._stops = stops
 

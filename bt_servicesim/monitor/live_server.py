@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from foxglove import Context
-    from foxglove.websocket import ChannelView, Client
+    from foxglove.websocket import ChannelView, Client, ServerListener
 
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765  # Foxglove's convention
@@ -67,7 +67,7 @@ class LiveServer:
         try:
             self._server = foxglove.start_server(
                 name=SERVER_NAME, host=address.host, port=address.port, context=self.context,
-                server_listener=self, supported_encodings=["cdr"])
+                server_listener=_replaying_listener(self._replays), supported_encodings=["cdr"])
         except RuntimeError as error:
             reason = str(error).removeprefix("FoxgloveError: ")
             raise LiveServerError(f"--foxglove {address}: cannot serve there: {reason}") from None
@@ -86,18 +86,24 @@ class LiveServer:
         """Call ``replay`` whenever a client subscribes to the channel ``channel_id``."""
         self._replays[channel_id] = replay
 
-    # foxglove.websocket.ServerListener: called on the server's own thread
-    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
-        replay = self._replays.get(channel.id)
-        if replay is not None:
-            replay()
-
-    def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
-        return None
-
     def stop(self) -> None:
         """Close every connection and stop listening; idempotent."""
         self._server.stop()
+
+
+def _replaying_listener(replays: dict[int, Callable[[], None]]) -> ServerListener:
+    """A server listener that calls a channel's replay whenever a client subscribes to it."""
+    from foxglove.websocket import ServerListener
+
+    class ReplayOnSubscribe(ServerListener):
+        """Called on the server's own thread; every other event is foxglove's default."""
+
+        def on_subscribe(self, client: Client, channel: ChannelView) -> None:
+            replay = replays.get(channel.id)
+            if replay is not None:
+                replay()
+
+    return ReplayOnSubscribe()
 
 
 def open_live_server(address: LiveAddress) -> LiveServer:

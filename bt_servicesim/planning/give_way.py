@@ -44,6 +44,7 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.goals import ROBOT_CLEARANCE
@@ -309,13 +310,13 @@ def _clear_of_doorway(grid: OccupancyGrid2D, routes: RouteTree, node: int, *,
     nodes = routes.route_to(node)
     points = routes.points(nodes)
     near_walls = np.flatnonzero(grid.clearances_at(points[:, 0], points[:, 1]) < DOORWAY_WIDTH / 2)
-    found = []
+    found: list[Doorway] = []
     for index in near_walls:
         key = int(nodes[index])
         if key not in doorways:
             doorways[key] = doorway(grid, float(points[index, 0]), float(points[index, 1]))
-        if doorways[key] is not None:
-            found.append(doorways[key])
+        if (opening := doorways[key]) is not None:
+            found.append(opening)
     if not found:
         return True
     door = min(found, key=lambda opening: opening.width)
@@ -341,7 +342,8 @@ def travel_heading(trail: np.ndarray, robot: Pose2D) -> float:
 def _clear_of_people(xs: np.ndarray, ys: np.ndarray, people: np.ndarray) -> np.ndarray:
     """Which points lie at least :data:`PEOPLE_CLEAR` from every person."""
     gaps = np.hypot(xs[:, None] - people[None, :, 0], ys[:, None] - people[None, :, 1])
-    return np.all(gaps >= PEOPLE_CLEAR, axis=1)
+    clear: NDArray[np.bool_] = np.all(gaps >= PEOPLE_CLEAR, axis=1)
+    return clear
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:
@@ -387,10 +389,13 @@ def _distance_to_polyline(xs: np.ndarray, ys: np.ndarray, line: np.ndarray) -> n
     """Each point's distance to the polyline ``line`` (n, 2); a single point counts as one."""
     points = np.stack([xs, ys], axis=1)[:, None, :]
     if len(line) == 1:
-        return np.hypot(*(points[:, 0, :] - line[0]).T)
+        to_point: NDArray[np.float64] = np.hypot(*(points[:, 0, :] - line[0]).T)
+        return to_point
     starts, ends = line[:-1][None, :, :], line[1:][None, :, :]
     along = ends - starts
     squared = np.maximum(np.sum(along * along, axis=2), 1e-12)
     t = np.clip(np.sum((points - starts) * along, axis=2) / squared, 0.0, 1.0)
     nearest = starts + t[:, :, None] * along
-    return np.min(np.hypot(*(points - nearest).transpose(2, 0, 1)), axis=1)
+    to_line: NDArray[np.float64] = np.min(np.hypot(*(points - nearest).transpose(2, 0, 1)),
+                                          axis=1)
+    return to_line

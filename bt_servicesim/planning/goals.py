@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterable
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from bt_servicesim.planning.geometry import Box, Point, Pose2D
 from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree
@@ -156,8 +157,9 @@ def pickup_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> Pose2D | None
     def cost(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         beyond_reach = np.maximum(farthest_corner(spawn, xs, ys) - PICKUP_REACH, 0.0)
         crowding = np.maximum(SOCIAL_DISTANCE - distance_to_box(spawn, xs, ys), 0.0)
-        return 100.0 * beyond_reach + 10.0 * crowding + 1e-2 * np.hypot(xs - robot.x,
-                                                                        ys - robot.y)
+        travel = np.hypot(xs - robot.x, ys - robot.y)
+        costs: NDArray[np.float64] = 100.0 * beyond_reach + 10.0 * crowding + 1e-2 * travel
+        return costs
 
     for margin in (GOAL_TOLERANCE, GOAL_TOLERANCE / 2.0, 0.0):
         spot = _best_cell(grid, shrunk(box, margin, margin), reachable, cost)

@@ -44,6 +44,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage
 
 from bt_servicesim.planning.geometry import Point, Pose2D
@@ -248,21 +249,25 @@ def _candidate_cells(grid: OccupancyGrid2D, heard: np.ndarray) -> np.ndarray:
 
 
 def _distances(cells: np.ndarray, points: np.ndarray) -> np.ndarray:
-    return np.hypot(cells[:, None, 0] - points[None, :, 0], cells[:, None, 1] - points[None, :, 1])
+    distances: NDArray[np.float64] = np.hypot(cells[:, None, 0] - points[None, :, 0],
+                                              cells[:, None, 1] - points[None, :, 1])
+    return distances
 
 
 def _count_within(cells: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
     """For each cell, how many points lie within ``radius``."""
     if points.size == 0:
         return np.zeros(len(cells), dtype=int)
-    return (_distances(cells, points) <= radius).sum(axis=1)
+    counts: NDArray[np.intp] = (_distances(cells, points) <= radius).sum(axis=1)
+    return counts
 
 
 def _count_beyond(cells: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
     """For each cell, how many points lie farther than ``radius``."""
     if points.size == 0:
         return np.zeros(len(cells), dtype=int)
-    return (_distances(cells, points) > radius).sum(axis=1)
+    counts: NDArray[np.intp] = (_distances(cells, points) > radius).sum(axis=1)
+    return counts
 
 
 def locate_bystanders(history: RfidHistory, guest: str, grid: OccupancyGrid2D,
@@ -348,7 +353,8 @@ def _score(estimate: GuestEstimate, cells: np.ndarray, robot: Pose2D) -> np.ndar
     off_ring = np.abs(np.hypot(cells[:, 0] - estimate.x, cells[:, 1] - estimate.y)
                       - APPROACH_DISTANCE)
     travel = np.hypot(cells[:, 0] - robot.x, cells[:, 1] - robot.y)
-    return in_reach - crowding - 0.1 * off_ring - 1e-3 * travel
+    scores: NDArray[np.float64] = in_reach - crowding - 0.1 * off_ring - 1e-3 * travel
+    return scores
 
 
 def _wall_berth(grid: OccupancyGrid2D, cells: np.ndarray) -> np.ndarray:
@@ -356,7 +362,8 @@ def _wall_berth(grid: OccupancyGrid2D, cells: np.ndarray) -> np.ndarray:
     :data:`~bt_servicesim.planning.goals.ROBOT_CLEARANCE`."""
     rows, cols = _cells_of(grid, cells)
     shortfall = (WALL_BERTH - grid.clearances[rows, cols]) / (WALL_BERTH - ROBOT_CLEARANCE)
-    return -WALL_WEIGHT * np.clip(shortfall, 0.0, 1.0)
+    berth: NDArray[np.float64] = -WALL_WEIGHT * np.clip(shortfall, 0.0, 1.0)
+    return berth
 
 
 def _departure(estimate: GuestEstimate, grid: OccupancyGrid2D, cells: np.ndarray,
@@ -373,7 +380,9 @@ def _departure(estimate: GuestEstimate, grid: OccupancyGrid2D, cells: np.ndarray
     guest_to_exit = np.min(to_exit + np.hypot(cells[:, 0] - estimate.x, cells[:, 1] - estimate.y))
     if not np.isfinite(guest_to_exit):
         return np.zeros(len(cells))
-    return DEPARTURE_WEIGHT * np.clip((guest_to_exit - to_exit) / DEPARTURE_SCALE, -1.0, 1.0)
+    departure: NDArray[np.float64] = DEPARTURE_WEIGHT * np.clip(
+        (guest_to_exit - to_exit) / DEPARTURE_SCALE, -1.0, 1.0)
+    return departure
 
 
 def _reachable_keeping(berth: float, estimate: GuestEstimate, grid: OccupancyGrid2D,
@@ -400,7 +409,8 @@ def _reachable_keeping(berth: float, estimate: GuestEstimate, grid: OccupancyGri
     if robot_label == 0:
         return everywhere
     cell_rows, cell_cols = _cells_of(grid, cells)
-    return labels[cell_rows, cell_cols] == robot_label
+    reachable: NDArray[np.bool_] = labels[cell_rows, cell_cols] == robot_label
+    return reachable
 
 
 def _window_indices(grid: OccupancyGrid2D, window: Window,

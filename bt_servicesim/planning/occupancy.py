@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
@@ -205,8 +206,8 @@ class OccupancyGrid2D:
         return (float(window.xs[best[1]]), float(window.ys[best[0]]))
 
     def clear_lines(
-        self, x: float, y: float, xs: np.ndarray, ys: np.ndarray, clearance: float
-    ) -> np.ndarray:
+        self, x: float, y: float, xs: ArrayLike, ys: ArrayLike, clearance: float
+    ) -> NDArray[np.bool_]:
         """For each end (xs[i], ys[i]), whether the straight line from (x, y) keeps ``clearance``.
 
         The lines are sampled every cell, which is exact enough for a clearance of a few cells.
@@ -218,7 +219,9 @@ class OccupancyGrid2D:
         steps = max(2, math.ceil(longest / self.resolution) + 1)
         t = np.linspace(0.0, 1.0, steps)[None, :]
         room = self._clearances_at(x + (xs[:, None] - x) * t, y + (ys[:, None] - y) * t)
-        return np.all(room >= max(clearance, np.finfo(np.float32).tiny), axis=1)
+        clear: NDArray[np.bool_] = np.all(room >= max(clearance, np.finfo(np.float32).tiny),
+                                          axis=1)
+        return clear
 
     def clearances_at(self, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Clearance at many points at once (0 outside the map), in the points' shape."""
@@ -257,7 +260,8 @@ class OccupancyGrid2D:
         seed = self.nearest_free(x, y, clearance=clearance, max_radius=SEED_RADIUS)
         if seed is None:
             return np.zeros(labels.shape, dtype=bool)
-        return labels == labels[self.world_to_cell(*seed)]
+        reachable: NDArray[np.bool_] = labels == labels[self.world_to_cell(*seed)]
+        return reachable
 
     def routes_from(self, x: float, y: float, clearance: float) -> RouteTree | None:
         """The shortest routes from (x, y) over cells with ``clearance``; None if boxed in.
@@ -328,8 +332,8 @@ class RouteTree:
         node_of[lattice] = np.arange(len(node_cells))
         graph = _lattice_graph(node_of, stride * grid.resolution)
         start = _nearest_node(grid, node_cells, x, y)
-        distances, predecessors = csgraph.dijkstra(
-            graph, directed=False, indices=start, return_predecessors=True
+        distances, predecessors = csgraph.dijkstra(  # a 0-d index: 1-d results
+            graph, directed=False, indices=np.asarray(start), return_predecessors=True
         )
         return cls(grid=grid, stride=stride, node_of=node_of, node_cells=node_cells,
                    distances=distances, predecessors=predecessors)

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from typing import Any
 
 import py_trees
+import pydot
 
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, short_label, walk
 
@@ -131,7 +132,7 @@ def _heat_label(name: str, row: Mapping[str, Any]) -> str:
     return "\\n".join(parts)
 
 
-def _dot_graph(root: py_trees.behaviour.Behaviour) -> Any:
+def _dot_graph(root: py_trees.behaviour.Behaviour) -> pydot.Dot:
     with _ascii_symbols():
         graph = py_trees.display.dot_tree(root)
     graph.set_name(py_trees.utilities.get_valid_filename(short_label(root.name)) or "tree")

@@ -19,9 +19,12 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bt_servicesim.records.episode_view import episode_view
+
+if TYPE_CHECKING:
+    import jinja2
 
 HTML_NAME = "report.html"
 TEMPLATES = Path(__file__).with_name("templates")
@@ -34,7 +37,7 @@ COLUMNS = (
 
 
 @cache
-def _environment() -> Any:
+def _environment() -> jinja2.Environment:
     import jinja2
 
     return jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES),

@@ -41,6 +41,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from mcap.writer import CompressionType, Writer
 from nav_msgs.msg import OccupancyGrid, Odometry
 from py_trees.common import Status
+from rclpy.client import Client
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
@@ -311,8 +312,9 @@ class TaskTopic:
         self.recorder = recorder
         latched = RecordedTopic(TASK_TOPIC, String, latched=True).qos
         self.publisher = node.create_publisher(String, TASK_TOPIC, latched)
-        self.client = node.create_client(TaskInfo, "/servicesim/task_info")
-        self._pending: Future | None = None
+        self.client: Client[TaskInfo.Request, TaskInfo.Response] = node.create_client(
+            TaskInfo, "/servicesim/task_info")
+        self._pending: Future[TaskInfo.Response] | None = None
         self._referee = shared_subscription(
             node, RefereeState, "/servicesim/referee", self._on_referee,
             RecordedTopic("/servicesim/referee", RefereeState, latched=True).qos)
@@ -324,7 +326,7 @@ class TaskTopic:
             self._pending = self.client.call_async(TaskInfo.Request())
             self._pending.add_done_callback(self._on_task)
 
-    def _on_task(self, future: Future) -> None:
+    def _on_task(self, future: Future[TaskInfo.Response]) -> None:
         self._pending = None
         response = future.result()
         if response is None or not response.guest_name:

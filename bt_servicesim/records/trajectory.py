@@ -32,7 +32,7 @@ from collections import Counter, deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from nav_msgs.msg import OccupancyGrid, Odometry
@@ -47,6 +47,9 @@ from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, RECORDED_TOPICS, TREE
 from bt_servicesim.records.recording import RecordingCutShortError, recorded_messages
 from bt_servicesim.records.tree_log import read_tree_log
 from bt_servicesim.ros.planar_cdr import odometry_pose
+
+if TYPE_CHECKING:  # matplotlib is imported when a picture is drawn
+    from matplotlib.axes import Axes
 
 TRAJECTORY_NAME = "trajectory.png"
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -322,7 +325,7 @@ def render_trajectory(trace: RunTrace, *, path: Path, boxes: Mapping[str, Box] |
         partial.unlink(missing_ok=True)
 
 
-def _draw_boxes(axes: Any, boxes: Mapping[str, Box]) -> None:
+def _draw_boxes(axes: Axes, boxes: Mapping[str, Box]) -> None:
     from matplotlib.patches import Rectangle
 
     for index, (name, box) in enumerate(boxes.items()):
@@ -333,7 +336,7 @@ def _draw_boxes(axes: Any, boxes: Mapping[str, Box]) -> None:
                                  label=name.replace("_box", "").replace("_", "-") + " area"))
 
 
-def _draw_paths(axes: Any, trace: RunTrace) -> None:
+def _draw_paths(axes: Axes, trace: RunTrace) -> None:
     for index, points in enumerate(trace.people.values()):
         if len(points) > 1:
             xs, ys = zip(*points, strict=True)
@@ -352,7 +355,7 @@ def _draw_paths(axes: Any, trace: RunTrace) -> None:
         axes.plot(*trace.start, "s", color=ROBOT_COLOUR, markersize=8, label="robot start")
 
 
-def _draw_events(axes: Any, events: list[RunEvent]) -> None:
+def _draw_events(axes: Axes, events: list[RunEvent]) -> None:
     """A numbered marker per event, and the numbered list beside the legend."""
     labelled: set[str] = set()
     lines = []
@@ -372,7 +375,7 @@ def _draw_events(axes: Any, events: list[RunEvent]) -> None:
                   va="top", ha="left", family="monospace", fontsize=7.5)
 
 
-def _frame(axes: Any, trace: RunTrace, boxes: Mapping[str, Box]) -> None:
+def _frame(axes: Axes, trace: RunTrace, boxes: Mapping[str, Box]) -> None:
     """Zoom to the known map, the paths and the boxes, with a margin."""
     xs: list[float] = [x for points in (trace.robot, trace.guest) for x, _ in points]
     ys: list[float] = [y for points in (trace.robot, trace.guest) for _, y in points]

@@ -38,7 +38,7 @@ import bisect
 import json
 import re
 import reprlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import compress
 from operator import attrgetter, is_not, ne
@@ -96,7 +96,7 @@ class TickRecord:
         )
 
 
-def short_repr(value: Any) -> str:
+def short_repr(value: object) -> str:
     """A blackboard value as one short line."""
     return " ".join(_SHORT.repr(value).split())
 
@@ -106,7 +106,7 @@ def stable_key(key: str) -> str:
     return _UUID_SUFFIX.sub("", key)
 
 
-def blackboard_values() -> dict[str, Any]:
+def blackboard_values() -> dict[str, object]:
     return dict(py_trees.blackboard.Blackboard.storage)
 
 
@@ -170,7 +170,7 @@ class TreeLog:
 
     def __init__(self, *, tree: py_trees.trees.BehaviourTree, path: Path,
                  sim_time_s: Callable[[], float], tree_file: str | None = None,
-                 blackboard: Callable[[], dict[str, Any]] = blackboard_values,
+                 blackboard: Callable[[], dict[str, object]] = blackboard_values,
                  phases: str | None = None, count: bool = True) -> None:
         self.tree = tree
         self.shape = TreeShape.of(tree.root)
@@ -182,12 +182,12 @@ class TreeLog:
         self._keys = self.shape.keys
         self._key_of = {id(behaviour): key
                         for key, behaviour in zip(self._keys, self._behaviours, strict=True)}
-        self._last_states: list[NodeState | None] = [None] * len(self._behaviours)
+        self._last_states: Sequence[NodeState | None] = [None] * len(self._behaviours)
         self._last_keys: list[str] = []
-        self._last_objects: list[Any] = []
+        self._last_objects: list[object] = []
         self._last_nodes: dict[str, NodeState] = {}
         self._last_tip: str | None = None
-        self._last_values: dict[str, tuple[Any, str]] = {}
+        self._last_values: dict[str, tuple[object, str]] = {}
         self._stable_keys: dict[str, str] = {}
         self._records = 0
         self.counter = TickCounter(self._behaviours)
@@ -230,7 +230,7 @@ class TreeLog:
         is made by the interpreter's built-ins (``map``, ``compress``) rather than a Python
         loop over the whole tree: a tick changes a few of the tree's hundred and more nodes.
         """
-        states = list(map(_STATE, self._behaviours))
+        states: list[NodeState] = list(map(_STATE, self._behaviours))
         changed_at = list(compress(range(len(states)), map(ne, states, self._last_states)))
         tip = self._tip_key()
         values = self._blackboard_changes()
@@ -259,6 +259,7 @@ class TreeLog:
         """
         current = self._blackboard()
         keys, values = list(current), list(current.values())
+        moved: Iterator[str]
         if keys == self._last_keys:
             moved = compress(keys, map(is_not, values, self._last_objects))
         else:

@@ -22,11 +22,12 @@ from __future__ import annotations
 
 import time
 
-from rclpy.executors import Executor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from tf2_msgs.msg import TFMessage
+
+from bt_servicesim.ros.spinning import Spinner
 
 __all__ = ["CLOCK_TOPIC", "SIM_CLOCK_PROBE", "SYSTEM_CLOCK_PROBE", "await_backend_discovery"]
 
@@ -41,7 +42,7 @@ SPIN_S = 0.05
 """Wall seconds of one wait for the probe's message."""
 
 
-def await_backend_discovery(node: Node, executor: Executor, *, limit_s: float,
+def await_backend_discovery(node: Node, executor: Spinner, *, limit_s: float,
                             probe: tuple[type, str] = SIM_CLOCK_PROBE) -> bool:
     """Until the backend has matched every reader ``node`` has now (True), or ``limit_s``
     wall seconds passed (False): see the module docstring. Call it once every reader

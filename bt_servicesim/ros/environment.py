@@ -46,7 +46,10 @@ import sys
 import time
 from collections.abc import MutableMapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from rclpy.context import Context
 
 __all__ = ["apply_localhost_defaults", "delete_participant", "remove_dead_segments",
            "shut_ros_down_at_exit", "uses_the_projects_profile"]
@@ -177,7 +180,7 @@ def shut_ros_down_at_exit() -> None:
         delete_participant(get_default_context(), every_node=True)
 
 
-def delete_participant(context: Any, *, every_node: bool = False) -> None:
+def delete_participant(context: Context, *, every_node: bool = False) -> None:
     """Shut ``context`` down and delete its DDS participant now, not when the garbage goes.
 
     Shutting a context down destroys the publishers, subscriptions, services and timers of the
@@ -197,10 +200,19 @@ def delete_participant(context: Any, *, every_node: bool = False) -> None:
             continue
         for waitable in list(node.waitables):
             with contextlib.suppress(Exception):
-                waitable.destroy()
+                if isinstance(waitable, _Destroyable):
+                    waitable.destroy()
         with contextlib.suppress(Exception):
             node.destroy_node()
     context.destroy()
+
+
+@runtime_checkable
+class _Destroyable(Protocol):
+    """A waitable that holds resources of its own (an action client or server, an event
+    handler): rclpy's ``Waitable`` itself declares no ``destroy``."""
+
+    def destroy(self) -> None: ...
 
 
 def _register_at_exit() -> None:

@@ -32,10 +32,10 @@ import struct
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from rclpy.client import Client
-from rclpy.executors import Executor
+from rclpy.clock import ROSClock
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos import ReliabilityPolicy as Reliability
@@ -44,9 +44,11 @@ from rclpy.time import Time
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
 
+from bt_servicesim.ros.node_features import ErrorKeeper
+from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.ros.traffic import Traffic
 
-__all__ = ["LockstepClient", "LockstepTicker", "offered"]
+__all__ = ["LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of", "offered"]
 
 JOIN_SERVICE = "/servicesim/lockstep/join"
 PERIOD_TOPIC = "/servicesim/lockstep/period"
@@ -74,9 +76,25 @@ DUE_TOLERANCE_NS = 10_000_000
 """A period's sim time within this of a tick's due time counts as reaching it."""
 
 
-def offered(node: Node, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+@runtime_checkable
+class LockstepHost(ErrorKeeper, Protocol):
+    """A node lockstep can run on (:mod:`bt_servicesim.ros.node_features`): it counts its
+    traffic and holds its lockstep client."""
+
+    traffic: Traffic
+    """What the node sent and received."""
+    lockstep: LockstepClient | None
+    """The lockstep client once joined, else None (the node runs free)."""
+
+
+def lockstep_of(node: object) -> LockstepClient | None:
+    """The lockstep client ``node`` has joined with, if it is a host that has one."""
+    return node.lockstep if isinstance(node, LockstepHost) else None
+
+
+def offered(node: Node, executor: Spinner, *, wait_s: float = OFFER_WAIT_S) -> bool:
     """Whether the backend offers lockstep: its join service appears within ``wait_s``."""
-    client = node.create_client(LockstepJoin, JOIN_SERVICE)
+    client: Client[Any, Any] = node.create_client(LockstepJoin, JOIN_SERVICE)
     try:
         deadline = time.monotonic() + wait_s
         while not client.service_is_ready() and time.monotonic() < deadline:
@@ -92,7 +110,7 @@ def after_this_period(node: Node, work: Callable[[], None]) -> None:
     At once when the node has no lockstep client (free running) or is between periods; see
     :meth:`LockstepClient.after_done`.
     """
-    client = getattr(node, "lockstep", None)
+    client = lockstep_of(node)
     if client is None:
         work()
     else:
@@ -128,21 +146,25 @@ class LockstepTicker:
         except Exception as error:  # escaping an executor's callback kills the process
             self.cancel()
             self.error = error
-            note = getattr(self.client.node, "note_error", None)
-            if note is not None:
-                note(error, where="a tick")
+            self.client.host.note_error(error, where="a tick")
 
 
 class LockstepClient:
     """One node's lockstep with the simulator; see the module docstring."""
 
     def __init__(self, node: Node, *, name: str) -> None:
-        traffic = getattr(node, "traffic", None)
-        if not isinstance(traffic, Traffic):
+        if not isinstance(node, LockstepHost):
             raise TypeError(f"{node.get_name()}: lockstep needs a node that counts its traffic")
-        self.node = node
+        clock = node.get_clock()
+        if not isinstance(clock, ROSClock):
+            raise TypeError(f"{node.get_name()}: lockstep needs a node on ROS time")
+        self.node: Node = node
+        self.host: LockstepHost = node
+        """The same node, as lockstep's host: where the client puts itself once joined."""
+        self._clock = clock
+        """The node's clock, which each period's announcement sets."""
         self.name = name
-        self.traffic = traffic
+        self.traffic = node.traffic
         self.client_id: int | None = None
         self.periods = 0
         """Periods this client has ticked for since it joined."""
@@ -183,7 +205,7 @@ class LockstepClient:
         run then went on free running: a seed's replay decided by a race)."""
 
     # ------------------------------------------------------------------ join
-    def join(self, executor: Executor, *, wait_s: float = OFFER_WAIT_S) -> bool:
+    def join(self, executor: Spinner, *, wait_s: float = OFFER_WAIT_S) -> bool:
         """Join the simulator's lockstep; whether it took us (bounded in wall time)."""
         client = self._joining
         if client is None:
@@ -193,9 +215,9 @@ class LockstepClient:
             deadline = time.monotonic() + wait_s
             while not future.done() and time.monotonic() < deadline:
                 executor.spin_once(timeout_sec=0.05)
-            if not future.done() or future.result() is None:
+            answer = future.result() if future.done() else None
+            if answer is None:
                 return False
-            answer = future.result()
             self._take_what_came_before(executor, answer.joined_at)
         finally:
             self.node.destroy_client(client)
@@ -209,7 +231,7 @@ class LockstepClient:
             self._pending.popleft()  # announced before the join: done with it above
         self._pending_since = time.monotonic()
         self.traffic.on_arrival = self._check
-        self.node.lockstep = self
+        self.host.lockstep = self
         self._stop_following_clock_topic()
         self._check()
         return True
@@ -222,7 +244,7 @@ class LockstepClient:
         if time_source is not None and hasattr(time_source, "detach_node"):
             time_source.detach_node()
 
-    def _take_what_came_before(self, executor: Executor, joined_at: LockstepPeriod) -> None:
+    def _take_what_came_before(self, executor: Spinner, joined_at: LockstepPeriod) -> None:
         """Take what the simulator sent before it answered the join, so that the offsets
         count it as before the join.
 
@@ -419,16 +441,13 @@ class LockstepClient:
         if (not self._pending or self._scheduled or self.holding or self.client_id is None):
             return
         if self.dropped_at is not None:  # free: tick the newest period as it comes
-            self._scheduled = True
-            self.node.executor.create_task(self._run_period)
+            self._schedule_period()
             return
         if ((self.traffic.arrivals < self._ready_no_sooner
                     and self._head_targets[0] is self._pending[0])
                 or self.missing()):
             return
-        self._scheduled = True
-        # a task, so that callbacks of what just arrived (a future's) run before the tick
-        self.node.executor.create_task(self._run_period)
+        self._schedule_period()
 
     def check_stalled(self) -> None:
         """Tick a period that waited too long for its messages anyway, and say what lacked."""
@@ -439,8 +458,16 @@ class LockstepClient:
         self.node.get_logger().warning(
             f"lockstep: period {self._pending[0].period} ticked without "
             f"{', '.join(self.missing())} after {STALL_WARNING_S:.0f} s: this run may not replay")
+        self._schedule_period()
+
+    def _schedule_period(self) -> None:
+        """Tick the oldest pending period in a task of the node's executor, so that callbacks
+        of what just arrived (a future's) run before the tick."""
+        executor = self.node.executor
+        if executor is None:
+            raise RuntimeError(f"{self.name}: lockstep needs the node on an executor")
         self._scheduled = True
-        self.node.executor.create_task(self._run_period)
+        executor.create_task(self._run_period)
 
     def _run_period(self) -> None:
         self._scheduled = False
@@ -449,7 +476,7 @@ class LockstepClient:
         period = self._pending.popleft()
         self._pending_since = time.monotonic()
         now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
-        self.node.get_clock().set_ros_time_override(Time(nanoseconds=now_ns))
+        self._clock.set_ros_time_override(Time(nanoseconds=now_ns))
         in_step = self.in_step
         self._after_done = []
         try:
@@ -473,10 +500,7 @@ class LockstepClient:
             try:
                 step()
             except Exception as error:  # escaping an executor's callback kills the process
-                note = getattr(self.node, "note_error", None)
-                if note is None:
-                    raise
-                note(error, where="recording a tick")
+                self.host.note_error(error, where="recording a tick")
 
     def _release(self, period: LockstepPeriod) -> None:
         """Hand on what ``period`` counts; what a callback raises is kept, not raised."""
@@ -484,10 +508,7 @@ class LockstepClient:
         try:
             self.traffic.release(messages, answers)
         except Exception as error:  # escaping an executor's callback kills the process
-            note = getattr(self.node, "note_error", None)
-            if note is None:
-                raise
-            note(error, where=f"handing on period {period.period}")
+            self.host.note_error(error, where=f"handing on period {period.period}")
 
     def _publish_done(self, period: int) -> None:
         """Say the tick of ``period`` is done, with the requests sent since the join.

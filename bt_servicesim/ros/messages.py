@@ -8,25 +8,24 @@ talk to ROS convert at the edge with these functions.
 from __future__ import annotations
 
 import math
-from typing import Any
 
-from geometry_msgs.msg import Pose
+from geometry_msgs.msg import Pose, Quaternion, Transform
 
 from bt_servicesim.planning.geometry import Pose2D, yaw_of
 
 __all__ = ["pose_from_msg", "pose_from_transform", "pose_to_msg"]
 
 
-def _yaw(q: Any) -> float:
+def _yaw(q: Quaternion) -> float:
     return yaw_of(q.x, q.y, q.z, q.w)
 
 
-def pose_from_msg(pose: Any) -> Pose2D:
+def pose_from_msg(pose: Pose) -> Pose2D:
     """The planar pose of a ``geometry_msgs/Pose``: x, y and the yaw of its quaternion."""
     return Pose2D(x=pose.position.x, y=pose.position.y, yaw=_yaw(pose.orientation))
 
 
-def pose_from_transform(transform: Any) -> Pose2D:
+def pose_from_transform(transform: Transform) -> Pose2D:
     """The planar part of a ``geometry_msgs/Transform``: the child frame's origin in the
     parent's, x, y and yaw."""
     translation = transform.translation

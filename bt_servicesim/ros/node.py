@@ -41,16 +41,25 @@ from __future__ import annotations
 import copy
 import traceback
 from collections.abc import Callable
-from typing import Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 from rclpy.action import ActionClient
 from rclpy.client import Client
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.publisher import Publisher
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
+from rclpy.type_support import MsgT
+from rclpy.waitable import Waitable
 
 from bt_servicesim.ros.traffic import Traffic
+
+if TYPE_CHECKING:
+    from bt_servicesim.ros.lockstep import LockstepClient
 
 __all__ = ["ExecutiveNode", "shared_action_client", "shared_client"]
 
@@ -71,7 +80,7 @@ class ExecutiveNode(Node):
         self.reliable_subscriptions = False
         """Whether subscriptions asked for best effort get reliable ones: set in lockstep,
         whose backend publishes reliably and whose counts need every message."""
-        self.lockstep: Any = None
+        self.lockstep: LockstepClient | None = None
         """The :class:`~bt_servicesim.ros.lockstep.LockstepClient` once joined, else None."""
         super().__init__(name, start_parameter_services=False,
                          parameter_overrides=overrides, **kwargs)
@@ -79,16 +88,15 @@ class ExecutiveNode(Node):
         """The first exception a guarded callback raised, as one line; None while none did."""
         self.callback_traceback: str | None = None
 
-    def guarded(self, callback: Callable[..., Any]) -> Callable[..., Any]:
+    def guarded(self, callback: Callable[..., None]) -> Callable[..., None]:
         """``callback``, but an exception it raises is kept (the first) instead of escaping."""
-        def call(*args: Any) -> Any:
+        def call(*args: object) -> None:
             try:
-                return callback(*args)
+                callback(*args)
             except Exception as error:  # anything escaping kills the process: keep it instead
                 if (stop := stop_behind(error)) is not None:
                     raise stop from error
                 self.note_error(error, where=getattr(callback, "__qualname__", repr(callback)))
-                return None
 
         return call
 
@@ -103,14 +111,16 @@ class ExecutiveNode(Node):
         """Destroy the shared action clients too: rclpy's ``destroy_node`` leaves waitables
         alive, and an action client keeps the node, its context and its DDS participant (with a
         shared-memory segment in /dev/shm) alive until the process ends, sometimes for good."""
-        for client in _clients_of(self).values():
-            if isinstance(client, ActionClient):
-                client.destroy()
-        _clients_of(self).clear()
+        shared = _clients_of(self)
+        for client in shared.actions.values():
+            client.destroy()
+        shared.services.clear()
+        shared.actions.clear()
         super().destroy_node()
 
-    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., Any],
-                            qos_profile: Any, **kwargs: Any) -> Any:
+    def create_subscription(self, msg_type: type[MsgT], topic: str,
+                            callback: Callable[..., None], qos_profile: QoSProfile | int,
+                            **kwargs: Any) -> Subscription[MsgT]:
         kwargs.setdefault("event_callbacks",
                           SubscriptionEventCallbacks(use_default_callbacks=False))
         qos_profile = deep_enough(qos_profile)
@@ -124,26 +134,26 @@ class ExecutiveNode(Node):
         self.traffic.add_reader(key, subscription)
         return subscription
 
-    def destroy_subscription(self, subscription: Any) -> bool:
+    def destroy_subscription(self, subscription: Subscription[Any]) -> bool:
         self.traffic.forget(subscription)
         return super().destroy_subscription(subscription)
 
-    def create_client(self, *args: Any, **kwargs: Any) -> Client:
-        client = super().create_client(*args, **kwargs)
+    def create_client(self, *args: Any, **kwargs: Any) -> Client[Any, Any]:
+        client: Client[Any, Any] = super().create_client(*args, **kwargs)
         self.traffic.watch_client(client)
         return client
 
-    def add_waitable(self, waitable: Any) -> None:
+    def add_waitable(self, waitable: Waitable[Any]) -> None:
         if isinstance(waitable, ActionClient):
             self.traffic.watch_action_client(waitable)
         super().add_waitable(waitable)
 
-    def create_timer(self, timer_period_sec: float, callback: Callable[..., Any] | None,
-                     *args: Any, **kwargs: Any) -> Any:
+    def create_timer(self, timer_period_sec: float, callback: Callable[..., None] | None,
+                     *args: Any, **kwargs: Any) -> Timer:
         guarded = None if callback is None else self.guarded(callback)
         return super().create_timer(timer_period_sec, guarded, *args, **kwargs)
 
-    def create_publisher(self, *args: Any, **kwargs: Any) -> Any:
+    def create_publisher(self, *args: Any, **kwargs: Any) -> Publisher[Any]:
         kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))
         publisher = super().create_publisher(*args, **kwargs)
         self.traffic.watch_publisher(publisher)
@@ -159,11 +169,12 @@ def stop_behind(error: BaseException) -> BaseException | None:
     to convert function return value"), with the stop as its cause. That is the stop, not a bug.
     """
     seen: set[int] = set()
-    while error is not None and id(error) not in seen:
-        seen.add(id(error))
-        if not isinstance(error, Exception):
-            return error
-        error = error.__cause__ or error.__context__
+    cause: BaseException | None = error
+    while cause is not None and id(cause) not in seen:
+        seen.add(id(cause))
+        if not isinstance(cause, Exception):
+            return cause
+        cause = cause.__cause__ or cause.__context__
     return None
 
 
@@ -196,28 +207,37 @@ def reliable(qos: QoSProfile | int) -> QoSProfile | int:
                       reliability=ReliabilityPolicy.RELIABLE, durability=qos.durability)
 
 
-def shared_client(node: Node, service_type: type, service: str) -> Client:
+def shared_client(node: Node, service_type: type, service: str) -> Client[Any, Any]:
     """The node's one client for ``service``, created on first use."""
-    clients = _clients_of(node)
+    clients = _clients_of(node).services
     key = (service_type, service)
     if key not in clients:
         clients[key] = node.create_client(service_type, service)
     return clients[key]
 
 
-def shared_action_client(node: Node, action_type: type, action: str) -> ActionClient:
+def shared_action_client(node: Node, action_type: type,
+                         action: str) -> ActionClient[Any, Any, Any]:
     """The node's one action client for ``action``, created on first use."""
-    clients = _clients_of(node)
+    clients = _clients_of(node).actions
     key = (action_type, action)
     if key not in clients:
         clients[key] = ActionClient(node, action_type, action)
     return clients[key]
 
 
-def _clients_of(node: Node) -> dict[tuple[type, str], Any]:
+@dataclass
+class _SharedClients:
+    """A node's shared clients, by interface type and name."""
+
+    services: dict[tuple[type, str], Client[Any, Any]] = field(default_factory=dict)
+    actions: dict[tuple[type, str], ActionClient[Any, Any, Any]] = field(default_factory=dict)
+
+
+def _clients_of(node: Node) -> _SharedClients:
     """The node's shared clients, kept on the node so they live and die with it."""
     clients = getattr(node, _CLIENTS_ATTRIBUTE, None)
-    if clients is None:
-        clients = {}
+    if not isinstance(clients, _SharedClients):
+        clients = _SharedClients()
         setattr(node, _CLIENTS_ATTRIBUTE, clients)
     return clients

@@ -46,6 +46,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 
+from bt_servicesim.ros.lockstep import LockstepHost
 from bt_servicesim.ros.node import ExecutiveNode, reliable
 
 __all__ = ["Reader", "SharedSubscription", "queued_raw_messages", "shared_subscription"]
@@ -77,6 +78,8 @@ class SharedSubscription:
         self.topic = topic
         self.qos = qos
         self.readers: list[Reader] = []
+        self._traffic = node.traffic if isinstance(node, LockstepHost) else None
+        """What the node counts, if it does: a held subscription's queue is left to it."""
         latched = qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
         self._kept: deque[bytes] | None = deque(maxlen=max(qos.depth, 1)) if latched else None
         self.subscription: Subscription[Any] | None = node.create_subscription(
@@ -115,7 +118,7 @@ class SharedSubscription:
 
     def _on_data(self, data: bytes) -> None:
         burst = [data]
-        traffic = getattr(self.node, "traffic", None)
+        traffic = self._traffic
         if self.subscription is not None and not (traffic is not None
                                                   and traffic.holds(self.subscription)):
             burst.extend(queued_raw_messages(self.subscription))
@@ -125,7 +128,7 @@ class SharedSubscription:
             self._kept.extend(burst)
         newest = len(burst) - 1
         for index, taken in enumerate(burst):
-            message = None
+            message: object | None = None
             for reader in list(self.readers):
                 if reader.latest_only and index != newest:
                     continue
@@ -160,8 +163,9 @@ def queued_raw_messages(subscription: Subscription[Any]) -> Iterator[bytes]:
     """Take the messages waiting in a raw subscription's queue, oldest first, until none is."""
     while True:
         try:
-            with subscription.handle:
-                taken = subscription.handle.take_message(subscription.msg_type, True)
+            with subscription.handle:  # None once the queue is empty (rclpy's stub omits it)
+                taken: tuple[bytes, Any] | None = subscription.handle.take_message(
+                    subscription.msg_type, True)
         except InvalidHandle:
             return
         if taken is None:

@@ -62,7 +62,8 @@ def clock_from_setup_kwargs(behaviour_name: str, kwargs: dict[str, Any]) -> Cloc
     node = kwargs["node"]
     if not callable(getattr(node, "get_clock", None)):
         raise TypeError(f"{behaviour_name}: setup(node=...) expects an rclpy Node, got {node!r}")
-    return node.get_clock()
+    clock: Clock = node.get_clock()
+    return clock
 
 
 def clock_now_ns(clock: Clock) -> int:
@@ -77,7 +78,8 @@ def clock_now_ns(clock: Clock) -> int:
     if handle is None:
         return clock.now().nanoseconds
     with handle:
-        return handle.get_now().nanoseconds
+        now_ns: int = handle.get_now().nanoseconds
+    return now_ns
 
 
 def sim_now_s(clock: Clock) -> float:

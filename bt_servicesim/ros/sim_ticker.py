@@ -26,15 +26,17 @@ On a node without sim time (its clock never jumps) the ticker falls back to a pl
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Protocol
 
 from rclpy.clock import JumpThreshold, ROSClock
 from rclpy.duration import Duration
 from rclpy.node import Node
 
+from bt_servicesim.ros.lockstep import lockstep_of
+from bt_servicesim.ros.node_features import keep_error
 from bt_servicesim.ros.sim_clock import clock_now_ns
 
-__all__ = ["SimTicker", "sim_ticker"]
+__all__ = ["SimTicker", "Ticker", "sim_ticker"]
 
 _LIVE: dict[int, set[SimTicker]] = {}
 """Tickers registered on a clock, by node, kept alive until cancelled."""
@@ -91,8 +93,11 @@ class SimTicker:
         if self._scheduled or self._cancelled:
             return
         if clock_now_ns(self._clock) + self._tolerance_ns >= self._due_ns:
+            executor = self.node.executor
+            if executor is None:
+                raise RuntimeError(f"{self.node.get_name()}: left its executor while ticking")
             self._scheduled = True
-            self.node.executor.create_task(self._fire)
+            executor.create_task(self._fire)
 
     def _fire(self) -> None:
         self._scheduled = False
@@ -113,18 +118,25 @@ class SimTicker:
         except Exception as error:  # escaping an executor's callback kills the process
             self.cancel()
             self.error = error
-            note = getattr(self.node, "note_error", None)
-            if note is not None:
-                note(error, where="a tick")
-            else:
+            if not keep_error(self.node, error, where="a tick"):
                 self.node.get_logger().error(f"tick raised {type(error).__name__}: {error}")
 
 
-def sim_ticker(node: Node, period_s: float, callback: Callable[[], None]) -> Any:
+class Ticker(Protocol):
+    """What a ticker on sim time offers, in lockstep or not."""
+
+    error: Exception | None
+    """What the callback raised, if it did: the ticker stops then."""
+
+    def cancel(self) -> None:
+        """No more calls; idempotent."""
+
+
+def sim_ticker(node: Node, period_s: float, callback: Callable[[], None]) -> Ticker:
     """A ticker on the node's sim time: in lockstep once the node has joined one
     (:mod:`bt_servicesim.ros.lockstep`: exactly once per announced period), else a
-    :class:`SimTicker`. Either has ``cancel()`` and ``error``."""
-    lockstep = getattr(node, "lockstep", None)
+    :class:`SimTicker`."""
+    lockstep = lockstep_of(node)
     if lockstep is not None:
         return lockstep.ticker(period_s, callback)
     return SimTicker(node, period_s, callback)

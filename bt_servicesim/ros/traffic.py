@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from rclpy.exceptions import InvalidHandle
 from rclpy.subscription import Subscription
@@ -34,6 +34,8 @@ from rclpy.task import Future
 __all__ = ["PROTOCOL_PREFIX", "Traffic", "endpoint_name"]
 
 PROTOCOL_PREFIX = "/servicesim/lockstep/"
+Name = TypeVar("Name", int, str)
+"""A reader's key or an endpoint's name."""
 
 
 def endpoint_name(name: str) -> str:
@@ -47,7 +49,7 @@ class Traffic:
     def __init__(self) -> None:
         self.received: dict[int, int] = {}
         """Messages taken per reader (a subscription, by :meth:`reader` key)."""
-        self.readers: dict[int, Any] = {}
+        self.readers: dict[int, Subscription[Any]] = {}
         """The subscriptions by key; a destroyed one is forgotten."""
         self.sent: dict[str, int] = {}
         """Requests sent per endpoint, and messages published per topic."""
@@ -66,18 +68,18 @@ class Traffic:
         self._held_readers: set[int] = set()
         self._held_subscriptions: set[int] = set()
         self._held_endpoints: set[str] = set()
-        self._held_messages: dict[int, deque[tuple[Any, ...]]] = {}
+        self._held_messages: dict[int, deque[tuple[object, ...]]] = {}
         self._held_answers: dict[str, deque[Callable[[], None]]] = {}
-        self._callbacks: dict[int, Callable[..., Any]] = {}
+        self._callbacks: dict[int, Callable[..., None]] = {}
 
-    def _arrived(self, table: dict[Any, int], name: Any) -> None:
+    def _arrived(self, table: dict[Name, int], name: Name) -> None:
         table[name] = table.get(name, 0) + 1
         self.arrivals += 1
         if self.on_arrival is not None:
             self.on_arrival()
 
     def counted_callback(self, topic: str,
-                         callback: Callable[..., Any]) -> tuple[int | None, Callable[..., Any]]:
+                         callback: Callable[..., None]) -> tuple[int | None, Callable[..., None]]:
         """A key for a new reader of ``topic`` and ``callback`` counting each message for it.
 
         Each subscription counts for itself: two on one topic (different QoS) each receive
@@ -90,12 +92,12 @@ class Traffic:
         self.delivered[key] = 0
         self._callbacks[key] = callback
 
-        def receive(*args: Any) -> Any:
+        def receive(*args: object) -> None:
             if self.holding and key in self._held_readers:
                 self._hold_message(key, args)
-                return None
+                return
             try:
-                return callback(*args)
+                callback(*args)
             finally:
                 self.delivered[key] += 1
                 self._arrived(self.received, key)
@@ -119,7 +121,7 @@ class Traffic:
                      {endpoint: self.answered.get(endpoint, 0)
                       for endpoint in self._held_answers})
 
-    def holds(self, subscription: Any) -> bool:
+    def holds(self, subscription: Subscription[Any]) -> bool:
         """Whether what arrives for ``subscription`` is held (its callback must not take more)."""
         return self.holding and id(subscription) in self._held_subscriptions
 
@@ -138,7 +140,7 @@ class Traffic:
                 self.answers_delivered[endpoint] = self.answers_delivered.get(endpoint, 0) + 1
                 waiting.popleft()()
 
-    def _hold_message(self, key: int, args: tuple[Any, ...]) -> None:
+    def _hold_message(self, key: int, args: tuple[object, ...]) -> None:
         held = self._held_messages.setdefault(key, deque())
         held.append(args)
         subscription = self.readers.get(key)
@@ -161,17 +163,17 @@ class Traffic:
         self._held_answers.setdefault(endpoint, deque()).append(hand_on)
         self._arrived(self.answered, endpoint)
 
-    def add_reader(self, key: int | None, subscription: Any) -> None:
+    def add_reader(self, key: int | None, subscription: Subscription[Any]) -> None:
         if key is not None:
             self.readers[key] = subscription
 
-    def forget(self, subscription: Any) -> None:
+    def forget(self, subscription: Subscription[Any]) -> None:
         """A destroyed subscription: nothing more is expected of it."""
         for key, reader in list(self.readers.items()):
             if reader is subscription:
                 del self.readers[key]
 
-    def took_more(self, subscription: Any, count: int) -> None:
+    def took_more(self, subscription: Subscription[Any], count: int) -> None:
         """``count`` more messages taken by a callback from its own subscription's queue."""
         for key, reader in self.readers.items():
             if reader is subscription:
@@ -246,20 +248,20 @@ def _pass_on(done: Future[Any], handed: Future[Any]) -> None:
         return
     if done.cancelled():
         handed.cancel()
-    elif done.exception() is not None:
-        handed.set_exception(done.exception())
+    elif (exception := done.exception()) is not None:
+        handed.set_exception(exception)
     else:
         handed.set_result(done.result())
 
 
-def _waiting(subscription: Subscription[Any], *, message_only: bool) -> list[tuple[Any, ...]]:
+def _waiting(subscription: Subscription[Any], *, message_only: bool) -> list[tuple[object, ...]]:
     """The messages waiting in ``subscription``'s queue, oldest first, as callback arguments."""
-    taken: list[tuple[Any, ...]] = []
+    taken: list[tuple[object, ...]] = []
     while True:
         try:
-            with subscription.handle:
-                message_info = subscription.handle.take_message(subscription.msg_type,
-                                                                subscription.raw)
+            with subscription.handle:  # None once the queue is empty (rclpy's stub omits it)
+                message_info: tuple[object, object] | None = subscription.handle.take_message(
+                    subscription.msg_type, subscription.raw)
         except InvalidHandle:
             return taken
         if message_info is None:

@@ -10,12 +10,13 @@ Interrupting it stops the tree, so behaviours cancel whatever they have in fligh
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Protocol
 
 import py_trees
 from rclpy.node import Node
 
-from bt_servicesim.ros.sim_ticker import sim_ticker
+from bt_servicesim.ros.node_features import keep_error
+from bt_servicesim.ros.sim_ticker import Ticker, sim_ticker
 from bt_servicesim.tree.lean_tree import LeanBehaviourTree
 from bt_servicesim.tree.loading import DEFAULT_PHASES
 from bt_servicesim.tree.shape import short_label
@@ -63,7 +64,7 @@ class MissionExecutive:
         self.error: str | None = None
         """What a tick raised, as one line, when the mission failed because of it."""
         self.ticks = 0
-        self._ticker: Any = None
+        self._ticker: Ticker | None = None
         self._phase: tuple[int, str] = (-1, "-")
 
     def setup(self, *, timeout_s: float = 15.0) -> None:
@@ -100,9 +101,7 @@ class MissionExecutive:
         self.stop_ticking()
         where = _raising_behaviour(error) or "the tree"
         self.error = f"{type(error).__name__} in {where}: {' '.join(str(error).split())}"
-        note = getattr(self.node, "note_error", None)
-        if note is not None:
-            note(error, where=where)
+        keep_error(self.node, error, where=where)
         try:
             self.tree.root.stop(Status.INVALID)
         except Exception as stop_error:  # stopping a broken tree may raise again: keep the first
@@ -141,7 +140,8 @@ class MissionExecutive:
                 phase = node
             if short_label(node.parent.name) == self.phases:
                 named = phase or node
-                return named.name[len(named.parent.name) + 1:].split(".", 1)[0]
+                parent = named.parent or node.parent  # named is node or below it: never None
+                return named.name[len(parent.name) + 1:].split(".", 1)[0]
             node = node.parent
         return "-"
 

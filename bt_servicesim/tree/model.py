@@ -28,7 +28,7 @@ import py_trees
 
 from bt_servicesim.behaviours import node_registry
 from bt_servicesim.behaviours.node import kind_of
-from bt_servicesim.tree.loading import DEFAULT_TREE
+from bt_servicesim.tree.files import DEFAULT_TREE
 
 __all__ = ["DEFAULT_NODES", "default_trees", "model_tags", "node_class", "node_model",
            "nodes_file", "used_tags"]
@@ -132,7 +132,7 @@ def nodes_file(tree_files: Iterable[Path], registry: Mapping[str, type] | None =
             "  </TreeNodesModel>\n</root>\n")
 
 
-def _settings(cls: type) -> dict[str, Any]:
+def _settings(cls: type[object]) -> dict[str, Any]:
     """Constructor keyword arguments a tree file may set as attributes, with their defaults
     (``None`` where there is none worth showing)."""
     settings: dict[str, Any] = {}
@@ -145,7 +145,7 @@ def _settings(cls: type) -> dict[str, Any]:
     return settings
 
 
-def _setting_type(cls: type, name: str) -> str:
+def _setting_type(cls: type[object], name: str) -> str:
     """A constructor argument's type, when its annotation is a plain ``int``, ``float``..."""
     annotation = inspect.signature(cls.__init__).parameters[name].annotation
     text = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", "")

@@ -45,7 +45,7 @@ def structure_problems(root: ElementTree.Element, registry: Mapping[str, type], 
     ``main_tree`` is the main tree's ID when the caller names it."""
     trees = root.findall("BehaviorTree")
     yield from _identity_problems(trees)
-    ids = {tree.get("ID") for tree in trees} - {None}
+    ids = {tree_id for tree in trees if (tree_id := tree.get("ID")) is not None}
     yield from _main_tree_problems(root, ids=ids, count=len(trees), given=main_tree)
     for tree in trees:
         for element in tree.iter():

@@ -101,13 +101,15 @@ def _node_problems(element: ElementTree.Element, cls: type) -> Iterator[str]:
         yield ("needs a name or a seed: py_trees names it with a random uuid, and it seeds "
                "itself from its name, so each load would draw different numbers")
     ports: dict[str, typing.Any] = {}
+    inputs: dict[str, typing.Any] = {}
     if issubclass(cls, PortsMixin):
-        ports = {**cls.input_ports(), **cls.output_ports()}
-        for name, info in cls.input_ports().items():
+        inputs = cls.input_ports()
+        ports = {**inputs, **cls.output_ports()}
+        for name, info in inputs.items():
             if info.required and info.default_value is None and name not in element.attrib:
                 yield f"the required input port {name} is not given"
     hints = {name: hint for name, hint in _constructor_hints(cls).items() if name not in ports}
-    hints.update(_port_hints(cls.input_ports() if ports else {}))
+    hints.update(_port_hints(inputs))
     for attribute, value in element.attrib.items():
         expected = hints.get(attribute)
         if attribute in _NOT_ARGUMENTS or _is_key(value) or expected is None:
@@ -135,7 +137,7 @@ def number_problem(value: str, expected: type, *, lowest: int = 0) -> str | None
     return None
 
 
-def _constructor_hints(cls: type) -> dict[str, type]:
+def _constructor_hints(cls: type[object]) -> dict[str, type]:
     """The constructor's int, float and bool arguments, by name."""
     try:
         hints = typing.get_type_hints(cls.__init__)
@@ -160,7 +162,7 @@ def _plain_type(hint: object) -> type | None:
     return hint if hint in (int, float, bool) else None
 
 
-def _seeds_from_name(cls: type) -> bool:
+def _seeds_from_name(cls: type[object]) -> bool:
     """Whether ``cls`` takes a ``seed`` and so, given none, seeds itself from its name."""
     try:
         return "seed" in inspect.signature(cls.__init__).parameters

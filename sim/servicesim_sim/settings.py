@@ -19,6 +19,7 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import CrowdError
@@ -90,7 +91,7 @@ def playable_engine(settings: SimSettings) -> SimEngine:
 
 def difficulty_from(args: argparse.Namespace) -> Difficulty:
     difficulty = Difficulty.hard() if args.difficulty == "hard" else Difficulty.default()
-    changes: dict[str, object] = {}
+    changes: dict[str, Any] = {}  # Difficulty fields of several types, from the arguments
     if args.guest_out_of_range:
         changes["guest_out_of_range"] = True
     if getattr(args, "guest_path", None):

@@ -51,9 +51,10 @@ import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
+from numpy.typing import NDArray
 
 from servicesim_sim.model.engine import PICKUP_RANGE_M
 from servicesim_sim.model.guest import LOST_DISTANCE
@@ -168,7 +169,8 @@ def _near_box(lattice: LatticeGraph, box: AreaBox, reach: float) -> np.ndarray:
     """Nodes within ``reach`` (straight-line) of the box."""
     dx = np.maximum(np.maximum(box.min_x - lattice.x, lattice.x - box.max_x), 0.0)
     dy = np.maximum(np.maximum(box.min_y - lattice.y, lattice.y - box.max_y), 0.0)
-    return np.hypot(dx, dy) <= reach
+    near: NDArray[np.bool_] = np.hypot(dx, dy) <= reach
+    return near
 
 
 def _seeds(reached: list[tuple[Search, np.ndarray]],
@@ -316,7 +318,7 @@ def read_episodes(path: str) -> list[Any]:
 def parse_entry(parser: argparse.ArgumentParser, arguments: list[str],
                 number: int) -> argparse.Namespace:
     """The entry's arguments parsed as the simulator would, or a one-line error naming it."""
-    def refuse(message: str) -> None:
+    def refuse(message: str) -> NoReturn:
         raise BoundInputError(f"episode {number}: {message}")
 
     parser.error = refuse  # type: ignore[method-assign]  # raise, do not exit, inside a batch

@@ -21,7 +21,7 @@ in the robot's namespace, ``servicebot``, has.
 """
 
 from collections.abc import Iterable
-from typing import Any, ClassVar
+from typing import Any
 
 from nav2_msgs.srv import ClearEntireCostmap
 
@@ -52,8 +52,8 @@ class ClearCostmaps(ActionNode):
         server_timeout: sim seconds to wait for each server to appear before failing
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(
         self,

@@ -14,8 +14,8 @@ from bt_servicesim.planning.geometry import Pose2D
 class CopyGoal(ActionNode):
     """Copy ``goal`` to ``copy``: the recovery ladder starts from the goal it was asked for."""
 
-    INPUT_PORTS = {"goal": PortInformation(data_type=Pose2D)}  # noqa: RUF012
-    OUTPUT_PORTS = {"copy": PortInformation(data_type=Pose2D)}  # noqa: RUF012
+    INPUT_PORTS = {"goal": PortInformation(data_type=Pose2D)}
+    OUTPUT_PORTS = {"copy": PortInformation(data_type=Pose2D)}
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import random
 import zlib
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 import py_trees
@@ -50,8 +50,8 @@ class _Computation(ActionNode, register=False):
     message). An optional input without data (and without a default) is passed as None.
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -67,8 +67,11 @@ class _Computation(ActionNode, register=False):
         self._set_output(output, result)
         return Status.SUCCESS
 
-    def compute(self, **inputs: Any) -> Any:
-        """The output for the inputs (by port name); None, with a feedback message, if none."""
+    def compute(self, *args: Any, **inputs: Any) -> Any:
+        """The output for the inputs (by port name); None, with a feedback message, if none.
+
+        Each subclass names its inputs as parameters: ``*args`` lets it do so (it is called with
+        keyword arguments only)."""
         raise NotImplementedError
 
     def _read_inputs(self) -> dict[str, Any] | None:
@@ -98,8 +101,8 @@ def describe(pose: Pose2D) -> str:
 class PickupGoal(_Computation):
     """The pick-up goal: inside the box, nearest the guest's spawn area (:func:`pickup_goal`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
-    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "PickupGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -114,8 +117,8 @@ class PickupGoal(_Computation):
 class DropOffGoal(_Computation):
     """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
-    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "DropOffGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -129,8 +132,8 @@ class DropOffRepositionGoal(_Computation):
     """After a refused drop-off, a move that pulls the guest deeper in
     (:func:`drop_off_reposition_goal`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
-    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "DropOffRepositionGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -155,11 +158,11 @@ def _report_plan(
 class ReturnGoal(_Computation):
     """The start pose itself, snapped to free space if need be (:func:`return_goal`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "start_pose": PortInformation(data_type=Pose2D, description="from the referee"),
         "occupancy": OCCUPANCY,
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+    OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "ReturnGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -180,9 +183,9 @@ class JitterGoal(_Computation):
             ``setup`` as ``run_seed``), so that a run repeats and another seed jitters anew
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {"goal": PortInformation(data_type=Pose2D),
+    INPUT_PORTS: Ports = {"goal": PortInformation(data_type=Pose2D),
                                     "occupancy": OCCUPANCY}
-    OUTPUT_PORTS: ClassVar[Ports] = {"jittered": GOAL_OUT}
+    OUTPUT_PORTS: Ports = {"jittered": GOAL_OUT}
 
     def __init__(self, name: str = "JitterGoal", seed: int | None = None, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -214,7 +217,7 @@ class GiveWaySpot(_Computation):
     spot keeps clear of them; without a costmap it is found without.
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "robot_pose": ROBOT_POSE,
         "occupancy": OCCUPANCY,
         "rfid_history": PortInformation(data_type=RfidHistory,
@@ -224,7 +227,7 @@ class GiveWaySpot(_Computation):
         "costmap": PortInformation(data_type=Costmap2D, required=False,
                                    description="navigation's costmap, where people stand"),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {"spot": GOAL_OUT}
+    OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
 
     def __init__(self, name: str = "GiveWaySpot", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -259,8 +262,8 @@ def _seen(people: np.ndarray | None) -> str:
 class ExplorationWaypoints(_Computation):
     """Waypoints covering the box and its surroundings (:func:`exploration_waypoints`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
-    OUTPUT_PORTS: ClassVar[Ports] = {"waypoints": WAYPOINTS_OUT}
+    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    OUTPUT_PORTS: Ports = {"waypoints": WAYPOINTS_OUT}
 
     def __init__(self, name: str = "ExplorationWaypoints", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -277,12 +280,12 @@ class ExplorationWaypoints(_Computation):
 class GuestSearchWaypoints(_Computation):
     """The last-seen spot, then rings around it (:func:`guest_search_waypoints`)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "guest_last_seen": PortInformation(data_type=Pose2D, description="robot pose then"),
         "occupancy": OCCUPANCY,
         "robot_pose": ROBOT_POSE,
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {"waypoints": WAYPOINTS_OUT}
+    OUTPUT_PORTS: Ports = {"waypoints": WAYPOINTS_OUT}
 
     def __init__(self, name: str = "GuestSearchWaypoints", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

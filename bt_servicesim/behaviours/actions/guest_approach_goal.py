@@ -8,7 +8,7 @@ the RFID lists by name, and the goal keeps clear of the others the lists name.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -33,7 +33,7 @@ class GuestApproachGoal(ActionNode):
     where it stands.
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "guest_name": PortInformation(data_type=str, required=True),
         "rfid_history": PortInformation(data_type=RfidHistory, required=True),
         "occupancy": PortInformation(data_type=OccupancyGrid2D, required=True),
@@ -45,7 +45,7 @@ class GuestApproachGoal(ActionNode):
             data_type=Box, required=False,
             description="the area the guest is to be led to: stand on their side towards it"),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "goal": PortInformation(data_type=Pose2D, required=False),
     }
 

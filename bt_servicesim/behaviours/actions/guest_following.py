@@ -6,7 +6,7 @@ It remembers where the robot was when it last had the guest in range, where a se
 guest starts. All times are sim time.
 """
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -28,11 +28,11 @@ class GuestFollowing(ActionNode):
         grace: sim seconds the guest may be out of range before it counts as lost
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         **GUEST_IN_RANGE_INPUTS,
         "robot_pose": PortInformation(data_type=Pose2D, required=False),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "guest_last_seen": PortInformation(data_type=Pose2D, required=False),
     }
 

@@ -8,7 +8,7 @@ follows (``Checkpoint.cc``, ``CP_PickUp.cc``, ``CP_DropOff.cc``). So SUCCESS her
 moves (``GuestFollowing``).
 """
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import PortInformation
 from servicesim_competition import srv
@@ -22,11 +22,11 @@ class PickUpGuest(ServiceCall):
 
     SERVICE_TYPE = srv.PickUpGuest
     DEFAULT_SERVICE = "/servicesim/pickup_guest"
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "guest_name": PortInformation(data_type=str, required=True),
         "robot_name": PortInformation(data_type=str, required=False, default_value="servicebot"),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def build_request(self) -> Any:
         """The guest and the robot from the ports."""
@@ -47,8 +47,8 @@ class DropOffGuest(ServiceCall):
 
     SERVICE_TYPE = srv.DropOffGuest
     DEFAULT_SERVICE = "/servicesim/dropoff_guest"
-    INPUT_PORTS: ClassVar[Ports] = {"guest_name": PortInformation(data_type=str, required=True)}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {"guest_name": PortInformation(data_type=str, required=True)}
+    OUTPUT_PORTS: Ports = {}
 
     def build_request(self) -> Any:
         """The guest from the port."""

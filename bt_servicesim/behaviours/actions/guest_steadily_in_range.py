@@ -5,7 +5,7 @@ An action, not a condition: it waits (RUNNING) for enough readings taken since i
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -27,11 +27,11 @@ class GuestSteadilyInRange(ActionNode):
     :data:`STEADY_PATIENCE` sim s without a steady run.
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "guest_name": PortInformation(data_type=str, required=True),
         "rfid_history": PortInformation(data_type=RfidHistory, required=True),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str = "GuestSteadilyInRange", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -16,7 +16,7 @@ at, and only the newest global frame -> odometry frame transform is kept.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from nav_msgs.msg import Odometry
 from py_trees.ports import PortInformation
@@ -47,8 +47,8 @@ class LocalisedPoseToBlackboard(ActionNode):
         odom_frame: odometry's frame, the child of the transform from ``global_frame``
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {
         "robot_pose": PortInformation(data_type=Pose2D, required=False),
     }
 

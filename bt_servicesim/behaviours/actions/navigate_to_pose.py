@@ -16,19 +16,22 @@ the silence allowed is generous because an executive that falls behind a fast si
 sees sim time jump before it has read the feedback that came with it.
 """
 
-from typing import Any, ClassVar
+from typing import Any
 
 from action_msgs.msg import GoalStatus
 from nav2_msgs.action import NavigateToPose as NavigateToPoseAction
 from py_trees.ports import NoDataAvailable, PortInformation
-from rclpy.action import ActionClient
-from rclpy.action.client import ClientGoalHandle
 from rclpy.node import Node
 from rclpy.task import Future
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.ros.messages import pose_to_msg
+from bt_servicesim.ros.navigate_to_pose import (
+    NavigationClient,
+    NavigationGoalHandle,
+    NavigationResult,
+)
 from bt_servicesim.ros.node import shared_action_client
 from bt_servicesim.ros.sim_clock import SimStopwatch, node_from_setup_kwargs
 
@@ -61,8 +64,8 @@ class NavigateToPose(ActionNode):
         frame_id: the frame of the goal pose
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {"goal": PortInformation(data_type=Pose2D, required=True)}
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {"goal": PortInformation(data_type=Pose2D, required=True)}
+    OUTPUT_PORTS: Ports = {
         "distance_remaining": PortInformation(data_type=float, required=False),
         "error_code": PortInformation(data_type=int, required=False),
         "error_msg": PortInformation(data_type=str, required=False),
@@ -85,12 +88,12 @@ class NavigateToPose(ActionNode):
         self.timeout = float(timeout)
         self.frame_id = frame_id
         self.node: Node | None = None
-        self.client: ActionClient | None = None
+        self.client: NavigationClient | None = None
         self._goal: Pose2D | None = None
         self._error: str | None = None
-        self._goal_future: Future | None = None
-        self._result_future: Future | None = None
-        self._goal_handle: ClientGoalHandle | None = None
+        self._goal_future: Future[NavigationGoalHandle] | None = None
+        self._result_future: Future[NavigationResult] | None = None
+        self._goal_handle: NavigationGoalHandle | None = None
         self._feedback: Any = None
         self._generation = 0
         self._overall: SimStopwatch | None = None
@@ -156,7 +159,7 @@ class NavigateToPose(ActionNode):
         self._reset()
 
     # ---------------------------------------------------------------- helpers
-    def _require_setup(self) -> ActionClient:
+    def _require_setup(self) -> NavigationClient:
         if self.client is None or self.node is None:
             raise RuntimeError(f"{self.name}: call setup(node=...) before ticking")
         return self.client
@@ -216,7 +219,7 @@ class NavigateToPose(ActionNode):
         self.feedback_message = f"waiting for navigation server {self.action}"
         return Status.RUNNING
 
-    def _take_goal_handle(self, future: Future) -> Status | None:
+    def _take_goal_handle(self, future: Future[NavigationGoalHandle]) -> Status | None:
         handle = None if future.exception() is not None else future.result()
         if handle is None or not handle.accepted:
             self._record_error(-1, "goal rejected by the navigation server")
@@ -248,7 +251,7 @@ class NavigateToPose(ActionNode):
             self.feedback_message = f"navigating: {remaining:.2f} m remaining"
         return Status.RUNNING
 
-    def _judge_result(self, future: Future) -> Status:
+    def _judge_result(self, future: Future[NavigationResult]) -> Status:
         wrapped = None if future.exception() is not None else future.result()
         if wrapped is None:
             self._record_error(-1, "no result from the navigation server")
@@ -269,7 +272,7 @@ class NavigateToPose(ActionNode):
         self._set_output("error_msg", text)
 
 
-def _cancel_when_accepted(future: Future) -> None:
+def _cancel_when_accepted(future: Future[NavigationGoalHandle]) -> None:
     """Cancel a goal whose acceptance arrives after the behaviour was stopped."""
     if future.cancelled() or future.exception() is not None:
         return

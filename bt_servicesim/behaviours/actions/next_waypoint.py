@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -18,8 +18,8 @@ class NextWaypoint(ActionNode):
     A new list object on the blackboard starts again from its first waypoint.
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {"waypoints": PortInformation(data_type=list[Pose2D])}
-    OUTPUT_PORTS: ClassVar[Ports] = {"goal": GOAL_OUT}
+    INPUT_PORTS: Ports = {"waypoints": PortInformation(data_type=list[Pose2D])}
+    OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "NextWaypoint", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -1,6 +1,6 @@
 """Localisation input: publish the pose the robot starts at, once per round of activity."""
 
-from typing import Any, ClassVar
+from typing import Any
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from py_trees.ports import NoDataAvailable, PortInformation
@@ -22,8 +22,8 @@ class PublishInitialPose(ActionNode):
         frame_id: the frame of the pose
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {"pose": PortInformation(data_type=Pose2D, required=True)}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {"pose": PortInformation(data_type=Pose2D, required=True)}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(
         self,
@@ -36,7 +36,7 @@ class PublishInitialPose(ActionNode):
         self.topic = topic
         self.frame_id = frame_id
         self.node: Node | None = None
-        self.publisher: Publisher | None = None
+        self.publisher: Publisher[PoseWithCovarianceStamped] | None = None
 
     def setup(self, **kwargs: Any) -> None:
         """Create the latched publisher on ``kwargs["node"]``."""

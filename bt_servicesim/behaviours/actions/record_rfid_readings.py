@@ -7,7 +7,7 @@ Runs every tick beside the topic readers; the history itself and what it means a
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -35,12 +35,12 @@ class RecordRfidReadings(ActionNode):
         length: readings kept
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "actors_in_range": PortInformation(data_type=list[str], required=True),
         "rfid_age": PortInformation(data_type=float, required=True),
         "robot_pose": PortInformation(data_type=Pose2D, required=True),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "rfid_history": PortInformation(data_type=RfidHistory, required=False),
     }
 

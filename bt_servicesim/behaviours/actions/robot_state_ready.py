@@ -20,11 +20,11 @@ from bt_servicesim.planning.geometry import Pose2D
 class RobotStateReady(ActionNode):
     """RUNNING until the robot pose and the occupancy grid are both available, then SUCCESS."""
 
-    INPUT_PORTS = {  # noqa: RUF012 - py_trees declares ports as class attributes
+    INPUT_PORTS = {
         "robot_pose": PortInformation(data_type=Pose2D, description="from odometry"),
         "occupancy": PortInformation(data_type=object, description="from the map"),
     }
-    OUTPUT_PORTS: dict[str, PortInformation] = {}  # noqa: RUF012
+    OUTPUT_PORTS: dict[str, PortInformation] = {}
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

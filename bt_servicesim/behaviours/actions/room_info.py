@@ -1,6 +1,6 @@
 """The referee's ``RoomInfo`` service: a room's target area as a ``Box``."""
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import PortInformation
 from servicesim_competition import srv
@@ -15,8 +15,8 @@ class RoomInfo(ServiceCall):
 
     SERVICE_TYPE = srv.RoomInfo
     DEFAULT_SERVICE = "/servicesim/room_info"
-    INPUT_PORTS: ClassVar[Ports] = {"room": PortInformation(data_type=str, required=True)}
-    OUTPUT_PORTS: ClassVar[Ports] = {"box": PortInformation(data_type=Box, required=False)}
+    INPUT_PORTS: Ports = {"room": PortInformation(data_type=str, required=True)}
+    OUTPUT_PORTS: Ports = {"box": PortInformation(data_type=Box, required=False)}
 
     def build_request(self) -> Any:
         """Ask for the room on the ``room`` port."""

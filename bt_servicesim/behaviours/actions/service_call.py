@@ -60,13 +60,13 @@ class ServiceExchange:
         server_timeout: sim seconds to wait for the server to appear
     """
 
-    def __init__(self, *, service: str, client: Client, clock: Clock, timeout: float,
+    def __init__(self, *, service: str, client: Client[Any, Any], clock: Clock, timeout: float,
                  server_timeout: float) -> None:
         self.service = service
         self.client = client
         self.timeout = timeout
         self.server_timeout = server_timeout
-        self.future: Future | None = None
+        self.future: Future[Any] | None = None
         self.response: Any = None
         self.message = ""
         self._request: Any = None
@@ -125,7 +125,7 @@ class ServiceExchange:
         self.message = f"waiting for {self.service} ({elapsed:.1f} sim s)"
         return Status.RUNNING
 
-    def _take_answer(self, future: Future) -> Status:
+    def _take_answer(self, future: Future[Any]) -> Status:
         error = future.exception()
         self.response = None if error is not None or future.cancelled() else future.result()
         if self.response is None:
@@ -164,7 +164,7 @@ class ServiceCall(ActionNode):
         self.timeout = float(timeout)
         self.server_timeout = float(server_timeout)
         self.node: Node | None = None
-        self.client: Client | None = None
+        self.client: Client[Any, Any] | None = None
         self.exchange: ServiceExchange | None = None
         self._request: Any = None
         self._error: str | None = None

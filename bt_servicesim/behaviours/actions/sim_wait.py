@@ -1,6 +1,6 @@
 """Wait a number of seconds of sim time: py_trees' own ``Timer`` counts wall time."""
 
-from typing import Any, ClassVar
+from typing import Any
 
 import py_trees
 
@@ -16,8 +16,8 @@ class SimWait(ActionNode):
         seconds: how long to wait, in sim seconds
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str = "SimWait", seconds: float = 1.0, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

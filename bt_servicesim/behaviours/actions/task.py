@@ -1,6 +1,6 @@
 """The referee's task services: ``NewTask`` starts the task, ``TaskInfo`` reads a running one."""
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import PortInformation
 from servicesim_competition import srv
@@ -21,8 +21,8 @@ _TASK_PORTS: dict[str, PortInformation] = {
 class _TaskCall(ServiceCall, register=False):
     """Shared answer handling of NewTask and TaskInfo (same response type)."""
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = _TASK_PORTS
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = _TASK_PORTS
 
     def check_response(self, response: Any) -> tuple[bool, str]:
         """An empty pick-up location is the referee's error answer."""

@@ -63,9 +63,9 @@ class _TopicReader(ActionNode, register=False):
         topic: the topic to subscribe to
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {}
-    OUTPUT_PORTS: ClassVar[Ports] = {}
-    MESSAGE_TYPE: ClassVar[Any]
+    INPUT_PORTS: Ports = {}
+    OUTPUT_PORTS: Ports = {}
+    MESSAGE_TYPE: ClassVar[type]
     QOS: ClassVar[QoSProfile | int] = qos_profile_sensor_data
 
     def __init__(self, name: str, topic: str, **kwargs: Any) -> None:
@@ -111,7 +111,7 @@ class RfidToBlackboard(_TopicReader):
     """
 
     MESSAGE_TYPE = ActorNames
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "actors_in_range": PortInformation(data_type=list[str], required=False),
         "rfid_age": PortInformation(data_type=float, required=False),
     }
@@ -125,7 +125,7 @@ class RfidToBlackboard(_TopicReader):
     ) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
         self.stale_after = float(stale_after)
-        self._names: tuple[Any, list[str]] = (None, [])
+        self._names: tuple[object, list[str]] = (None, [])
 
     def update(self) -> Status:
         """Write the list, emptied once it is stale; always SUCCESS."""
@@ -163,7 +163,7 @@ class MapToBlackboard(_TopicReader):
 
     MESSAGE_TYPE = OccupancyGrid
     QOS = MAP_QOS
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "occupancy": PortInformation(data_type=OccupancyGrid2D, required=False),
     }
 
@@ -171,7 +171,7 @@ class MapToBlackboard(_TopicReader):
         self, name: str = "MapToBlackboard", topic: str = "/servicebot/map", **kwargs: Any
     ) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
-        self._written: Any = None
+        self._written: object = None
 
     def _on_message(self, message: Any) -> None:
         self._received_s = sim_now_s(self._require_node().get_clock())
@@ -206,7 +206,7 @@ class CostmapToBlackboard(_TopicReader):
 
     MESSAGE_TYPE = OccupancyGrid
     QOS = MAP_QOS
-    OUTPUT_PORTS: ClassVar[Ports] = {
+    OUTPUT_PORTS: Ports = {
         "costmap": PortInformation(data_type=Costmap2D, required=False),
     }
 
@@ -215,7 +215,7 @@ class CostmapToBlackboard(_TopicReader):
                  **kwargs: Any) -> None:
         super().__init__(name=name, topic=topic, **kwargs)
         self.global_frame = global_frame
-        self._written: Any = None
+        self._written: object = None
         self._refused = ""
 
     def _on_message(self, message: Any) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable
 
@@ -15,8 +15,8 @@ __all__ = ["GuestInRange"]
 class GuestInRange(ConditionNode):
     """SUCCESS if the guest is among ``actors_in_range``, else FAILURE."""
 
-    INPUT_PORTS: ClassVar[Ports] = dict(GUEST_IN_RANGE_INPUTS)
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    INPUT_PORTS: Ports = dict(GUEST_IN_RANGE_INPUTS)
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str = "GuestInRange", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -12,7 +12,7 @@ rejected, the server lost, a random abort) are not a blocked way.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -32,11 +32,11 @@ BLOCKED_ERROR_CODES = frozenset({GOAL_OCCUPIED, NO_VALID_PATH, FAILED_TO_MAKE_PR
 class NavigationBlocked(ConditionNode):
     """SUCCESS when ``error_code`` (a NavigateToPose's last error) says the way was blocked."""
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "error_code": PortInformation(data_type=int, required=True,
                                       description="the last navigation's Nav2 error code"),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str = "NavigationBlocked", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

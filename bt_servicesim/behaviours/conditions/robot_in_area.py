@@ -9,7 +9,7 @@ closer to the approximation penalty for crowding a person).
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any
 
 from py_trees.ports import NoDataAvailable, PortInformation
 
@@ -28,11 +28,11 @@ class RobotInArea(ConditionNode):
             last bit of motion after the check cannot put it back outside
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "box": PortInformation(data_type=Box, required=True),
         "robot_pose": PortInformation(data_type=Pose2D, required=True),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(self, name: str = "RobotInArea", margin: float = 0.15, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -41,7 +41,8 @@ class RobotInArea(ConditionNode):
     def check(self) -> bool:
         """Compare the pose with the box."""
         try:
-            box, pose = self.get_input("box"), self.get_input("robot_pose")
+            box: Box = self.get_input("box")
+            pose: Pose2D = self.get_input("robot_pose")
         except NoDataAvailable as error:
             self.feedback_message = f"cannot check the area: {error}"
             return False

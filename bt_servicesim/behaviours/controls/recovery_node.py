@@ -28,7 +28,7 @@ knows it as the tag ``<RecoveryNode>``.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from typing import Any, ClassVar
+from typing import Any
 
 import py_trees
 from py_trees.ports import PortInformation, PortsMixin
@@ -49,12 +49,12 @@ class RecoveryNode(PortsMixin, py_trees.composites.Composite):
         number_of_retries: recoveries allowed when the ``number_of_retries`` port is not wired
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "number_of_retries": PortInformation(
             data_type=int, required=False, default_value=1,
             description="recoveries (so retries of the action) allowed before FAILURE"),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(
         self,

@@ -4,7 +4,7 @@ py_trees' own ``Timeout`` counts wall time; the mission runs on sim time.
 """
 
 import contextlib
-from typing import Any, ClassVar
+from typing import Any
 
 import py_trees
 from py_trees.ports import NoDataAvailable, PortInformation, PortsMixin
@@ -27,10 +27,10 @@ class SimTimeout(PortsMixin, py_trees.decorators.Decorator):
         seconds: the time limit, in sim seconds, when the ``seconds`` port is not wired
     """
 
-    INPUT_PORTS: ClassVar[Ports] = {
+    INPUT_PORTS: Ports = {
         "seconds": PortInformation(data_type=float, required=False),
     }
-    OUTPUT_PORTS: ClassVar[Ports] = {}
+    OUTPUT_PORTS: Ports = {}
 
     def __init__(
         self,

@@ -129,12 +129,12 @@ class LockstepServer:
 
         return call
 
-    def turn(self, endpoint: str, number: int) -> Future | None:
+    def turn(self, endpoint: str, number: int) -> Future[bool] | None:
         """While a client is joined, a future the gate completes when it admits request
         ``number`` on ``endpoint``; None when nobody is joined (serve at once)."""
         if not self.gate.active:
             return None
-        turn = Future()
+        turn: Future[bool] = Future()
         self.gate.admit_later(Admission(endpoint=endpoint, number=number,
                                         serve=lambda: turn.set_result(True)))
         return turn
@@ -219,8 +219,9 @@ class LockstepServer:
         """Take the done messages waiting; whether the gate is open now."""
         while True:
             try:
-                with self._dones.handle:
-                    taken = self._dones.handle.take_message(LockstepDone, True)
+                with self._dones.handle:  # None once the queue is empty (rclpy's stub omits it)
+                    taken: tuple[bytes, Any] | None = self._dones.handle.take_message(
+                        LockstepDone, True)
             except InvalidHandle:
                 return self.gate.is_open()
             if taken is None:
@@ -230,9 +231,11 @@ class LockstepServer:
     def _wait_for_done(self, executor: DrainingExecutor, *, timeout_s: float) -> None:
         """Block until a done message waits, the context shuts down or ``timeout_s`` passed."""
         guard = executor.shutting_down
-        context = self.node.context
-        with self._dones.handle, guard.handle, context.handle:
-            wait_set = rclpy_implementation.WaitSet(1, 1, 0, 0, 0, 0, context.handle)
+        context = self.node.context.handle
+        if context is None:
+            raise RuntimeError("lockstep: the simulator's context is destroyed")
+        with self._dones.handle, guard.handle, context:
+            wait_set = rclpy_implementation.WaitSet(1, 1, 0, 0, 0, 0, context)
             try:
                 wait_set.add_subscription(self._dones.handle)
                 wait_set.add_guard_condition(guard.handle)
@@ -305,7 +308,7 @@ def drain_completely(executor: DrainingExecutor) -> None:
         executor.drain_budget_s = budget
 
 
-class CountingActionServer(ActionServer):
+class CountingActionServer(ActionServer[Any, Any, Any]):
     """rclpy's action server, counting the requests it takes and the answers it sends, and
     serving its requests through the gate.
 

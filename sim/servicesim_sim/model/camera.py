@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from servicesim_sim.world.files import OccupancyMap
 
@@ -172,7 +173,8 @@ class FrontCamera:
     @staticmethod
     def _cells(coordinates: np.ndarray, size: int) -> np.ndarray:
         """Padded-grid indices; anything off the map lands on the wall of padding."""
-        return np.clip(coordinates, 0, size - 1).astype(np.intp)
+        cells: NDArray[np.intp] = np.clip(coordinates, 0, size - 1).astype(np.intp)
+        return cells
 
     def _draw_room(self, image: np.ndarray, depths: np.ndarray, along_x: np.ndarray) -> None:
         horizon = self.height // 2

@@ -46,7 +46,7 @@ from servicesim_sim.model.localisation import (
     compose,
 )
 from servicesim_sim.model.people import Crowd
-from servicesim_sim.model.referee import Referee
+from servicesim_sim.model.referee import Referee, RefereeReport
 from servicesim_sim.model.robot import Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
 from servicesim_sim.model.scenario import Scenario
@@ -518,7 +518,7 @@ class SimEngine:
     def score(self) -> float:
         return self.referee.score()
 
-    def referee_report(self) -> dict[str, object]:
+    def referee_report(self) -> RefereeReport:
         return self.referee.report()
 
     def penalty_causes(self) -> tuple[int, dict[str, float]]:

@@ -44,6 +44,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
@@ -199,7 +200,9 @@ class Clearance:
         rows = ((y0 - self.origin_y + t * (y1 - y0)[:, None]) / self.resolution).astype(np.intp)
         inside = steps[None, :] < samples[:, None]
         cols, rows = np.where(inside, cols, cols[:, :1]), np.where(inside, rows, rows[:, :1])
-        return walkable[rows - self.row0, cols - self.col0].all(axis=1)
+        clear: NDArray[np.bool_] = np.logical_and.reduce(
+            walkable[rows - self.row0, cols - self.col0], axis=1)
+        return clear
 
 
 # ----------------------------------------------------------------------------------- idlers

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TypedDict
 
 CHECKPOINT_NAMES = ("go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start")
 CHECKPOINT_WEIGHTS = (1.0, 2.0, 2.0, 1.0)
@@ -52,6 +52,37 @@ PERSON_APPROXIMATION_WEIGHT = 1.0
 OBJECT_APPROXIMATION_WEIGHT = 0.25
 
 GO_TO_PICK_UP, PICK_UP_GUEST, DROP_OFF_GUEST, RETURN_TO_START = range(4)
+
+
+class CheckpointReport(TypedDict):
+    """One checkpoint in :meth:`Referee.report`."""
+
+    name: str
+    done: bool
+    sim_time_s: float
+
+
+class PenaltyReport(TypedDict):
+    """The penalties in :meth:`Referee.report`: counts, and the points of contact and
+    approximation."""
+
+    failed_pickup: int
+    failed_dropoff: int
+    too_fast: int
+    drifts: int
+    contact: float
+    approximation: float
+
+
+class RefereeReport(TypedDict):
+    """The referee's account, in report.json's shape."""
+
+    running: bool
+    completed: bool
+    score: float
+    task_sim_time: float
+    checkpoints: list[CheckpointReport]
+    penalties: PenaltyReport
 
 
 @dataclass
@@ -172,7 +203,7 @@ class Referee:
                                                strict=True))
         return timed + self.penalties.points()
 
-    def report(self) -> dict[str, Any]:
+    def report(self) -> RefereeReport:
         """The referee's account, in report.json's shape."""
         return {
             "running": self.running,

@@ -36,13 +36,14 @@ class WallClearance:
         self.map = occupancy_map
         self.grid = occupancy_map.wall_distance.astype(np.float32)
         self._cols = self.grid.shape[1]
-        self._cells = memoryview(self.grid).cast("B").cast("f")
+        self._cells = self.grid.data.cast("B").cast("f")
 
     def at(self, x: float, y: float) -> float:
         row, col = self.map.world_to_cell(x, y)
         if not self.map.in_bounds(row, col):
             return 0.0
-        return self._cells[row * self._cols + col]
+        distance: float = self._cells[row * self._cols + col]
+        return distance
 
 
 class Robot:

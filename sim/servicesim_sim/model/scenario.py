@@ -23,6 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage
 
 from servicesim_sim.world.files import AreaBox, DriftSpec, TaskSpec, World
@@ -227,7 +228,8 @@ def _reachable_from(world: World, free: np.ndarray, x: float, y: float) -> np.nd
     row, col = world.map.world_to_cell(x, y)
     if not world.map.in_bounds(row, col) or labels[row, col] == 0:
         return free
-    return labels == labels[row, col]
+    reachable: NDArray[np.bool_] = labels == labels[row, col]
+    return reachable
 
 
 def _start_spot(world: World, box: AreaBox, free: np.ndarray, rng: np.random.Generator,

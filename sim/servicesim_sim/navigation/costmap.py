@@ -34,6 +34,7 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage
 
 from servicesim_sim.world.files import OccupancyMap
@@ -301,8 +302,10 @@ class Costmap:
         surface = distance - self.person_radius
         bearing = np.arctan2(offsets[:, 1], offsets[:, 0]) - yaw
         bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
-        return ((np.abs(bearing) <= self.lidar.half_angle)
-                & (surface >= self.lidar.min_range) & (surface <= self.lidar.max_range))
+        in_field: NDArray[np.bool_] = ((np.abs(bearing) <= self.lidar.half_angle)
+                                       & (surface >= self.lidar.min_range)
+                                       & (surface <= self.lidar.max_range))
+        return in_field
 
     def _in_line_of_sight(self, robot: np.ndarray, targets: np.ndarray, *,
                           occluders: np.ndarray) -> np.ndarray:
@@ -337,7 +340,7 @@ class Costmap:
         first = grid.samples_along(min(RAY_FIRST_SAMPLES, int(counts.max())))
         hits = grid.walls_at(robot[0] + across[:, None] * first, robot[1] + up[:, None] * first)
         hits &= np.arange(first.size) < counts[:, None]  # samples past a short ray's end
-        free = ~np.logical_or.reduce(hits, axis=1)
+        free: NDArray[np.bool_] = ~np.logical_or.reduce(hits, axis=1)
         longer = np.flatnonzero(free & (counts > first.size))
         if longer.size:
             rest = counts[longer] - first.size
@@ -362,7 +365,9 @@ class Costmap:
         across = np.abs(relative[:, :, 0] * unit[:, None, 1] - relative[:, :, 1] * unit[:, None, 0])
         in_front = (along > 0.0) & (along < distance[:, None] - self.person_radius)
         # np.logical_or.reduce is np.any without its wrappers (a sweep's fixed costs)
-        return np.logical_or.reduce(in_front & (across < self.person_radius), axis=1)
+        hidden: NDArray[np.bool_] = np.logical_or.reduce(
+            in_front & (across < self.person_radius), axis=1)
+        return hidden
 
 
 class RayGrid:
@@ -417,7 +422,8 @@ def _near_any(points: np.ndarray, others: np.ndarray, radius: float) -> np.ndarr
         return np.zeros(len(points), dtype=bool)
     gaps = np.hypot(points[:, None, 0] - others[None, :, 0],
                     points[:, None, 1] - others[None, :, 1])
-    return np.logical_or.reduce(gaps <= radius, axis=1)
+    near: NDArray[np.bool_] = np.logical_or.reduce(gaps <= radius, axis=1)
+    return near
 
 
 _WALL_DISTANCES: weakref.WeakKeyDictionary[

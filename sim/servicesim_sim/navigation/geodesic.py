@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
@@ -103,7 +104,7 @@ class LatticeGraph:
             raise ValueError("the map has no cell where the robot fits")
         self._row0, self._col0 = int(rows.min()), int(cols.min())
         allowed = allowed[self._row0:rows.max() + 1, self._col0:cols.max() + 1]
-        self.index = np.full(allowed.shape, -1, dtype=np.int32)
+        self.index: NDArray[np.int32] = np.full(allowed.shape, -1, dtype=np.int32)
         self.index[allowed] = np.arange(int(allowed.sum()), dtype=np.int32)
         self.nodes = int(allowed.sum())
         self.source = self.nodes  # the virtual node every search starts from
@@ -143,8 +144,8 @@ class LatticeGraph:
             (np.concatenate([base.data, values + SEED_OFFSET]),
              np.concatenate([base.indices, seeds.astype(base.indices.dtype)]), indptr),
             shape=base.shape)
-        distances, predecessors = csgraph.dijkstra(graph, directed=True, indices=self.source,
-                                                   return_predecessors=True)
+        distances, predecessors = csgraph.dijkstra(  # a 0-d index: 1-d results
+            graph, directed=True, indices=np.asarray(self.source), return_predecessors=True)
         return Search(distances=distances[:self.nodes] - SEED_OFFSET,
                       predecessors=predecessors[:self.nodes], source=self.source)
 

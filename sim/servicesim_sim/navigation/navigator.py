@@ -38,6 +38,7 @@ from enum import IntEnum
 from typing import Literal, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from servicesim_sim.navigation.costmap import INSCRIBED, Costmap, Lidar
 from servicesim_sim.navigation.planner import (
@@ -135,9 +136,12 @@ class PolylinePath:
         s = min(max(s, 0.0), self.total)
         index = min(bisect.bisect_right(self._arcs, s) - 1, len(self.lengths) - 1)
         if index < 0 or self.lengths[index] == 0.0:
-            return self.points[max(index, 0)].copy()
+            start: NDArray[np.float64] = self.points[max(index, 0)].copy()
+            return start
         fraction = (s - self.arc[index]) / self.lengths[index]
-        return self.points[index] + fraction * (self.points[index + 1] - self.points[index])
+        point: NDArray[np.float64] = self.points[index] + fraction * (
+            self.points[index + 1] - self.points[index])
+        return point
 
     def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
         """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``.

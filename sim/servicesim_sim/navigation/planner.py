@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from enum import IntEnum
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import sparse
 from scipy.sparse import csgraph
 
@@ -115,9 +116,10 @@ class GridGraph:
         # scipy's sparse matrices and csgraph index with int32 where it fits: arrays of any
         # other type were converted (copied) by every matrix built and every search run
         index_type = np.int32 if rows * cols < np.iinfo(np.int32).max else np.int64
-        self.targets = np.concatenate(targets)[order].astype(index_type)
+        self.targets: NDArray[np.int32 | np.int64] = np.concatenate(targets)[order].astype(
+            index_type)
         self.lengths = np.concatenate(lengths)[order]
-        self.indptr = np.searchsorted(sources_all[order],
+        self.indptr: NDArray[np.int32 | np.int64] = np.searchsorted(sources_all[order],
                                       np.arange(rows * cols + 1)).astype(index_type)
         # the steps onto each cell (indices into targets), for re-weighing a few cells' steps
         self._static = np.array(static_costs).ravel()
@@ -157,7 +159,9 @@ class GridGraph:
         starts = self._onto_ptr[cells]
         counts = self._onto_ptr[cells + 1] - starts
         firsts = np.cumsum(counts) - counts
-        return self._onto[np.arange(int(counts.sum())) - np.repeat(firsts - starts, counts)]
+        steps: NDArray[np.intp] = self._onto[np.arange(int(counts.sum()))
+                                             - np.repeat(firsts - starts, counts)]
+        return steps
 
 
 def step_weights(entered: np.ndarray, lengths: np.ndarray, *,
@@ -244,7 +248,8 @@ class Planner:
     def _distance_field(self, goal_index: int) -> np.ndarray:
         field = self._distance_fields.get(goal_index)
         if field is None:
-            field = csgraph.dijkstra(self.graph.unweighted(), directed=True, indices=goal_index)
+            field = csgraph.dijkstra(self.graph.unweighted(), directed=True,
+                                     indices=np.asarray(goal_index))  # 0-d: a 1-d field
             while len(self._distance_fields) >= DISTANCE_FIELDS_KEPT:
                 self._distance_fields.pop(next(iter(self._distance_fields)))
             self._distance_fields[goal_index] = field

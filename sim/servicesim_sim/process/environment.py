@@ -41,6 +41,7 @@ import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 __all__ = ["apply_environment_defaults", "reads_the_simulators_profile", "remove_dead_segments",
            "shut_ros_down_at_exit"]
@@ -127,6 +128,14 @@ def _remove_if_dead(directory: Path, lock_name: str, settled_s: float) -> bool:
         os.close(descriptor)  # releases the lock
 
 
+@runtime_checkable
+class _Destroyable(Protocol):
+    """A waitable that holds resources of its own (an action server, an event handler):
+    rclpy's ``Waitable`` itself declares no ``destroy``."""
+
+    def destroy(self) -> None: ...
+
+
 def shut_ros_down_at_exit() -> None:
     """Delete this process's DDS participant: shut rclpy's default context down, collect the
     garbage, destroy every node still alive with its waitables (``destroy_node`` leaves those,
@@ -143,7 +152,8 @@ def shut_ros_down_at_exit() -> None:
         for node in [item for item in gc.get_objects() if isinstance(item, Node)]:
             for waitable in list(node.waitables):
                 with contextlib.suppress(Exception):
-                    waitable.destroy()
+                    if isinstance(waitable, _Destroyable):
+                        waitable.destroy()
             with contextlib.suppress(Exception):
                 node.destroy_node()
         context.destroy()

@@ -106,7 +106,7 @@ class EpisodeResets:
         """Whether a reset was ever accepted: the simulator then plays episodes one after
         another, and holds still between them (``SimulatorNode._idle``)."""
         self.worlds = WorldShelf()
-        self._answered: Future | None = None
+        self._answered: Future[bool] | None = None
         node.create_service(ResetEpisode, RESET_SERVICE, self._reset,
                             callback_group=ReentrantCallbackGroup())
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeAlias
 
 from geometry_msgs.msg import PoseStamped
 from nav2_msgs.action import NavigateToPose
@@ -28,6 +28,10 @@ from servicesim_sim.model.engine import NavigationState, SimEngine
 from servicesim_sim.navigation.goals import GoalPose, GoalRefusal, goal_in_map
 from servicesim_sim.ros.publishing import EVERY_REQUEST, duration, stamp
 from servicesim_sim.world.files import World
+
+NavigationGoal: TypeAlias = ServerGoalHandle[
+    NavigateToPose.Goal, NavigateToPose.Result, NavigateToPose.Feedback]
+"""A NavigateToPose goal as the action server holds it."""
 
 NAVIGATION_ACTION = "/servicebot/navigate_to_pose"
 FEEDBACK_PERIOD_S = 0.5  # navigation feedback at 2 Hz sim, as often as anyone reads it
@@ -43,7 +47,7 @@ class NavigationAction:
         self.world = world
         self.lockstep = lockstep
         self.io_period_s = io_period_s
-        self._active_goal: ServerGoalHandle | None = None
+        self._active_goal: NavigationGoal | None = None
         self._navigations: list[_Navigation] = []
         self._server = CountingActionServer(
             node, NavigateToPose, NAVIGATION_ACTION, lockstep=lockstep,
@@ -60,7 +64,7 @@ class NavigationAction:
         self._navigations = []
         self._server.destroy()
 
-    def _on_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
+    def _on_goal_accepted(self, goal_handle: NavigationGoal) -> None:
         """One goal at a time, as Nav2: the new goal preempts whatever runs, at once."""
         self._active_goal = goal_handle
         for navigation in self._navigations:
@@ -68,7 +72,7 @@ class NavigationAction:
         self._navigations.clear()
         goal_handle.execute()
 
-    async def _navigate(self, goal_handle: ServerGoalHandle) -> NavigateToPose.Result:
+    async def _navigate(self, goal_handle: NavigationGoal) -> NavigateToPose.Result:
         """Start the goal and wait for its result, which :meth:`advance` sets.
 
         A goal already preempted (a burst accepts several before any runs) or refused ends
@@ -167,11 +171,11 @@ def _preemption_result() -> NavigateToPose.Result:
 class _Navigation:
     """A NavigateToPose goal the loop follows; ``result`` completes the goal's coroutine."""
 
-    handle: ServerGoalHandle
+    handle: NavigationGoal
     ticket: int
     started: float
     feedback_due: float
-    result: Future = field(default_factory=Future)
+    result: Future[NavigateToPose.Result] = field(default_factory=Future)
 
     def end(self, result: NavigateToPose.Result) -> None:
         """Complete the goal's coroutine with its result (its terminal state is already set)."""

@@ -84,7 +84,7 @@ class SimulatorNode:
         self.inputs = RobotInputs(node=node, engine=engine, lockstep=lockstep)
         self.world_topics.send_map()
 
-    def sim_sleep(self, seconds: float) -> Future:
+    def sim_sleep(self, seconds: float) -> Future[bool]:
         """A future completed by the loop once ``seconds`` of sim time have passed."""
         return self.sleepers.sleep(seconds)
 

@@ -47,7 +47,7 @@ class CompetitionServices:
     the loop completes once that much sim time has passed."""
 
     def __init__(self, *, node: Node, engine: SimEngine, settings: SimSettings,
-                 lockstep: LockstepServer, sim_sleep: Callable[[float], Future]) -> None:
+                 lockstep: LockstepServer, sim_sleep: Callable[[float], Future[bool]]) -> None:
         self.node = node
         self.engine = engine
         self.settings = settings

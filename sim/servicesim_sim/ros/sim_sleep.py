@@ -20,11 +20,11 @@ class SimSleepers:
     def __init__(self, *, engine: SimEngine, lockstep: LockstepServer) -> None:
         self.engine = engine
         self.lockstep = lockstep
-        self._sleepers: list[tuple[float, Future]] = []
+        self._sleepers: list[tuple[float, Future[bool]]] = []
 
-    def sleep(self, seconds: float) -> Future:
+    def sleep(self, seconds: float) -> Future[bool]:
         """A future completed by the loop once ``seconds`` of sim time have passed."""
-        future = Future()
+        future: Future[bool] = Future()
         self._sleepers.append((self.engine.sim_time + max(seconds, 0.0), future))
         return future
 

@@ -70,7 +70,8 @@ class WallDistance:
         grid = self.grid
         below = grid[row0, col0] * (1.0 - fx) + grid[row0, col0 + 1] * fx
         above = grid[row0 + 1, col0] * (1.0 - fx) + grid[row0 + 1, col0 + 1] * fx
-        return below * (1.0 - fy) + above * fy
+        depth: np.ndarray = below * (1.0 - fy) + above * fy
+        return depth
 
 
 _WALL_DISTANCES: weakref.WeakKeyDictionary[OccupancyMap, WallDistance] = (

@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import NoReturn
 
 import numpy as np
+from numpy.typing import NDArray
 
 from servicesim_sim.world.files import DEFAULT_WORLD
 
@@ -442,7 +443,8 @@ def inside_outline(outline: Sequence[Point]) -> np.ndarray:
         rows = (centres >= min(y0, y1)) & (centres < max(y0, y1))
         first_col = math.ceil((x0 - ORIGIN[0]) / RESOLUTION - 0.5)
         crossings[rows, min(max(first_col, 0), SIZE)] += 1
-    return (np.cumsum(crossings, axis=1)[:, :SIZE] % 2) == 1
+    inside: NDArray[np.bool_] = (np.cumsum(crossings, axis=1)[:, :SIZE] % 2) == 1
+    return inside
 
 
 # --------------------------------------------------------------------------- writing files
