@@ -108,17 +108,19 @@ def matches(name: str, key: str) -> bool:
 def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None) -> type:
     """A stand-in whose ports are the real leaf's; its settings (``seconds``, ``grace``...)
     become constant string inputs."""
-    real_inputs = set(real.input_ports()) if real is not None else set()
-    real_outputs = set(real.output_ports()) if real is not None else set()
+    real_ports = real if real is not None and issubclass(real, BehaviourWithPorts) else None
+    real_declared = real_ports.input_ports() if real_ports is not None else {}
+    real_inputs = set(real_declared)
+    real_outputs = set(real_ports.output_ports()) if real_ports is not None else set()
 
     def port_info(names: set[str], data_type: type) -> dict[str, PortInformation]:
         return {port: PortInformation(data_type=data_type, required=False) for port in names}
 
     settings = ports - real_inputs - real_outputs
     scalars = {port for port in ports & real_inputs
-               if real is not None and real.input_ports()[port].data_type in SCALARS}
+               if real_declared[port].data_type in SCALARS}
     inputs = {**port_info(ports & real_inputs - scalars, object), **port_info(settings, str),
-              **{port: real.input_ports()[port] for port in scalars}}
+              **{port: real_declared[port] for port in scalars}}
     outputs = port_info(ports & real_outputs, object)
 
     def initialise(self: Any) -> None:
@@ -132,7 +134,8 @@ def _scripted_leaf(tag: str, ports: set[str], script: Script, real: type | None)
             for port in self.output_ports():
                 self._set_output(port, OUTPUT_VALUES.get(port, Unscripted()))
         self.feedback_message = f"scripted {self._outcome.name}"
-        return self._outcome
+        outcome: Status = self._outcome
+        return outcome
 
     def terminate(self: Any, new_status: Status) -> None:
         script.terminated[self.name].append(new_status)
