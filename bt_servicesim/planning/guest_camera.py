@@ -22,6 +22,8 @@ colours:
   picture's edge (a guest nearer than about 2.3 m, whose trousers leave the picture at the
   bottom) looks shorter than it is, so the distance is an overestimate
   (:attr:`GuestSighting.clipped`);
+- :func:`look_turns` plans a look round in steps: first towards where the guest was last
+  heard, then on the same way round, each step less than the field of view, a full turn in all;
 - :func:`camera_goal` turns a sighting taken from a pose into a goal :data:`STAND_OFF` short of
   the guest on the line of sight, facing them, moved to the nearest reachable free spot if
   that one is not.
@@ -49,6 +51,7 @@ __all__ = [
     "find_guest",
     "guest_masks",
     "guest_position",
+    "look_turns",
 ]
 
 GUEST_HEIGHT = 1.5
@@ -237,3 +240,19 @@ def camera_goal(robot: Pose2D, sighting: GuestSighting, grid: OccupancyGrid2D, *
     if spot is None:
         return None
     return Pose2D(spot[0], spot[1], math.atan2(gy - spot[1], gx - spot[0]))
+
+
+def look_turns(robot: Pose2D, *, towards: Pose2D | None, step: float) -> list[float]:
+    """The turns (radians, positive to the left) before each look of a full look round.
+
+    The first faces ``towards`` (no turn without it, or when the robot stands on it); the rest
+    go on the same way round in ``step``s until the looks have faced every way.
+    """
+    if not 0.0 < step < math.pi:
+        raise ValueError(f"a look round needs a step between 0 and pi, not {step}")
+    first = 0.0
+    if towards is not None and math.hypot(towards.x - robot.x, towards.y - robot.y) > 0.3:
+        bearing = math.atan2(towards.y - robot.y, towards.x - robot.x) - robot.yaw
+        first = math.atan2(math.sin(bearing), math.cos(bearing))
+    looks = math.ceil(2.0 * math.pi / step)
+    return [first] + [math.copysign(step, first if first != 0.0 else 1.0)] * (looks - 1)

@@ -19,6 +19,7 @@ from bt_servicesim.planning.guest_camera import (
     camera_goal,
     find_guest,
     guest_position,
+    look_turns,
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from servicesim_sim.model.camera import OTHER_SHIRTS, OTHER_TROUSERS, render_front_camera
@@ -204,3 +205,20 @@ def test_a_goal_in_a_wall_moves_to_free_floor_or_gives_none() -> None:
                              origin_y=-1.0)
     assert camera_goal(Pose2D(10.0, 10.0, 0.0), sighting_at(bearing=0.0, distance=8.0),
                        closet) is None
+
+
+# ---------------------------------------------------------------- the look round
+def test_a_look_round_faces_the_guests_last_place_first_and_then_every_way() -> None:
+    turns = look_turns(Pose2D(0.0, 0.0, 0.0), towards=Pose2D(-3.0, -0.1), step=0.9)
+    assert turns[0] == pytest.approx(-math.pi + math.atan(0.1 / 3.0))
+    assert turns[1:] == [-0.9] * 6  # on the same way round
+    headings = np.cumsum(turns)
+    gaps = np.diff(np.sort(np.mod(headings, 2 * math.pi)))
+    assert max([*gaps, 2 * math.pi - np.ptp(np.mod(headings, 2 * math.pi))]) < CAMERA.hfov
+
+
+def test_without_a_last_place_the_first_look_is_straight_ahead() -> None:
+    assert look_turns(Pose2D(1.0, 1.0, 2.0), towards=None, step=1.0) == [0.0] + [1.0] * 6
+    assert look_turns(Pose2D(1.0, 1.0, 2.0), towards=Pose2D(1.1, 1.0), step=1.0)[0] == 0.0
+    with pytest.raises(ValueError, match="step"):
+        look_turns(Pose2D(0.0, 0.0), towards=None, step=0.0)
