@@ -302,6 +302,7 @@ def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     assert script.count("PlanGuestSearch") == 1
+    assert script.count("LookForGuest") == 0  # found on the trail: no look round
     assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
     assert script.count("ComputeDropOffGoal") == 2
     assert Status.INVALID in script.terminated[
@@ -314,6 +315,7 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
         "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)] * 1000,
         "GuestCaughtUp": [Status.FAILURE] * 1000,
         "PlanGuestSearch": [Status.FAILURE] * 1000,
+        "LookForGuest": [Status.FAILURE] * 1000,
     })
     status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
@@ -321,7 +323,34 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
     # re-acquisition is not followed by another guiding under the same GuideRetry
     assert script.count("ComputeDropOffGoal") == 6 * 8
     assert script.count("PlanGuestSearch") == 6 * 8
+    assert script.count("LookForGuest") == 6 * 8
     assert script.count("CallDropOffGuest") == 0
+
+
+def test_a_guest_the_trail_search_misses_is_looked_for_with_the_camera_and_picked_up() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+        "GuestCaughtUp": [Status.FAILURE],
+        "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 100_000,
+        "SearchForLostGuest.NextWaypoint": [Status.SUCCESS, Status.SUCCESS, Status.FAILURE],
+        "SearchForLostGuest.NavigateToWaypoint": [(Status.SUCCESS, 30)] * 2,
+        "LookForGuest": [(Status.SUCCESS, 60)],
+        "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+        "SeenGuestInRange": [Status.FAILURE] * 10,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    order = [call for call in script.calls if any(matches(call, key) for key in (
+        "SearchForLostGuest.NavigateToWaypoint", "LookForGuest", "NavigateToSeenGuest",
+        "PickUpGuestAgain.CallPickUpGuest"))]
+    assert [call.rsplit(".", 1)[-1] for call in order] == [
+        "NavigateToWaypoint", "NavigateToWaypoint", "LookForGuest", "NavigateToSeenGuest",
+        "CallPickUpGuest"]
+    # the guest in RFID range ends the approach before navigation does
+    navigation = next(c for c in script.calls if matches(c, "NavigateToSeenGuest"))
+    assert Status.INVALID in script.terminated[navigation]
+    assert script.count("ComputeDropOffGoal") == 2
 
 
 def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> None:
