@@ -164,9 +164,9 @@ class LookForGuest(ActionNode):
         if self._moving:
             self._command(turn=0.0)
         self._drop_camera()
-        self._step = None
-        if new_status == Status.INVALID:
+        if new_status == Status.INVALID and self._step is not None:
             self.feedback_message = "look interrupted"
+        self._step = None
 
     # ---------------------------------------------------------------- steps
     def _begin_step(self, *, earliest_look: float = 0.0) -> None:
