@@ -34,6 +34,7 @@ Pure: numpy and the project's occupancy grid; no ROS, no py_trees.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,6 +77,11 @@ COLUMN_GAP = 2
 """Columns without blue that still join two runs of blue into one."""
 MAX_SIGHTING_DISTANCE = 30.0
 """Metres: a farther estimate is noise (the lidar's reach)."""
+BYSTANDER_BERTH = 1.0
+"""Metres the goal keeps from anyone else standing near the guest (centre to centre: the
+referee books approximation within 0.75 m of the robot's body)."""
+GOAL_SLACK = 0.6
+"""Metres the goal may move from the line of sight to free floor clear of bystanders."""
 
 
 @dataclass(frozen=True)
@@ -222,12 +228,13 @@ def guest_position(robot: Pose2D, sighting: GuestSighting) -> Point:
 
 
 def camera_goal(robot: Pose2D, sighting: GuestSighting, grid: OccupancyGrid2D, *,
-                stand_off: float = STAND_OFF) -> Pose2D | None:
+                stand_off: float = STAND_OFF, bystanders: Sequence[Point] = ()) -> Pose2D | None:
     """A goal ``stand_off`` short of the guest on the line of sight, facing them.
 
     A guest already within ``stand_off`` gives the robot's own spot, turned to them. A goal
-    that is not free with the robot's clearance moves to the nearest reachable spot that is,
-    within half a metre; None if there is none (then the robot cannot get there).
+    that is not free with the robot's clearance, or lies within :data:`BYSTANDER_BERTH` of
+    someone else near the guest (``bystanders``, from the costmap), moves to the nearest
+    reachable spot that is, within :data:`GOAL_SLACK`; None if there is none.
     """
     gx, gy = guest_position(robot, sighting)
     heading = robot.yaw + sighting.bearing
@@ -235,11 +242,26 @@ def camera_goal(robot: Pose2D, sighting: GuestSighting, grid: OccupancyGrid2D, *
     if ahead <= 0.0:
         return Pose2D(robot.x, robot.y, heading)
     x, y = robot.x + ahead * math.cos(heading), robot.y + ahead * math.sin(heading)
-    reachable = grid.reachable_from(robot.x, robot.y, ROBOT_CLEARANCE)
-    spot = grid.nearest_free(x, y, clearance=ROBOT_CLEARANCE, max_radius=0.5, within=reachable)
+    allowed = grid.reachable_from(robot.x, robot.y, ROBOT_CLEARANCE)
+    if bystanders:
+        allowed = _clear_of(grid, allowed, bystanders)
+    spot = grid.nearest_free(x, y, clearance=ROBOT_CLEARANCE, max_radius=GOAL_SLACK,
+                             within=allowed)
     if spot is None:
         return None
     return Pose2D(spot[0], spot[1], math.atan2(gy - spot[1], gx - spot[0]))
+
+
+def _clear_of(grid: OccupancyGrid2D, allowed: np.ndarray, people: Sequence[Point]) -> np.ndarray:
+    """``allowed`` without the cells within BYSTANDER_BERTH of any of ``people``."""
+    clear = allowed.copy()
+    for px, py in people:
+        window = grid.window(px - BYSTANDER_BERTH, py - BYSTANDER_BERTH,
+                             px + BYSTANDER_BERTH, py + BYSTANDER_BERTH)
+        near = (window.xs[None, :] - px) ** 2 + (window.ys[:, None] - py) ** 2 \
+            < BYSTANDER_BERTH ** 2
+        clear[window.rows, window.cols] &= ~near
+    return clear
 
 
 def look_turns(robot: Pose2D, *, towards: Pose2D | None, step: float) -> list[float]:

@@ -222,3 +222,17 @@ def test_without_a_last_place_the_first_look_is_straight_ahead() -> None:
     assert look_turns(Pose2D(1.0, 1.0, 2.0), towards=Pose2D(1.1, 1.0), step=1.0)[0] == 0.0
     with pytest.raises(ValueError, match="step"):
         look_turns(Pose2D(0.0, 0.0), towards=None, step=0.0)
+
+
+def test_the_goal_keeps_clear_of_someone_standing_beside_the_guest() -> None:
+    robot = Pose2D(5.0, 5.0, 0.0)
+    sighting = sighting_at(bearing=0.0, distance=6.0)  # the guest at (11, 5)
+    plain = camera_goal(robot, sighting, open_grid())
+    assert plain is not None and (plain.x, plain.y) == pytest.approx((9.4, 5.0), abs=0.05)
+    idler = (9.4, 5.6)
+    goal = camera_goal(robot, sighting, open_grid(), bystanders=[idler])
+    assert goal is not None
+    assert math.dist((goal.x, goal.y), idler) >= 1.0
+    assert math.dist((goal.x, goal.y), (plain.x, plain.y)) <= 0.6
+    crowd = [(9.4 + dx, 5.0 + dy) for dx in (-0.6, 0.0, 0.6) for dy in (-0.6, 0.6)]
+    assert camera_goal(robot, sighting, open_grid(), bystanders=crowd) is None

@@ -40,7 +40,7 @@ from sensor_msgs.msg import Image
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import GOAL_OUT, OCCUPANCY, ROBOT_POSE
-from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.planning.geometry import Point, Pose2D
 from bt_servicesim.planning.guest_camera import (
     CameraModel,
     camera_goal,
@@ -48,10 +48,17 @@ from bt_servicesim.planning.guest_camera import (
     guest_position,
     look_turns,
 )
+from bt_servicesim.planning.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
 
 __all__ = ["LookForGuest", "image_pixels"]
+
+BYSTANDER_REACH = 3.0
+"""Metres round the guest (in x and in y) in which the costmap's people are bystanders."""
+GUEST_MARK = 0.8
+"""Metres from where the camera puts the guest within which a costmap disc is the guest's."""
 
 
 @dataclass
@@ -92,6 +99,9 @@ class LookForGuest(ActionNode):
         "guest_last_seen": PortInformation(
             data_type=Pose2D, required=False,
             description="where the robot last had the guest in range: looked towards first"),
+        "costmap": PortInformation(
+            data_type=Costmap2D, required=False,
+            description="navigation's costmap: the goal keeps clear of others near the guest"),
     }
     OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
@@ -191,7 +201,7 @@ class LookForGuest(ActionNode):
         x, y = guest_position(robot, sighting)
         where = (f"guest seen at ({x:.2f}, {y:.2f}), {sighting.distance:.1f} m "
                  f"at {sighting.bearing:+.2f} rad")
-        goal = camera_goal(robot, sighting, grid)
+        goal = camera_goal(robot, sighting, grid, bystanders=self._bystanders(grid, (x, y)))
         if goal is None:
             self.feedback_message = f"{where}: no reachable spot near them"
             return Status.FAILURE
@@ -235,6 +245,22 @@ class LookForGuest(ActionNode):
         if self.reader is not None:
             self.reader.cancel()
             self.reader = None
+
+    def _bystanders(self, grid: OccupancyGrid2D, guest: Point) -> list[Point]:
+        """Others the costmap shows near the guest: every disc but the one nearest the guest,
+        if it lies within :data:`GUEST_MARK` of where the camera puts them."""
+        try:
+            costmap = self.get_input("costmap")
+        except NoDataAvailable:
+            return []
+        if not isinstance(costmap, Costmap2D):
+            return []
+        people = [(float(px), float(py)) for px, py in people_on_costmap(
+            costmap, grid, x=guest[0], y=guest[1], reach=BYSTANDER_REACH)]
+        people.sort(key=lambda person: math.dist(person, guest))
+        if people and math.dist(people[0], guest) <= GUEST_MARK:
+            people = people[1:]
+        return people
 
     def _last_seen(self) -> Pose2D | None:
         try:

@@ -22,7 +22,7 @@ from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from servicesim_sim.model.camera import render_front_camera
 from servicesim_sim.world.files import OccupancyMap
-from tests.fakes import SensorWorld, wire
+from tests.fakes import SensorWorld, costmap_of, wire
 
 Status = py_trees.common.Status
 GUEST = "human_20843"
@@ -88,8 +88,11 @@ class TurningRobot:
                               f"{count} camera subscribers")
 
 
-def look(world: SensorWorld, last_seen: Pose2D | None = None) -> LookForGuest:
+def look(world: SensorWorld, last_seen: Pose2D | None = None,
+         people_marked: list[tuple[float, float]] | None = None) -> LookForGuest:
     inputs: dict[str, object] = {"occupancy": GRID}
+    if people_marked is not None:
+        inputs["costmap"] = costmap_of(GRID, people_marked)
     if last_seen is not None:
         inputs["guest_last_seen"] = last_seen
     behaviour = LookForGuest(name="look")
@@ -111,6 +114,20 @@ def test_a_guest_behind_the_robot_is_found_by_turning_towards_where_they_were(
     assert robot.commands[0] > 0.0 and robot.commands[-1] == 0.0  # turned left, then stopped
     assert abs(robot.pose.yaw) > 2.5  # one turn, about half round, to face them
     robot.wait_for_subscribers(0)  # the camera is left when the look ends
+
+
+def test_a_guest_beside_others_is_approached_clear_of_them(world: SensorWorld) -> None:
+    """The guest stands between two idlers; the costmap marks all three. The goal 1.6 m short
+    of the guest on the line of sight would be 0.7 m from one idler: it moves clear of both."""
+    guest, left, right = (15.0, 10.0), (13.4, 10.7), (15.0, 11.0)
+    robot = TurningRobot(world, Pose2D(10.0, 10.0, 0.0),
+                         [(GUEST, "guest", *guest), ("human_11111", "idler", *left),
+                          ("human_22222", "idler", *right)])
+    behaviour = look(world, people_marked=[guest, left, right])
+    assert robot.run(behaviour) == Status.SUCCESS, behaviour.feedback_message
+    goal = Blackboard.get("/goal")
+    assert math.dist((goal.x, goal.y), guest) < 2.0  # within the referee's pick-up reach
+    assert min(math.dist((goal.x, goal.y), other) for other in (left, right)) >= 1.0
 
 
 def test_a_full_turn_without_the_guest_fails_and_leaves_the_robot_stopped(
