@@ -29,8 +29,8 @@ from servicesim_sim.navigation.navigator import (
     Navigator,
     PolylinePath,
 )
-from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
 from servicesim_sim.navigation.parameters import CostmapParameters, InflationLayer
+from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
 from servicesim_sim.world.files import OccupancyMap
 
 RESOLUTION = 0.05
