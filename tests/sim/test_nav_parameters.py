@@ -275,3 +275,18 @@ def test_the_navigator_takes_its_costmap_and_goal_checker_from_the_parameters() 
     strict.start(3.0, 2.0, math.pi, now=0.0)
     assert strict.command(pose=pose, people=[], now=0.0) != (0.0, 0.0)
     assert strict.status == "running"
+
+
+def test_a_containers_people_are_inflated_by_its_own_layer_and_by_a_later_top_level_one() -> None:
+    layered = parsed(costmap_with(
+        'plugins: ["static_layer", "people", "inflation_layer"]\n'
+        'static_layer: {plugin: "nav2_costmap_2d::StaticLayer"}\n'
+        "people:\n"
+        '  plugin: "nav2_costmap_2d::PluginContainerLayer"\n'
+        '  plugins: ["obstacle_layer", "inflation_layer"]\n'
+        '  obstacle_layer: {plugin: "nav2_costmap_2d::ObstacleLayer"}\n'
+        '  inflation_layer: {plugin: "nav2_costmap_2d::InflationLayer", '
+        "inflation_radius: 0.9}\n"
+        'inflation_layer: {plugin: "nav2_costmap_2d::InflationLayer"}'))
+    assert layered.costmap.walls == (InflationLayer(),)
+    assert layered.costmap.people == (InflationLayer(0.9, 10.0), InflationLayer())

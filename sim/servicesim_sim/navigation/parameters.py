@@ -24,7 +24,8 @@ Design intent:
   what it names; whatever it leaves out keeps the servicebot's value.
 * Layers act as Nav2's do on the master grid, in order: an inflation layer inflates the
   obstacles the layers before it put there (the walls, the people, or both); a container's
-  inflation layer inflates only what its own layers marked. :class:`CostmapParameters` keeps
+  inflation layer inflates only what its own layers marked, and what the container marked is
+  on the costmap for the layers after it. :class:`CostmapParameters` keeps
   the result: which inflations the walls get and which the people get.
 * A file is checked whole before anything starts: an unknown key, a key of the wrong type
   (ROS 2 reads ``10`` as an integer and refuses it for a double: write ``10.0``) or a value out
@@ -340,7 +341,8 @@ class _Layers:
         self.inflations: dict[str, list[InflationLayer]] = {"walls": [], "people": []}
 
     def walk(self, values: Mapping[str, Any], key: str, plugins: tuple[str, ...], *,
-             top: bool) -> None:
+             top: bool) -> list[str]:
+        """Each layer in order; what they marked (``walls``, ``people``) on this grid."""
         marked: list[str] = []  # what the layers so far put on this grid
         for index, name in enumerate(plugins):
             where = f"{key}.{name}"
@@ -352,11 +354,12 @@ class _Layers:
                 self.obstacles(section, where, marked)
             elif kind == INFLATION_LAYER:
                 self.inflation(section, where, marked)
-            else:
-                self.container(section, where, top=top)
+            else:  # what the container marked is on this grid for the layers after it
+                marked += self.container(section, where, top=top)
         if top and "walls" not in marked:
             raise self.reader.fail(f"{key}.plugins", f"needs a {STATIC_LAYER} first: the "
                                                      "map's walls")
+        return marked
 
     def kind(self, section: Mapping[str, Any], where: str, name: str) -> str:
         plugin = self.reader.string(section, where, "plugin")
@@ -402,14 +405,16 @@ class _Layers:
         for source in marked:
             self.inflations[source].append(layer)
 
-    def container(self, section: Mapping[str, Any], where: str, *, top: bool) -> None:
+    def container(self, section: Mapping[str, Any], where: str, *, top: bool) -> list[str]:
+        """The container's layers walked on a grid of their own; what they marked."""
         if not top:
             raise self.reader.fail(where, f"a {CONTAINER_LAYER} inside another is not taken")
         plugins = self.reader.names(section, where, "plugins")
         if plugins is None:
             raise self.reader.fail(f"{where}.plugins", "missing: name the container's layers")
         if not self.enabled(section, where, ("plugins", *plugins)):
-            return
+            return []
         require_types, self.require_types = self.require_types, True
-        self.walk(section, where, plugins, top=False)
+        marked = self.walk(section, where, plugins, top=False)
         self.require_types = require_types
+        return marked
