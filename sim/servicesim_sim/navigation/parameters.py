@@ -78,6 +78,25 @@ class NavigationParametersError(ValueError):
     """A parameters file the simulator's navigation cannot take; the message is one line."""
 
 
+def inscribed_radius(footprint: tuple[tuple[float, float], ...]) -> float:
+    """The distance from the robot's centre to the nearest edge of its footprint polygon (as
+    Nav2's ``calculateMinAndMaxDistances``); 0 when the centre is not inside it."""
+    nearest = math.inf
+    crossings = 0
+    for (x0, y0), (x1, y1) in zip(footprint, footprint[1:] + footprint[:1], strict=True):
+        dx, dy = x1 - x0, y1 - y0
+        square = dx * dx + dy * dy
+        t = 0.0 if square == 0.0 else min(max(-(x0 * dx + y0 * dy) / square, 0.0), 1.0)
+        nearest = min(nearest, math.hypot(x0 + t * dx, y0 + t * dy))
+        if (y0 > 0.0) != (y1 > 0.0) and x0 + (0.0 - y0) * dx / dy > 0.0:
+            crossings += 1
+    return nearest if crossings % 2 == 1 else 0.0
+
+
+SERVICEBOT_INSCRIBED_RADIUS = inscribed_radius(SERVICEBOT_FOOTPRINT)
+"""0.2 m: the planner keeps the robot's centre this far from obstacles."""
+
+
 @dataclass(frozen=True)
 class InflationLayer:
     """One ``nav2_costmap_2d::InflationLayer``: costs fall from 252 at the inscribed radius
@@ -93,7 +112,7 @@ class CostmapParameters:
     layers that inflate the walls and those that inflate the people (none: lethal where they
     are, nothing around)."""
 
-    inscribed_radius: float = 0.2  # the servicebot's footprint: see SERVICEBOT_FOOTPRINT
+    inscribed_radius: float = SERVICEBOT_INSCRIBED_RADIUS
     walls: tuple[InflationLayer, ...] = (InflationLayer(),)
     people: tuple[InflationLayer, ...] = (InflationLayer(),)
 
@@ -114,23 +133,7 @@ class NavigationParameters:
     goal_checker: GoalChecker = field(default_factory=GoalChecker)
 
 
-def inscribed_radius(footprint: tuple[tuple[float, float], ...]) -> float:
-    """The distance from the robot's centre to the nearest edge of its footprint polygon (as
-    Nav2's ``calculateMinAndMaxDistances``); 0 when the centre is not inside it."""
-    nearest = math.inf
-    crossings = 0
-    for (x0, y0), (x1, y1) in zip(footprint, footprint[1:] + footprint[:1], strict=True):
-        dx, dy = x1 - x0, y1 - y0
-        square = dx * dx + dy * dy
-        t = 0.0 if square == 0.0 else min(max(-(x0 * dx + y0 * dy) / square, 0.0), 1.0)
-        nearest = min(nearest, math.hypot(x0 + t * dx, y0 + t * dy))
-        if (y0 > 0.0) != (y1 > 0.0) and x0 + (0.0 - y0) * dx / dy > 0.0:
-            crossings += 1
-    return nearest if crossings % 2 == 1 else 0.0
-
-
-SERVICEBOT = NavigationParameters(costmap=CostmapParameters(
-    inscribed_radius=inscribed_radius(SERVICEBOT_FOOTPRINT)))
+SERVICEBOT = NavigationParameters()
 
 
 # --------------------------------------------------------------------------- reading a file
