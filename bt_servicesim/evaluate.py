@@ -40,6 +40,7 @@ import math
 import os
 import shlex
 import signal
+import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -84,6 +85,10 @@ if TYPE_CHECKING:  # the local pool imports no distributed engine
 Figures = TypeVar("Figures")
 
 PROG = "python -m bt_servicesim.evaluate"
+NAV_PARAMS_CHECK = (sys.executable, "-m", "servicesim_sim.nav_params")
+"""The simulator's own check of a navigation parameters file (one line and status 2 if bad)."""
+NAV_PARAMS_CHECK_S = 60.0
+"""Wall seconds the check may take (it reads one small file)."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -127,6 +132,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--throughput", type=Path, metavar="FILE",
                         help="state in results.md the episodes per hour, warm and cold, from "
                              "the figures of benchmarks/throughput.py --json FILE")
+    parser.add_argument("--nav-params", type=Path, metavar="FILE",
+                        help="the robot's navigation parameters (a Nav2 parameters file) every "
+                             "episode's simulator is given, whatever the executive (default: "
+                             "the original servicebot's configuration)")
     parser.add_argument("--cluster", metavar="ADDRESS",
                         help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
                              "worker as many at once as it has threads (needs the 'cluster' "
@@ -155,6 +164,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         _check(path is None or not path.exists() or path.is_dir(),
                f"{flag} {path}: exists and is not a directory")
     tree = _tree(args.tree, executives)
+    nav_params = _nav_params(args.nav_params)
     reproducibility = _figures("--reproducibility", args.reproducibility, load_reproducibility)
     throughput = _figures("--throughput", args.throughput, load_throughput)
     _docs_place(args.docs)  # last: every other check passed
@@ -164,7 +174,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         time_limit_s=args.time_limit, docs=args.docs,
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
         resume=args.resume, cold=args.cold, reproducibility=reproducibility,
-        throughput=throughput, tree=tree, trees=trees,
+        throughput=throughput, tree=tree, trees=trees, nav_params=nav_params,
     )
 
 
@@ -202,6 +212,25 @@ def _tree(path: Path | None, executives: tuple[str, ...]) -> Path:
         load_mission_tree(path)
     except MissionTreeError as error:
         raise UsageError(f"--tree {error}") from error
+    return path.resolve()
+
+
+def _nav_params(path: Path | None) -> Path | None:
+    """The navigation parameters file, absolute, checked once here by the simulator's own
+    reader (:data:`NAV_PARAMS_CHECK`, a process: the evaluation never imports the simulator):
+    a file the simulator would refuse is one line now, not a failure in every episode."""
+    if path is None:
+        return None
+    _check(path.is_file(), f"--nav-params {path}: "
+                           f"{'is a directory' if path.is_dir() else 'no such file'}")
+    try:
+        checked = subprocess.run([*NAV_PARAMS_CHECK, str(path)], capture_output=True,
+                                 text=True, timeout=NAV_PARAMS_CHECK_S, check=False)
+    except (OSError, subprocess.TimeoutExpired) as error:
+        raise UsageError(f"--nav-params {path}: could not be checked: {error}") from error
+    if checked.returncode != 0:
+        lines = checked.stderr.strip().splitlines() or [f"exit status {checked.returncode}"]
+        raise UsageError(f"--nav-params {lines[-1].split(': error: ', 1)[-1]}")
     return path.resolve()
 
 

@@ -92,6 +92,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "the seed's state machine (baseline)")
     parser.add_argument("--sim-arg", action="append", default=[], metavar="ARG",
                         help="extra argument passed to the simulator (repeatable)")
+    parser.add_argument("--nav-params", type=Path, metavar="FILE",
+                        help="the robot's navigation parameters, a Nav2 parameters file the "
+                        "simulator's navigation takes (default: the original servicebot's "
+                        "configuration; trees/servicesim_nav2_params.yaml is the shipped "
+                        "tree's; docs/reference/navigation.md)")
     parser.add_argument("--attach", action="store_true",
                         help="start no simulator: run against the backend already on this "
                         "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
@@ -123,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Simulator options the run sets itself; --sim-arg may not set them behind its back.
-RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world", "--await-lockstep")
+RUN_OWNED_SIM_OPTIONS = ("--speed", "--seed", "--world", "--await-lockstep", "--nav-params")
 MAX_TIME_LIMIT_S = 1e6
 """The longest mission time limit, in sim seconds (eleven days): longer is a typo."""
 
@@ -154,6 +159,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove), free_running=args.free_running,
         trajectory=args.trajectory, clock=args.clock, profile=args.profile,
+        nav_params=None if args.nav_params is None else args.nav_params.resolve(),
     )
 
 
@@ -186,9 +192,11 @@ def groot_address(argument: str) -> tuple[str, int]:
 
 def _check_backend(args: argparse.Namespace) -> None:
     """The simulator's options: a world that exists, none of them with --attach."""
-    if args.world is not None and not args.world.is_file():
-        what = "is a directory, not a world file" if args.world.is_dir() else "no such file"
-        raise UsageError(f"--world {args.world}: {what}")
+    for flag, path, kind in (("--world", args.world, "a world file"),
+                             ("--nav-params", args.nav_params, "a parameters file")):
+        if path is not None and not path.is_file():
+            what = f"is a directory, not {kind}" if path.is_dir() else "no such file"
+            raise UsageError(f"{flag} {path}: {what}")
     for arg in args.sim_arg:
         option = arg.split("=", 1)[0]
         if option in RUN_OWNED_SIM_OPTIONS:
@@ -196,7 +204,8 @@ def _check_backend(args: argparse.Namespace) -> None:
                              f"{option}")
     if args.attach:
         given = [flag for flag, value in (("--world", args.world), ("--seed", args.seed),
-                                          ("--speed", args.speed), ("--sim-arg", args.sim_arg))
+                                          ("--speed", args.speed), ("--sim-arg", args.sim_arg),
+                                          ("--nav-params", args.nav_params))
                  if value not in (None, [])]
         if given:
             raise UsageError(f"--attach starts no simulator: {', '.join(given)} would not "

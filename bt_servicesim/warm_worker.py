@@ -72,6 +72,8 @@ class WarmEpisode:
     time_limit_s: float = DEFAULT_TIME_LIMIT_S
     sim_args: tuple[str, ...] = ()
     tree: Path = DEFAULT_TREE
+    nav_params: Path | None = None
+    """The robot's navigation parameters file, as the run's ``--nav-params``."""
 
     @classmethod
     def from_line(cls, line: str) -> WarmEpisode:
@@ -87,7 +89,9 @@ class WarmEpisode:
                           speed=float(fields["speed"]),
                           time_limit_s=float(fields.get("time_limit_s", DEFAULT_TIME_LIMIT_S)),
                           sim_args=tuple(str(arg) for arg in fields.get("sim_args", ())),
-                          tree=Path(fields.get("tree") or DEFAULT_TREE))
+                          tree=Path(fields.get("tree") or DEFAULT_TREE),
+                          nav_params=(Path(fields["nav_params"]) if fields.get("nav_params")
+                                      else None))
         except (KeyError, TypeError) as error:
             raise ValueError(f"an episode needs out, run_id, executive and speed: {error}") \
                 from error
@@ -104,7 +108,8 @@ class WarmEpisode:
     def run_settings(self) -> RunSettings:
         return RunSettings(world=None, seed=self.seed, speed=self.speed, tree=self.tree,
                            out=self.out, time_limit_s=self.time_limit_s, headless=True,
-                           executive=self.executive, run_id=self.run_id, trajectory="failed")
+                           executive=self.executive, run_id=self.run_id, trajectory="failed",
+                           nav_params=self.nav_params)
 
 
 def build_parser() -> argparse.ArgumentParser:

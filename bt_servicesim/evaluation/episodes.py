@@ -120,6 +120,8 @@ def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the worker's own shipped tree
         fields["tree"] = str(tree)
+    if settings.nav_params is not None:
+        fields["nav_params"] = str(settings.nav_params)
     return json.dumps(fields) + "\n"
 
 
@@ -138,6 +140,8 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the run's own shipped tree
         command += ["--tree", str(tree)]
+    if settings.nav_params is not None:
+        command += ["--nav-params", str(settings.nav_params)]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
     for argument in SCENARIO_SETS[episode.scenario].sim_args:
@@ -169,6 +173,8 @@ class EpisodeRunner:
         self.revision = source_revision()
         self._tree_digests = {executive: tree_digest(tree) for executive in settings.executives
                               if (tree := settings.tree_of(executive)) is not None}
+        self._nav_params_digest = (None if settings.nav_params is None
+                                   else tree_digest(settings.nav_params))
         self._die_with_us = parent_death_signal(os.getpid())
         self._idle_pairs: LifoQueue[WarmPair] = LifoQueue()
         self._pairs_started = itertools.count(1)
@@ -206,6 +212,8 @@ class EpisodeRunner:
                "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
         if episode.executive in self._tree_digests:  # the shipped tree: as before
             key["tree_sha256"] = self._tree_digests[episode.executive]
+        if self._nav_params_digest is not None:  # the simulator's default: as before
+            key["nav_params_sha256"] = self._nav_params_digest
         return key
 
     def finished_row(self, episode: Episode) -> dict[str, Any] | None:

@@ -85,8 +85,12 @@ def _tree_note(settings: EvaluationSettings) -> str:
     executives: each path and its file's digest."""
     trees = {**({"the bt executive": settings.tree} if settings.own_tree else {}),
              **settings.trees}
-    return "".join(f"; {name} plays `{tree}` (SHA-256 {tree_digest(tree)[:16]})"
+    note = "".join(f"; {name} plays `{tree}` (SHA-256 {tree_digest(tree)[:16]})"
                    for name, tree in trees.items())
+    if settings.nav_params is not None:
+        note += (f"; every executive's robot navigates with `{settings.nav_params}` "
+                 f"(SHA-256 {tree_digest(settings.nav_params)[:16]})")
+    return note
 
 
 def _not_run_note(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> list[str]:

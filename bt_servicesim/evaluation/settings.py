@@ -81,6 +81,9 @@ class EvaluationSettings:
     """The mission tree the ``bt`` executive plays (an absolute path, checked to load)."""
     trees: Mapping[str, Path] = field(default_factory=dict)
     """The tree each ``bt:NAME`` executive plays (``--executive bt:FILE``), by its name."""
+    nav_params: Path | None = None
+    """The robot's navigation parameters file every episode's simulator is given, whatever
+    the executive (``--nav-params``, absolute, checked); None: the simulator's default."""
 
     @property
     def own_tree(self) -> bool:
@@ -101,8 +104,8 @@ def executive_kind(executive: str) -> str:
 
 
 def tree_digest(tree: Path) -> str:
-    """The tree file's SHA-256: what an episode kept for ``--resume`` must have played, and
-    what results.md names."""
+    """A tree file's SHA-256 (or a navigation parameters file's): what an episode kept for
+    ``--resume`` must have played, and what results.md and summary.json name."""
     try:
         return hashlib.sha256(tree.read_bytes()).hexdigest()
     except OSError:

@@ -23,7 +23,7 @@ import statistics
 from collections.abc import Callable
 from typing import Any
 
-from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings
+from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings, tree_digest
 
 
 def played(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -134,6 +134,8 @@ def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict
         summary["time_over_bound"] = {
             scenario: time_over_bound([row for row in own if row["scenario"] == scenario])
             for scenario in settings.scenarios}
+        summary["nav_params"] = (None if settings.nav_params is None else {
+            "file": str(settings.nav_params), "sha256": tree_digest(settings.nav_params)})
         summaries[executive] = summary
     return summaries
 

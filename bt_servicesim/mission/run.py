@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import gc
 import os
+import shutil
 import signal
 import sys
 import time
@@ -47,7 +48,13 @@ from bt_servicesim.mission.progress import ProgressView
 from bt_servicesim.mission.referee_monitor import REFEREE_TOPIC, RefereeMonitor
 from bt_servicesim.mission.report import replay_caveat, write_report
 from bt_servicesim.mission.run_records import RunRecords
-from bt_servicesim.mission.settings import REPORT_NAME, STARTUP_LIMIT_S, RunSettings
+from bt_servicesim.mission.settings import (
+    NAV_PARAMS_NAME,
+    REPORT_NAME,
+    STARTUP_LIMIT_S,
+    RunSettings,
+    nav_params_record,
+)
 from bt_servicesim.mission.simulator_process import SimulatorProcess
 from bt_servicesim.mission.stopping import (
     BetweenSpins,
@@ -136,6 +143,7 @@ class MissionRun:
         with StopSignals() as stops:
             try:
                 self._clear_what_an_earlier_run_left()
+                self._keep_the_nav_params()
                 write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 if noted is not None and noted.first is not None:
                     raise stop_for(noted.first)
@@ -161,6 +169,7 @@ class MissionRun:
         with StopSignals() as stops:
             try:
                 self._clear_what_an_earlier_run_left()
+                self._keep_the_nav_params()
                 write_report(self.settings.out / REPORT_NAME, self._header("running"))
                 code = self._execute_on(self._node(), stops)
             except (KeyboardInterrupt, Terminated) as stop:  # before the node was up
@@ -174,8 +183,19 @@ class MissionRun:
         (what it raised, the picture, which a completed run draws only when asked, the profile)
         and the page written at the end would be taken for this run's. Everything else a run
         writes it writes anew."""
-        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME, HTML_NAME):
+        for name in (TRACEBACK_NAME, TRAJECTORY_NAME, PROFILE_NAME, HTML_NAME, NAV_PARAMS_NAME):
             (self.settings.out / name).unlink(missing_ok=True)
+
+    def _keep_the_nav_params(self) -> None:
+        """A copy of the navigation parameters file the run was given, in its records (the
+        report names the file and its digest: :func:`nav_params_record`)."""
+        if self.settings.nav_params is None:
+            return
+        try:
+            shutil.copyfile(self.settings.nav_params, self.settings.out / NAV_PARAMS_NAME)
+        except OSError as error:  # the simulator read it at its start: the run goes on
+            print(f"warning: could not keep {self.settings.nav_params} in the run's records: "
+                  f"{error.strerror or error}", file=sys.stderr)
 
     def _node(self) -> ExecutiveNode:
         """The executive's node, on sim time unless the run keeps the system clock.
@@ -440,6 +460,7 @@ class MissionRun:
             "attached": self.settings.attach,
             "clock": self.settings.clock,
             "timing": self.timing,
+            "nav_params": nav_params_record(self.settings.nav_params),
             "reproduce": reproduce_command(self.settings, self.extra_sim_args),
         }
 
@@ -520,6 +541,8 @@ def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:
         words.append(f"--world {settings.world}")
     words += [f"--tree {settings.tree}", f"--executive {settings.executive}",
               f"--speed {settings.speed:g}", f"--time-limit {settings.time_limit_s:g}"]
+    if settings.nav_params is not None:
+        words.append(f"--nav-params {settings.nav_params}")
     words += [f"--sim-arg={argument}" for argument in sim_args]
     if settings.free_running:
         words.append("--free-running")

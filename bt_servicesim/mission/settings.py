@@ -7,14 +7,15 @@ run's own limits, in wall seconds where they guard against a process that never 
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
 from bt_servicesim.monitor.live_server import LiveAddress
 
 __all__ = [
-    "CLOCKS", "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "REPORT_NAME",
-    "STARTUP_LIMIT_S", "TRAJECTORY_POLICIES", "RunSettings",
+    "CLOCKS", "DEFAULT_SPEED", "DEFAULT_TIME_LIMIT_S", "EXECUTIVES", "NAV_PARAMS_NAME",
+    "REPORT_NAME", "STARTUP_LIMIT_S", "TRAJECTORY_POLICIES", "RunSettings", "nav_params_record",
 ]
 
 EXECUTIVES = ("bt", "baseline")
@@ -32,6 +33,8 @@ TRAJECTORY_POLICIES = ("always", "failed")
 """When the run draws ``trajectory.png``: after every run, or only after a mission that did
 not complete (an evaluation: the picture is the CPU of a tenth of a warm episode, and any run's
 can be drawn later from its ``run.mcap`` with ``python -m bt_servicesim.trajectory DIR``)."""
+NAV_PARAMS_NAME = "nav_params.yaml"
+"""The copy of the navigation parameters file a run was given, in its run directory."""
 REPORT_NAME = "report.json"
 """The report in the run directory: score, checkpoints and penalties as the referee counted."""
 
@@ -65,3 +68,19 @@ class RunSettings:
     profile: bool = True
     """Count every node's ticks as the tree ticks and write ``profile.json`` at the end
     (``run --no-profile`` turns both off: for benchmarks that measure what they cost)."""
+    nav_params: Path | None = None
+    """The robot's navigation parameters file (``run --nav-params``), absolute, passed to the
+    simulator; None: its default, the original servicebot's configuration."""
+
+
+def nav_params_record(path: Path | None) -> dict[str, str] | None:
+    """What a report says of the navigation parameters a run was given: the file and its
+    content's SHA-256 (two runs with the same digest were given the same parameters); None
+    for the simulator's default. An unreadable file is said so, not raised."""
+    if path is None:
+        return None
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError as error:
+        digest = f"unreadable: {error.strerror or error}"
+    return {"file": str(path), "sha256": digest}

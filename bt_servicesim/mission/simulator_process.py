@@ -42,10 +42,12 @@ SIMULATOR_LOG_NAME = "sim.log"
 
 def simulator_arguments(settings: RunSettings, sim_args: tuple[str, ...]) -> tuple[str, ...]:
     """The simulator's arguments for this run but the world, seed and speed: the hold for the
-    lockstep client (unless the run runs free) and the run's ``--sim-arg`` ones."""
+    lockstep client (unless the run runs free), the robot's navigation parameters file if the
+    run was given one, and the run's ``--sim-arg`` ones."""
     await_lockstep = () if settings.free_running else (
         "--await-lockstep", f"{STARTUP_LIMIT_S:.0f}")
-    return (*await_lockstep, *sim_args)
+    nav_params = () if settings.nav_params is None else ("--nav-params", str(settings.nav_params))
+    return (*await_lockstep, *nav_params, *sim_args)
 
 
 class SimulatorProcess:

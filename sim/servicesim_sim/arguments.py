@@ -60,6 +60,10 @@ def build_parser(parser_class: type[argparse.ArgumentParser] = OneLineArgumentPa
     parser.add_argument("--walker-routes", choices=("world", "random"),
                         help="the walkers' loops: the world's (default; the office: the "
                              "original's) or random loops of ours")
+    parser.add_argument("--nav-params", metavar="FILE",
+                        help="the robot's navigation parameters, a Nav2 parameters file "
+                             "(default: the original servicebot's move_base configuration; "
+                             "docs/reference/navigation.md)")
     parser.add_argument("--await-lockstep", type=float, default=0.0, metavar="SECONDS",
                         help="hold at the first period until a lockstep client joins, for up "
                         "to SECONDS of wall time, so that the task starts at the same sim "

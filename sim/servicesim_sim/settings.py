@@ -1,8 +1,9 @@
 """The simulator's settings, checked before anything starts.
 
 Command-line arguments become a :class:`SimSettings`: the loaded world, the seed, the speed
-factor and the difficulty knobs. Every problem is a :class:`SettingsError` whose message is the
-one line the user sees (a broken world file names the file and what is wrong with it).
+factor, the difficulty knobs and the robot's navigation parameters (``--nav-params``). Every
+problem is a :class:`SettingsError` whose message is the one line the user sees (a broken world
+file or parameters file names the file and what is wrong with it).
 
 A world can load and still be unplayable: too few target areas for a random task, no free spot
 in an area, no room for its people, a fixed task whose areas navigation cannot reach from the
@@ -25,6 +26,12 @@ from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import CrowdError
 from servicesim_sim.model.playable import playable_engine as playable_engine_of
 from servicesim_sim.model.scenario import Difficulty, ScenarioError
+from servicesim_sim.navigation.parameters import (
+    SERVICEBOT,
+    NavigationParameters,
+    NavigationParametersError,
+    load_navigation_parameters,
+)
 from servicesim_sim.world.files import DEFAULT_WORLD, World, WorldError, load_world
 
 
@@ -41,6 +48,8 @@ class SimSettings:
     camera_rate_hz: float
     await_lockstep_s: float = 0.0
     """Wall seconds to hold at the first period for a lockstep client to join."""
+    navigation: NavigationParameters = SERVICEBOT
+    """The robot's navigation parameters (``--nav-params FILE``; default the servicebot's)."""
 
 
 _KNOBS = {
@@ -75,14 +84,26 @@ def settings_from_arguments(args: argparse.Namespace, *,
         raise SettingsError(f"{args.world}: {error.strerror or error}") from error
     return SimSettings(world=world, seed=args.seed, speed=args.speed,
                        difficulty=difficulty_from(args), camera_rate_hz=args.camera_rate,
-                       await_lockstep_s=await_lockstep)
+                       await_lockstep_s=await_lockstep, navigation=navigation_from(args))
+
+
+def navigation_from(args: argparse.Namespace) -> NavigationParameters:
+    """The robot's navigation parameters: ``--nav-params``'s file, else the servicebot's."""
+    path = getattr(args, "nav_params", None)
+    if path is None:
+        return SERVICEBOT
+    try:
+        return load_navigation_parameters(path)
+    except NavigationParametersError as error:
+        raise SettingsError(f"--nav-params {error}") from error
 
 
 def playable_engine(settings: SimSettings) -> SimEngine:
     """The world set in motion for these settings, or a :class:`SettingsError` saying why not."""
     try:
         return playable_engine_of(settings.world, seed=settings.seed,
-                                  difficulty=settings.difficulty)
+                                  difficulty=settings.difficulty,
+                                  navigation=settings.navigation)
     except ScenarioError as error:  # its message names the world file
         raise SettingsError(str(error)) from error
     except CrowdError as error:

@@ -117,12 +117,18 @@ def test_a_refused_tree_keeps_the_earlier_run_it_was_to_overwrite(tmp_path: Path
                  "missing_map.yaml: map nowhere.yaml: no such file", id="world"),
     pytest.param(["--sim-arg=--frobnicate"], "unrecognized arguments: --frobnicate",
                  id="sim-arg"),
+    pytest.param(["--nav-params", "integer_scaling.yaml"],
+                 "integer_scaling.yaml: global_costmap.global_costmap.ros__parameters."
+                 "inflation_layer.cost_scaling_factor: must be a double", id="nav-params"),
 ])
 def test_input_the_simulator_refuses_writes_nothing_and_keeps_an_earlier_run(
         tmp_path: Path, arguments: list[str], problem: str) -> None:
     """The simulator checks the world (and its own arguments) before the run takes its
     directory: a refusal leaves an earlier run as it was, and makes no fresh directory."""
     (tmp_path / "missing_map.yaml").write_text("name: broken\nmap: nowhere.yaml\n")
+    (tmp_path / "integer_scaling.yaml").write_text(
+        "global_costmap:\n  global_costmap:\n    ros__parameters:\n"
+        "      inflation_layer:\n        cost_scaling_factor: 10\n")
     earlier = tmp_path / "earlier"
     earlier.mkdir()
     kept = {"report.json": '{"status": "completed"}', "sim.log": "the earlier simulator\n",
@@ -138,3 +144,24 @@ def test_input_the_simulator_refuses_writes_nothing_and_keeps_an_earlier_run(
     fresh = run(*arguments, "--out", "fresh/run", cwd=tmp_path)
     assert fresh.returncode == 2 and problem in fresh.stderr
     assert not (tmp_path / "fresh").exists(), "exit 2: nothing was started, nothing written"
+
+
+def test_nav_params_is_a_file_the_run_passes_on_and_no_sim_arg_or_attached_backend_takes(
+        tmp_path: Path) -> None:
+    from bt_servicesim.cli import UsageError
+    from bt_servicesim.run import build_parser, settings_from
+
+    params = tmp_path / "mine.yaml"
+    params.write_text("controller_server:\n  ros__parameters: {}\n")
+    out = ["--out", str(tmp_path / "run")]
+    given = settings_from(build_parser().parse_args(["--nav-params", str(params), *out]))
+    assert given.nav_params == params.resolve()
+    assert settings_from(build_parser().parse_args(out)).nav_params is None
+    for arguments, problem in (
+            (["--nav-params", str(tmp_path / "missing.yaml")], "missing.yaml: no such file"),
+            (["--nav-params", str(tmp_path)], "is a directory, not a parameters file"),
+            (["--nav-params", str(params), "--attach"], "--attach starts no simulator: "
+                                                        "--nav-params would not reach"),
+            ([f"--sim-arg=--nav-params={params}"], "the run sets --nav-params itself")):
+        with pytest.raises(UsageError, match=problem):
+            settings_from(build_parser().parse_args([*arguments, *out]))

@@ -123,7 +123,7 @@ sys.exit(main(sys.argv[3:], command=command))
 
 SUMMARY_KEYS = {"episodes", "success_rate", "success_interval", "mean_score", "median_score",
                 "mean_sim_time_s",
-                "penalties", "wall_time_s", "not_run", "rows", "time_over_bound"}
+                "penalties", "wall_time_s", "not_run", "rows", "time_over_bound", "nav_params"}
 
 
 def settings(tmp_path: Path, **changes: Any) -> EvaluationSettings:
@@ -643,3 +643,74 @@ def test_a_stop_before_any_episode_started_is_one_line(
     assert main(["--episodes", "1", "--out", str(tmp_path)]) == 130
     assert capsys.readouterr().err == (
         "python -m bt_servicesim.evaluate: stopped by SIGINT while starting\n")
+
+
+# ------------------------------------------------------------ the robot's navigation parameters
+def nav_params(tmp_path: Path, tolerance: str = "0.3") -> Path:
+    path = tmp_path / "nav2_params.yaml"
+    path.write_text("controller_server:\n  ros__parameters:\n    general_goal_checker:\n"
+                    f"      xy_goal_tolerance: {tolerance}\n")
+    return path
+
+
+def test_every_executives_episodes_get_the_navigation_parameters_cold_or_warm(
+        tmp_path: Path) -> None:
+    from bt_servicesim.evaluation.episodes import warm_line
+    from bt_servicesim.warm_worker import WarmEpisode
+
+    params = nav_params(tmp_path)
+    chosen = settings(tmp_path, executives=("bt", "bt:mine", "baseline"),
+                      trees={"bt:mine": own_tree(tmp_path)}, nav_params=params)
+    for episode in plan_episodes(chosen):
+        command, line = run_command(episode, chosen), warm_line(episode, chosen)
+        assert command[command.index("--nav-params") + 1] == str(params)
+        assert WarmEpisode.from_line(line).run_settings().nav_params == params
+    default = settings(tmp_path)
+    for episode in plan_episodes(default):
+        assert "--nav-params" not in run_command(episode, default)
+        assert "nav_params" not in json.loads(warm_line(episode, default))
+
+
+def test_the_summary_and_results_name_the_navigation_parameters_and_their_digest(
+        tmp_path: Path) -> None:
+    import hashlib
+
+    params = nav_params(tmp_path)
+    chosen = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params)
+    quietly(tmp_path, chosen, fake())
+    digest = hashlib.sha256(params.read_bytes()).hexdigest()
+    summary = json.loads((chosen.out / "summary.json").read_text())
+    for executive in ("bt", "baseline"):
+        assert summary[executive]["nav_params"] == {"file": str(params), "sha256": digest}
+    assert f"navigates with `{params}` (SHA-256 {digest[:16]})" in (
+        chosen.out / "results.md").read_text()
+    default = settings(tmp_path, episodes=1, scenarios=("random",), out=tmp_path / "default")
+    quietly(tmp_path, default, fake())
+    assert json.loads((default.out / "summary.json").read_text())["bt"]["nav_params"] is None
+
+
+def test_resume_reruns_every_episode_when_the_navigation_parameters_changed(
+        tmp_path: Path) -> None:
+    params = nav_params(tmp_path)
+    first = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params)
+    quietly(tmp_path, first, fake())
+    same = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params, resume=True)
+    assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
+    nav_params(tmp_path, tolerance="0.2")
+    assert not any(row.get("resumed") for row in quietly(tmp_path, same, fake()))
+
+
+def test_navigation_parameters_the_simulator_would_refuse_are_one_line_before_anything_starts(
+        tmp_path: Path) -> None:
+    (tmp_path / "integer.yaml").write_text(
+        "controller_server:\n  ros__parameters:\n    general_goal_checker:\n"
+        "      xy_goal_tolerance: 1\n")
+    for arguments, named in ((["--nav-params", "missing.yaml"], "missing.yaml: no such file"),
+                             (["--nav-params", "integer.yaml"],
+                              "integer.yaml: controller_server.ros__parameters."
+                              "general_goal_checker.xy_goal_tolerance: must be a double")):
+        result = evaluate_command(tmp_path, "--out", "evaluation", *arguments)
+        lines = result.stderr.strip().splitlines()
+        assert result.returncode == 2 and len(lines) == 1, result.stderr
+        assert named in lines[0] and lines[0].count("--nav-params") == 1, lines[0]
+        assert not (tmp_path / "evaluation").exists(), "nothing is started or written"

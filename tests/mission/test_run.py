@@ -3,6 +3,8 @@ sim-time backstop counts from the mission's start."""
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import os
 import signal
 import time
@@ -163,3 +165,30 @@ def test_the_last_line_says_when_a_lockstep_run_may_not_replay() -> None:
         {**in_step, "lockstep_dropped": {"period": 1388, "sim_time_s": 138.8}})
     assert dropped == (" (may not replay: the simulator dropped the run from lockstep at "
                        "138.8 s sim, and it ran free from there)")
+
+
+def test_the_run_keeps_a_copy_of_its_navigation_parameters_and_names_their_digest(
+        tmp_path: Path) -> None:
+    params = tmp_path / "mine.yaml"
+    params.write_text("controller_server:\n  ros__parameters: {}\n")
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "nav_params.yaml").write_text("an earlier run's")
+    settings = RunSettings(world=None, seed=3, speed=0.0, tree=DEFAULT_TREE, out=out,
+                           time_limit_s=900.0, headless=True, executive="bt", attach=True,
+                           nav_params=params)
+    run = MissionRun(settings=settings, make_executive=lambda node: None)  # type: ignore[arg-type]
+    run._clear_what_an_earlier_run_left()
+    run._keep_the_nav_params()
+    assert (out / "nav_params.yaml").read_text() == params.read_text()
+    record = run._header("running")["nav_params"]
+    assert record == {"file": str(params),
+                      "sha256": hashlib.sha256(params.read_bytes()).hexdigest()}
+    assert f"--nav-params {params}" in run._header("running")["reproduce"]
+    default = MissionRun(settings=dataclasses.replace(settings, nav_params=None),
+                         make_executive=lambda node: None)  # type: ignore[arg-type]
+    default._clear_what_an_earlier_run_left()
+    default._keep_the_nav_params()
+    assert not (out / "nav_params.yaml").exists(), "an earlier run's copy is not this run's"
+    assert default._header("running")["nav_params"] is None
+    assert "--nav-params" not in default._header("running")["reproduce"]

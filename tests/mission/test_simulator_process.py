@@ -102,3 +102,28 @@ def test_a_simulator_stopped_by_a_signal_it_caught_is_said_to_be(tmp_path: Path)
     while process.exit_code() is None and time.monotonic() < deadline:
         time.sleep(0.01)
     assert process.describe_exit() == "the simulator was stopped by SIGTERM (exit status 143)"
+
+
+def test_the_navigation_parameters_reach_the_simulator_cold_and_on_every_warm_reset(
+        tmp_path: Path) -> None:
+    import json
+
+    from bt_servicesim.mission.settings import RunSettings
+    from bt_servicesim.tree.files import DEFAULT_TREE
+    from bt_servicesim.warm_worker import WarmEpisode
+
+    params = tmp_path / "mine.yaml"
+    settings = RunSettings(world=None, seed=4, speed=0.0, tree=DEFAULT_TREE, out=tmp_path,
+                           time_limit_s=900.0, headless=True, executive="baseline",
+                           nav_params=params)
+    cold = SimulatorProcess.for_run(settings, ("--difficulty", "hard")).command
+    assert cold[cold.index("--nav-params") + 1] == str(params)
+    assert cold[-2:] == ["--difficulty", "hard"]
+    episode = WarmEpisode.from_line(json.dumps({
+        "out": str(tmp_path), "run_id": "r", "executive": "baseline", "seed": 4, "speed": 0.0,
+        "nav_params": str(params)}))
+    reset = episode.reset_arguments()
+    assert reset[reset.index("--nav-params") + 1] == str(params)
+    without = WarmEpisode.from_line(json.dumps({
+        "out": str(tmp_path), "run_id": "r", "executive": "baseline", "speed": 0.0}))
+    assert "--nav-params" not in without.reset_arguments(), "the simulator's default"

@@ -29,6 +29,7 @@ from servicesim_sim.navigation.navigator import (
     Navigator,
     PolylinePath,
 )
+from servicesim_sim.navigation.parameters import CostmapParameters, InflationLayer
 from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
 from servicesim_sim.world.files import OccupancyMap
 
@@ -142,7 +143,7 @@ def segments_clear(costmap: Costmap, waypoints: list[tuple[float, float]]) -> bo
 
 # --------------------------------------------------------------------------- costmap
 def test_inflation_is_lethal_on_obstacles_inscribed_to_the_robot_radius_then_fades() -> None:
-    costs = Inflation(robot_radius=0.25, inflation_radius=0.4).costs(
+    costs = Inflation(robot_radius=0.25, layers=(InflationLayer(inflation_radius=0.4),)).costs(
         np.array([0.0, 0.1, 0.25, 0.26, 0.3, 0.35, 0.4, 0.41, 2.0]))
     assert list(costs[:3]) == [LETHAL, INSCRIBED, INSCRIBED]
     assert MAX_INFLATED >= costs[3] > costs[4] > costs[5] > costs[6] > 0
@@ -169,14 +170,19 @@ def test_the_grid_is_cropped_to_the_walls_and_coarser_than_the_map(occupied: int
 
 
 def test_a_person_in_view_is_marked_and_inflated() -> None:
-    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)
+    costmap = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE)  # the servicebot's layers
     costmap.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=2.0)
     assert [(mark.x, mark.y, mark.seen_at) for mark in costmap.marks] == [(6.0, 1.6, 2.0)]
     assert costmap.cost_at(6.0, 1.6) == LETHAL
-    assert costmap.cost_at(6.0, 2.0) >= INSCRIBED  # within person + robot radius
-    assert 0 < costmap.cost_at(6.0, 2.2) < INSCRIBED
-    assert 0 < costmap.cost_at(6.9, 1.6) < costmap.cost_at(6.0, 2.2)  # the social berth
-    assert costmap.cost_at(7.25, 1.6) == 0  # beyond it: 0.3 m body + 0.8 m berth
+    assert costmap.cost_at(6.0, 1.95) >= INSCRIBED  # within person + inscribed radius
+    assert 0 < costmap.cost_at(6.0, 2.15) < INSCRIBED
+    assert costmap.cost_at(6.85, 1.6) == 0  # beyond 0.3 m body + 0.4 m inflation: no berth
+    berth = Costmap(corridor_map(3.0), lidar=MARK_AT_ANY_RANGE, layers=CostmapParameters(
+        inscribed_radius=0.25, walls=(InflationLayer(0.4, 5.0),),
+        people=(InflationLayer(0.8, 2.5),)))  # trees/servicesim_nav2_params.yaml's
+    berth.observe(1.0, 1.6, 0.0, [(6.0, 1.6)], now=2.0)
+    assert 0 < berth.cost_at(6.9, 1.6) < berth.cost_at(6.0, 2.2)  # the people's own berth
+    assert berth.cost_at(7.25, 1.6) == 0  # beyond it: 0.3 m body + 0.8 m berth
 
 
 def test_people_behind_the_robot_behind_a_wall_or_behind_another_person_are_not_seen() -> None:

@@ -51,6 +51,7 @@ from servicesim_sim.model.robot import Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
 from servicesim_sim.model.scenario import Scenario
 from servicesim_sim.navigation.navigator import Navigator
+from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.world.files import OccupancyMap, PlacedWalker, WalkerRoute, World
 from servicesim_sim.world.footprint import CIRCUMSCRIBED_RADIUS
 
@@ -98,8 +99,8 @@ class NavigationState:
 class SimEngine:
     """One world, one scenario; see the module docstring."""
 
-    def __init__(self, *, world: World, scenario: Scenario,
-                 dt: float = PHYSICS_STEP_S) -> None:
+    def __init__(self, *, world: World, scenario: Scenario, dt: float = PHYSICS_STEP_S,
+                 navigation: NavigationParameters = SERVICEBOT) -> None:
         self.world, self.scenario, self.dt = world, scenario, dt
         self.sim_time = 0.0
         self.task_started_at: float | None = None
@@ -131,7 +132,7 @@ class SimEngine:
             resolution=world.map.resolution), person_radius=PERSON_BODY_RADIUS)
         self._scan_noise = np.random.default_rng([scenario.knob_seed, 4])
         self.navigator = Navigator(world.map, rng=np.random.default_rng(scenario.knob_seed + 1),
-                                   body=self.robot.footprint)
+                                   parameters=navigation, body=self.robot.footprint)
         self._ticket = 0
         self._localised = False
         if world.amcl_initial_pose is not None:

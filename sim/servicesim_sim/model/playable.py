@@ -8,13 +8,17 @@ simulator draws is checked once the people are placed, and drawn again from the 
 cannot be played (deterministically: the n-th draw of a seed is always the same); a world's
 fixed task that the walls alone make unplayable is refused, in one line.
 
-The check is the navigation's own: the costmap's static layer with each idler marked as the
-lidar would mark them, cells below inscribed cost passable, and the areas reached when the
-passable cells connected to the robot's start meet their boxes. Walkers move on and the guest
-follows, so neither counts.
+The check is made on a costmap of its own (:data:`PASSAGE`): the static layer with each idler
+marked as the lidar would mark them, cells below inscribed cost passable, and the areas reached
+when the passable cells connected to the robot's start meet their boxes. It keeps the robot's
+half-width, 0.25 m, off walls and idlers' marks whatever navigation parameters the robot was
+given (``--nav-params``): which task a seed plays is the simulator's, never the robot's. Walkers
+move on and the guest follows, so neither counts.
 """
 
 from __future__ import annotations
+
+import weakref
 
 import numpy as np
 from scipy import ndimage
@@ -23,16 +27,38 @@ from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import IDLER
 from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
 from servicesim_sim.navigation.costmap import INSCRIBED, Costmap
-from servicesim_sim.world.files import AreaBox, World
+from servicesim_sim.navigation.parameters import (
+    SERVICEBOT,
+    CostmapParameters,
+    InflationLayer,
+    NavigationParameters,
+)
+from servicesim_sim.world.files import AreaBox, OccupancyMap, World
 
 MAX_DRAWS = 20  # draws of a seed's task (or of a fixed task's people) before giving up
 START_ESCAPE_M = 0.5  # a start in lethal cost may reach passable floor this far off
+PASSAGE = CostmapParameters(inscribed_radius=0.25, walls=(InflationLayer(),),
+                            people=(InflationLayer(),))
+"""The playability check's costmap: passable where the servicebot's half-width (its footprint
+is 0.5 m wide) clears walls and idlers; only the inscribed radius counts."""
+
+_PASSAGE_COSTMAPS: weakref.WeakKeyDictionary[OccupancyMap, Costmap] = (
+    weakref.WeakKeyDictionary())
+
+
+def passage_costmap(occupancy_map: OccupancyMap) -> Costmap:
+    """The map's :data:`PASSAGE` costmap, built once per loaded map (its marks never change:
+    the check asks :meth:`Costmap.costs_with`)."""
+    costmap = _PASSAGE_COSTMAPS.get(occupancy_map)
+    if costmap is None:
+        costmap = _PASSAGE_COSTMAPS[occupancy_map] = Costmap(occupancy_map, layers=PASSAGE)
+    return costmap
 
 
 def unreachable_areas(engine: SimEngine, *, with_idlers: bool = True) -> list[str]:
     """The task's areas (pick-up, drop-off, start; in that order) the robot's navigation
     cannot reach from its start, with the idlers in place unless ``with_idlers`` is False."""
-    costmap = engine.navigator.costmap
+    costmap = passage_costmap(engine.world.map)
     idlers = [(x, y) for _, role, x, y in engine.crowd.states() if role == IDLER]
     costs = costmap.costs_with(idlers if with_idlers else [])
     labels, _ = ndimage.label(costs < INSCRIBED, structure=np.ones((3, 3), dtype=bool))
@@ -65,14 +91,14 @@ def _meets(costmap: Costmap, labels: np.ndarray, region: int, box: AreaBox) -> b
     return bool(np.any(labels[row0:row1 + 1, col0:col1 + 1] == region))
 
 
-def playable_engine(world: World, *, seed: int | None,
-                    difficulty: Difficulty | None = None) -> SimEngine:
+def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | None = None,
+                    navigation: NavigationParameters = SERVICEBOT) -> SimEngine:
     """The engine of the seed's first playable draw (without a seed: the world's fixed task,
-    its people drawn again while idlers cut it off), or :class:`ScenarioError` saying why
-    there is none."""
+    its people drawn again while idlers cut it off), its robot navigating with
+    ``navigation``, or :class:`ScenarioError` saying why there is none."""
     for draw in range(MAX_DRAWS):
         scenario = make_scenario(world, seed=seed, difficulty=difficulty, draw=draw)
-        engine = SimEngine(world=world, scenario=scenario)
+        engine = SimEngine(world=world, scenario=scenario, navigation=navigation)
         if not unreachable_areas(engine):
             return engine
         walled_off = unreachable_areas(engine, with_idlers=False)

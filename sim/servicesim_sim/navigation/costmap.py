@@ -1,9 +1,12 @@
 """The navigation costmap: the static map inflated once, plus people seen by the lidar.
 
-Costs follow Nav2's conventions (0 free, 1..252 inflated, 253 inscribed, 254 lethal). A cell is
-lethal when its centre lies within the robot's radius of an obstacle (the robot's centre there
-would touch it) and its cost decays exponentially out to the inflation radius, as in Nav2's
-inflation layer, so plans keep to the middle of doors and corridors.
+Costs follow Nav2's conventions (0 free, 1..252 inflated, 253 inscribed, 254 lethal). An
+obstacle's cell is lethal; a cell whose centre lies within the robot's inscribed radius of one is
+inscribed (the robot's centre there would touch it; the planner never enters either), and the
+cost decays exponentially out to the inflation radius, as in Nav2's inflation layer, so plans
+keep to the middle of doors and corridors. Which inflation layers inflate the walls and which
+the people is the robot's navigation parameters' (:mod:`servicesim_sim.navigation.parameters`):
+by default the servicebot's, one layer for both.
 
 Design intent:
 
@@ -19,7 +22,8 @@ Design intent:
   (``raytrace_range`` 100 m, the lidar's 30 m). So every old mark in view with nobody there
   any more is cleared at any range, and a mark where a visible person still stands stays (the
   ray ends on them). Marks out of view stay, stale, until seen again or :meth:`Costmap.clear`.
-  A person is a disc.
+  A person is a lethal disc (:data:`PERSON_RADIUS`), inflated by the layers that inflate
+  people.
 * The lidar is approximated by one ray per person to the person's centre, walls sampled on the
   map's own grid; people's legs, the scan's angular resolution and noise are not modelled.
   A sweep traces only the rays whose answer can change its result (people within the marking
@@ -37,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from servicesim_sim.navigation.parameters import SERVICEBOT, CostmapParameters, InflationLayer
 from servicesim_sim.world.files import OccupancyMap
 
 FREE = 0
@@ -44,12 +49,7 @@ MAX_INFLATED = 252
 INSCRIBED = 253
 LETHAL = 254
 
-ROBOT_RADIUS = 0.25  # m: the simulator's contact disc (footprint 0.4 x 0.5 m)
-INFLATION_RADIUS = 0.4  # m, as in the competition's costmap
-PERSON_RADIUS = 0.3  # m
-PERSON_INFLATION_RADIUS = 0.8  # m from a person's edge: the referee's 0.75 m "approximation"
-PERSON_COST_SCALING = 2.5  # gentler than the walls': keep a berth where there is room for one
-
+PERSON_RADIUS = 0.3  # m: a person as the lidar's marks outline them (their box, 0.44 x 0.60 m)
 
 
 @dataclass(frozen=True)
@@ -89,20 +89,35 @@ class GridFrame:
 
 @dataclass(frozen=True)
 class Inflation:
-    """Cost as a function of the distance from a cell's centre to the nearest obstacle."""
+    """Cost as a function of the distance from a cell's centre to the nearest obstacle, as
+    Nav2's inflation layers make it: lethal on the obstacle, inscribed within the robot's
+    inscribed radius of it, then each layer's exponential decay out to its radius, the
+    highest of the layers' costs kept. Without a layer an obstacle is lethal and no more."""
 
-    robot_radius: float = ROBOT_RADIUS
-    inflation_radius: float = INFLATION_RADIUS
-    cost_scaling_factor: float = 5.0
+    robot_radius: float
+    layers: tuple[InflationLayer, ...]
+
+    @property
+    def reach(self) -> float:
+        """How far from an obstacle costs reach."""
+        if not self.layers:
+            return 0.0
+        return max(self.robot_radius, *(layer.inflation_radius for layer in self.layers))
 
     def costs(self, distance: np.ndarray) -> np.ndarray:
         distance = np.asarray(distance, dtype=np.float64)
-        decay = MAX_INFLATED * np.exp(
-            -self.cost_scaling_factor * (distance - self.robot_radius))
-        costs = np.where(distance <= self.inflation_radius, np.maximum(decay, 1.0), FREE)
-        costs = np.where(distance <= self.robot_radius, INSCRIBED, costs)
+        costs = np.zeros_like(distance)
+        for index, layer in enumerate(self.layers):
+            decay = MAX_INFLATED * np.exp(
+                -layer.cost_scaling_factor * (distance - self.robot_radius))
+            layer_costs = np.where(distance <= layer.inflation_radius, np.maximum(decay, 1.0),
+                                   FREE)
+            costs = layer_costs if index == 0 else np.maximum(costs, layer_costs)
+        if self.layers:
+            costs = np.where(distance <= self.robot_radius, INSCRIBED, costs)
         costs = np.where(distance <= 0.0, LETHAL, costs)
-        return np.rint(costs).astype(np.uint8)
+        rounded: NDArray[np.uint8] = np.rint(costs).astype(np.uint8)
+        return rounded
 
 
 RAY_CELL = 0.1  # metres: the lidar's rays are traced on walls pooled to about this size
@@ -136,24 +151,24 @@ class Costmap:
 
     Args:
         occupancy_map: the static map (0 free, 100 occupied, -1 unknown; unknown blocks)
-        robot_radius: within this distance of an obstacle a cell is lethal to the robot's centre
-        inflation_radius: costs decay to zero at this distance
+        layers: the robot's inscribed radius and the inflations of walls and of people
+            (:class:`~servicesim_sim.navigation.parameters.CostmapParameters`; default the
+            servicebot's)
         resolution: metres per costmap cell, rounded to a whole number of map cells
         crop_margin: metres kept around the bounding box of the map's occupied cells
-        person_radius: a marked person is an obstacle disc of this radius; around it costs decay
-            more gently and reach further (:data:`PERSON_INFLATION_RADIUS`), so plans keep out
-            of the zone where the referee books "approximation" penalties when there is room
+        person_radius: a marked person is a lethal disc of this radius, inflated by the
+            layers that inflate people
     """
 
-    def __init__(self, occupancy_map: OccupancyMap, *, robot_radius: float = ROBOT_RADIUS,
-                 inflation_radius: float = INFLATION_RADIUS, cost_scaling_factor: float = 5.0,
+    def __init__(self, occupancy_map: OccupancyMap, *, layers: CostmapParameters | None = None,
                  resolution: float = 0.1, crop_margin: float = 1.0,
                  person_radius: float = PERSON_RADIUS, lidar: Lidar | None = None) -> None:
         self.map = occupancy_map
-        self.inflation = Inflation(robot_radius=robot_radius, inflation_radius=inflation_radius,
-                                   cost_scaling_factor=cost_scaling_factor)
-        self.social = Inflation(robot_radius=robot_radius, inflation_radius=max(
-            inflation_radius, PERSON_INFLATION_RADIUS), cost_scaling_factor=PERSON_COST_SCALING)
+        self.layers = layers or SERVICEBOT.costmap
+        self.inflation = Inflation(robot_radius=self.layers.inscribed_radius,
+                                   layers=self.layers.walls)
+        self.people_inflation = Inflation(robot_radius=self.layers.inscribed_radius,
+                                          layers=self.layers.people)
         self.person_radius = person_radius
         self.lidar = lidar or Lidar()
         self._walls = np.asarray(occupancy_map.blocked_mask(), dtype=bool)
@@ -208,7 +223,7 @@ class Costmap:
             gaps = np.hypot(centre_xs[:, None] - marks[None, :, 0],
                             centre_ys[:, None] - marks[None, :, 1]).min(axis=1)
             costs = np.maximum(self.static[rows, cols],
-                               self.social.costs(gaps - self.person_radius))
+                               self.people_inflation.costs(gaps - self.person_radius))
         return np.where(inside, costs, LETHAL)
 
     # ------------------------------------------------------------------ people
@@ -278,7 +293,7 @@ class Costmap:
 
     def _with_people(self, costs: np.ndarray,
                      marks: tuple[PersonMark, ...] | None = None) -> np.ndarray:
-        reach = self.person_radius + self.social.inflation_radius
+        reach = self.person_radius + self.people_inflation.reach
         frame = self.frame
         for mark in self.marks if marks is None else marks:
             row0, col0 = frame.cell_of(mark.x - reach, mark.y - reach)
@@ -291,7 +306,7 @@ class Costmap:
             xs, ys = frame.centres(rows, cols)
             gap = np.hypot(xs - mark.x, ys - mark.y) - self.person_radius
             window = costs[row0:row1 + 1, col0:col1 + 1]
-            np.maximum(window, self.social.costs(gap), out=window)
+            np.maximum(window, self.people_inflation.costs(gap), out=window)
         return costs
 
     # ------------------------------------------------------------------ the lidar

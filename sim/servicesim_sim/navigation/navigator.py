@@ -7,11 +7,11 @@ Design intent:
 
 * Following is pure pursuit on the planned polyline (0.5 m lookahead), as a differential drive:
   the robot turns on the spot when the way it should head is over 0.7 rad from the way it faces,
-  and slows down for the goal. Within the goal tolerance (0.3 m) it stops and turns to the goal
-  yaw (0.262 rad), like Nav2's stateful goal checker. Plans keep to the middle of doors, so the
-  corners pursuit cuts stay clear of the jambs: on 1 m doors met at right angles the footprint
-  kept over 0.2 m from the walls (a follower that stopped and turned at sharp corners kept
-  0.27 m but took 15-25 % longer, and was dropped).
+  and slows down for the goal. Within the goal checker's tolerance (the servicebot's 0.3 m) it
+  stops and turns to the goal yaw (0.262 rad), like Nav2's stateful goal checker. Plans keep
+  to the middle of doors, so the corners pursuit cuts stay clear of the jambs: on 1 m doors met
+  at right angles the footprint kept over 0.2 m from the walls (a follower that stopped and
+  turned at sharp corners kept 0.27 m but took 15-25 % longer, and was dropped).
 * The costmap sees people through the lidar, ten sweeps a sim second. The robot replans when
   it strays from its path, and reconsiders its path when the costmap changed: within a second
   when people now obstruct the next 4 m (taking the way round unless it is over 5 m longer),
@@ -40,7 +40,8 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from servicesim_sim.navigation.costmap import INSCRIBED, Costmap, Lidar
+from servicesim_sim.navigation.costmap import INSCRIBED, PERSON_RADIUS, Costmap, Lidar
+from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.navigation.planner import (
     ComputePathToPoseError,
     Planner,
@@ -102,7 +103,7 @@ class Tuning:
     off_path: float = 0.6
     person_gap: float = 0.7  # from the robot's front to a person's body
     robot_front: float = 0.25
-    person_radius: float = 0.3
+    person_radius: float = PERSON_RADIUS
     person_across: float = 0.5  # a person this near the path is on it
     wait: tuple[float, float] = (0.5, 1.5)
     blocked_patience: float = 20.0
@@ -253,19 +254,20 @@ class Navigator:
     """
 
     def __init__(self, occupancy_map: OccupancyMap, *, max_speed: float = 0.5,
-                 max_turn_rate: float = 1.0, xy_tolerance: float = 0.3,
-                 yaw_tolerance: float = 0.262, rng: np.random.Generator,
+                 max_turn_rate: float = 1.0, rng: np.random.Generator,
+                 parameters: NavigationParameters = SERVICEBOT,
                  tuning: Tuning | None = None, lidar: Lidar | None = None,
                  body: Body | None = None) -> None:
         self.tuning = tuning or Tuning()
         self.body = body
         self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
-        self.xy_tolerance = xy_tolerance
-        self.yaw_tolerance = yaw_tolerance
+        self.parameters = parameters
+        self.xy_tolerance = parameters.goal_checker.xy_goal_tolerance
+        self.yaw_tolerance = parameters.goal_checker.yaw_goal_tolerance
         self.rng = rng
-        self.costmap = Costmap(occupancy_map, person_radius=self.tuning.person_radius,
-                               lidar=lidar)
-        self.planner = Planner(self.costmap, goal_tolerance=xy_tolerance)
+        self.costmap = Costmap(occupancy_map, layers=parameters.costmap,
+                               person_radius=self.tuning.person_radius, lidar=lidar)
+        self.planner = Planner(self.costmap, goal_tolerance=self.xy_tolerance)
         self.status: NavigationStatus = "idle"
         self.error_code = 0
         self.error_msg = ""
