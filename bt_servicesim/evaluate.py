@@ -77,7 +77,7 @@ from bt_servicesim.evaluation.throughput import load_throughput
 from bt_servicesim.mission.settings import EXECUTIVES
 from bt_servicesim.mission.stopping import StopSignals, Terminated, signal_of
 from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.files import DEFAULT_TREE, SERVICEBOT
 
 if TYPE_CHECKING:  # the local pool imports no distributed engine
     from distributed import Client
@@ -132,10 +132,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--throughput", type=Path, metavar="FILE",
                         help="state in results.md the episodes per hour, warm and cold, from "
                              "the figures of benchmarks/throughput.py --json FILE")
-    parser.add_argument("--nav-params", type=Path, metavar="FILE",
-                        help="the robot's navigation parameters (a Nav2 parameters file) every "
+    parser.add_argument("--nav-params", metavar="FILE",
+                        help="the robot's navigation parameters (a Nav2 parameters file, or "
+                             "'servicebot' for the original servicebot's configuration) every "
                              "episode's simulator is given, whatever the executive (default: "
-                             "the original servicebot's configuration)")
+                             "the shipped tree's trees/servicesim_nav2_params.yaml for bt and "
+                             "bt:FILE, servicebot for baseline)")
     parser.add_argument("--cluster", metavar="ADDRESS",
                         help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
                              "worker as many at once as it has threads (needs the 'cluster' "
@@ -215,12 +217,13 @@ def _tree(path: Path | None, executives: tuple[str, ...]) -> Path:
     return path.resolve()
 
 
-def _nav_params(path: Path | None) -> Path | None:
+def _nav_params(argument: str | None) -> str | None:
     """The navigation parameters file, absolute, checked once here by the simulator's own
     reader (:data:`NAV_PARAMS_CHECK`, a process: the evaluation never imports the simulator):
     a file the simulator would refuse is one line now, not a failure in every episode."""
-    if path is None:
-        return None
+    if argument in (None, SERVICEBOT):
+        return argument
+    path = Path(argument)
     _check(path.is_file(), f"--nav-params {path}: "
                            f"{'is a directory' if path.is_dir() else 'no such file'}")
     try:
@@ -231,7 +234,7 @@ def _nav_params(path: Path | None) -> Path | None:
     if checked.returncode != 0:
         lines = checked.stderr.strip().splitlines() or [f"exit status {checked.returncode}"]
         raise UsageError(f"--nav-params {lines[-1].split(': error: ', 1)[-1]}")
-    return path.resolve()
+    return str(path.resolve())
 
 
 def _executives(value: str) -> tuple[tuple[str, ...], dict[str, Path]]:

@@ -54,7 +54,7 @@ from bt_servicesim.monitor.live_server import (
     open_live_server,
 )
 from bt_servicesim.ros.domain import NoFreeDomainError
-from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.files import DEFAULT_TREE, SERVICEBOT, nav_params_for
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -92,11 +92,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "the seed's state machine (baseline)")
     parser.add_argument("--sim-arg", action="append", default=[], metavar="ARG",
                         help="extra argument passed to the simulator (repeatable)")
-    parser.add_argument("--nav-params", type=Path, metavar="FILE",
+    parser.add_argument("--nav-params", metavar="FILE",
                         help="the robot's navigation parameters, a Nav2 parameters file the "
-                        "simulator's navigation takes (default: the original servicebot's "
-                        "configuration; trees/servicesim_nav2_params.yaml is the shipped "
-                        "tree's; docs/reference/navigation.md)")
+                        "simulator's navigation takes, or 'servicebot' for the original "
+                        "servicebot's configuration (default: the shipped tree's "
+                        "trees/servicesim_nav2_params.yaml for bt, servicebot for baseline; "
+                        "docs/reference/navigation.md)")
     parser.add_argument("--attach", action="store_true",
                         help="start no simulator: run against the backend already on this "
                         "shell's ROS_DOMAIN_ID (a simulator started alone, Gazebo, a robot)")
@@ -159,7 +160,7 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         run_id=args.run_id or uuid.uuid4().hex, attach=args.attach, groot=groot,
         foxglove=_live_address(args.foxglove), free_running=args.free_running,
         trajectory=args.trajectory, clock=args.clock, profile=args.profile,
-        nav_params=None if args.nav_params is None else args.nav_params.resolve(),
+        nav_params=(None if args.attach else nav_params_for(args.executive, args.nav_params)),
     )
 
 
@@ -192,8 +193,9 @@ def groot_address(argument: str) -> tuple[str, int]:
 
 def _check_backend(args: argparse.Namespace) -> None:
     """The simulator's options: a world that exists, none of them with --attach."""
+    nav_params = None if args.nav_params in (None, SERVICEBOT) else Path(args.nav_params)
     for flag, path, kind in (("--world", args.world, "a world file"),
-                             ("--nav-params", args.nav_params, "a parameters file")):
+                             ("--nav-params", nav_params, "a parameters file")):
         if path is not None and not path.is_file():
             what = f"is a directory, not {kind}" if path.is_dir() else "no such file"
             raise UsageError(f"{flag} {path}: {what}")

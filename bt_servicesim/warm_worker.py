@@ -42,7 +42,7 @@ from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, STARTUP_LIMIT_S
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
-from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.files import DEFAULT_TREE, nav_params_for
 from bt_servicesim.tree.loading import MissionTreeError
 
 if TYPE_CHECKING:  # rclpy is imported once the worker runs ROS
@@ -90,8 +90,8 @@ class WarmEpisode:
                           time_limit_s=float(fields.get("time_limit_s", DEFAULT_TIME_LIMIT_S)),
                           sim_args=tuple(str(arg) for arg in fields.get("sim_args", ())),
                           tree=Path(fields.get("tree") or DEFAULT_TREE),
-                          nav_params=(Path(fields["nav_params"]) if fields.get("nav_params")
-                                      else None))
+                          nav_params=nav_params_for(str(fields["executive"]),
+                                                    fields.get("nav_params")))
         except (KeyError, TypeError) as error:
             raise ValueError(f"an episode needs out, run_id, executive and speed: {error}") \
                 from error

@@ -63,6 +63,7 @@ from bt_servicesim.mission.stopping import (
     parent_death_signal,
 )
 from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.tree.files import SERVICEBOT
 
 FINAL_STATUSES = ("completed", "failed", "interrupted")  # what a finished run's report says
 POLL_S = 0.1  # wall seconds between looks at the episodes under way
@@ -120,8 +121,7 @@ def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the worker's own shipped tree
         fields["tree"] = str(tree)
-    if settings.nav_params is not None:
-        fields["nav_params"] = str(settings.nav_params)
+    fields["nav_params"] = str(settings.nav_params_of(episode.executive) or SERVICEBOT)
     return json.dumps(fields) + "\n"
 
 
@@ -140,8 +140,7 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the run's own shipped tree
         command += ["--tree", str(tree)]
-    if settings.nav_params is not None:
-        command += ["--nav-params", str(settings.nav_params)]
+    command += ["--nav-params", str(settings.nav_params_of(episode.executive) or SERVICEBOT)]
     if episode.seed is not None:
         command += ["--seed", str(episode.seed)]
     for argument in SCENARIO_SETS[episode.scenario].sim_args:
@@ -173,8 +172,9 @@ class EpisodeRunner:
         self.revision = source_revision()
         self._tree_digests = {executive: tree_digest(tree) for executive in settings.executives
                               if (tree := settings.tree_of(executive)) is not None}
-        self._nav_params_digest = (None if settings.nav_params is None
-                                   else tree_digest(settings.nav_params))
+        self._nav_params_digests = {
+            executive: tree_digest(nav_params) for executive in settings.executives
+            if (nav_params := settings.nav_params_of(executive)) is not None}
         self._die_with_us = parent_death_signal(os.getpid())
         self._idle_pairs: LifoQueue[WarmPair] = LifoQueue()
         self._pairs_started = itertools.count(1)
@@ -212,8 +212,8 @@ class EpisodeRunner:
                "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
         if episode.executive in self._tree_digests:  # the shipped tree: as before
             key["tree_sha256"] = self._tree_digests[episode.executive]
-        if self._nav_params_digest is not None:  # the simulator's default: as before
-            key["nav_params_sha256"] = self._nav_params_digest
+        if episode.executive in self._nav_params_digests:  # else the servicebot's
+            key["nav_params_sha256"] = self._nav_params_digests[episode.executive]
         return key
 
     def finished_row(self, episode: Episode) -> dict[str, Any] | None:

@@ -87,9 +87,12 @@ def _tree_note(settings: EvaluationSettings) -> str:
              **settings.trees}
     note = "".join(f"; {name} plays `{tree}` (SHA-256 {tree_digest(tree)[:16]})"
                    for name, tree in trees.items())
-    if settings.nav_params is not None:
-        note += (f"; every executive's robot navigates with `{settings.nav_params}` "
-                 f"(SHA-256 {tree_digest(settings.nav_params)[:16]})")
+    for executive in settings.executives:
+        nav_params = settings.nav_params_of(executive)
+        note += (f"; {executive}'s robot navigates with the servicebot's configuration"
+                 if nav_params is None else
+                 f"; {executive}'s robot navigates with `{nav_params}` "
+                 f"(SHA-256 {tree_digest(nav_params)[:16]})")
     return note
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 from bt_servicesim.evaluation.reproducibility import Reproducibility
 from bt_servicesim.evaluation.throughput import Throughput
 from bt_servicesim.ros.domain import DOMAINS
-from bt_servicesim.tree.files import DEFAULT_TREE
+from bt_servicesim.tree.files import DEFAULT_TREE, nav_params_for
 
 #: Episodes run flat out by default: every episode runs in lockstep with our simulator, which
 #: waits for each tick, so a busy machine makes an episode slower, never different.
@@ -81,9 +81,10 @@ class EvaluationSettings:
     """The mission tree the ``bt`` executive plays (an absolute path, checked to load)."""
     trees: Mapping[str, Path] = field(default_factory=dict)
     """The tree each ``bt:NAME`` executive plays (``--executive bt:FILE``), by its name."""
-    nav_params: Path | None = None
-    """The robot's navigation parameters file every episode's simulator is given, whatever
-    the executive (``--nav-params``, absolute, checked); None: the simulator's default."""
+    nav_params: str | None = None
+    """``--nav-params`` as given: a file every episode's simulator is given, whatever the
+    executive (absolute, checked), or ``servicebot``; None: each executive's default
+    (:func:`~bt_servicesim.tree.files.nav_params_for`)."""
 
     @property
     def own_tree(self) -> bool:
@@ -96,6 +97,11 @@ class EvaluationSettings:
         if executive in self.trees:
             return self.trees[executive]
         return self.tree if executive == "bt" and self.own_tree else None
+
+    def nav_params_of(self, executive: str) -> Path | None:
+        """The navigation parameters file an episode of ``executive`` plays with; None: the
+        servicebot's configuration, the simulator's default."""
+        return nav_params_for(executive_kind(executive), self.nav_params)
 
 
 def executive_kind(executive: str) -> str:

@@ -134,8 +134,9 @@ def summary_of(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> dict
         summary["time_over_bound"] = {
             scenario: time_over_bound([row for row in own if row["scenario"] == scenario])
             for scenario in settings.scenarios}
-        summary["nav_params"] = (None if settings.nav_params is None else {
-            "file": str(settings.nav_params), "sha256": tree_digest(settings.nav_params)})
+        nav_params = settings.nav_params_of(executive)
+        summary["nav_params"] = (None if nav_params is None else {
+            "file": str(nav_params), "sha256": tree_digest(nav_params)})
         summaries[executive] = summary
     return summaries
 

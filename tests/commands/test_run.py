@@ -150,13 +150,19 @@ def test_nav_params_is_a_file_the_run_passes_on_and_no_sim_arg_or_attached_backe
         tmp_path: Path) -> None:
     from bt_servicesim.cli import UsageError
     from bt_servicesim.run import build_parser, settings_from
+    from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS
 
     params = tmp_path / "mine.yaml"
     params.write_text("controller_server:\n  ros__parameters: {}\n")
     out = ["--out", str(tmp_path / "run")]
     given = settings_from(build_parser().parse_args(["--nav-params", str(params), *out]))
     assert given.nav_params == params.resolve()
-    assert settings_from(build_parser().parse_args(out)).nav_params is None
+    assert settings_from(build_parser().parse_args(out)).nav_params == DEFAULT_NAV_PARAMS
+    baseline = ["--executive", "baseline", *out]
+    assert settings_from(build_parser().parse_args(baseline)).nav_params is None
+    servicebot = ["--nav-params", "servicebot", *out]
+    assert settings_from(build_parser().parse_args(servicebot)).nav_params is None
+    assert settings_from(build_parser().parse_args([*out, "--attach"])).nav_params is None
     for arguments, problem in (
             (["--nav-params", str(tmp_path / "missing.yaml")], "missing.yaml: no such file"),
             (["--nav-params", str(tmp_path)], "is a directory, not a parameters file"),

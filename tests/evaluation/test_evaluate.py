@@ -36,6 +36,7 @@ from bt_servicesim.evaluation.episodes import (
 from bt_servicesim.evaluation.report import PLOTS, markdown_report
 from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
 from bt_servicesim.evaluation.summary import summarise, summary_of
+from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS, SERVICEBOT
 from tests.fakes import run_module
 
 FAKE_EPISODE = r"""
@@ -660,15 +661,18 @@ def test_every_executives_episodes_get_the_navigation_parameters_cold_or_warm(
 
     params = nav_params(tmp_path)
     chosen = settings(tmp_path, executives=("bt", "bt:mine", "baseline"),
-                      trees={"bt:mine": own_tree(tmp_path)}, nav_params=params)
+                      trees={"bt:mine": own_tree(tmp_path)}, nav_params=str(params))
     for episode in plan_episodes(chosen):
         command, line = run_command(episode, chosen), warm_line(episode, chosen)
         assert command[command.index("--nav-params") + 1] == str(params)
         assert WarmEpisode.from_line(line).run_settings().nav_params == params
-    default = settings(tmp_path)
+    default = settings(tmp_path, executives=("bt", "bt:mine", "baseline"),
+                       trees={"bt:mine": own_tree(tmp_path)})
     for episode in plan_episodes(default):
-        assert "--nav-params" not in run_command(episode, default)
-        assert "nav_params" not in json.loads(warm_line(episode, default))
+        command, line = run_command(episode, default), warm_line(episode, default)
+        own = DEFAULT_NAV_PARAMS if episode.executive.startswith("bt") else None
+        assert command[command.index("--nav-params") + 1] == str(own or SERVICEBOT)
+        assert WarmEpisode.from_line(line).run_settings().nav_params == own
 
 
 def test_the_summary_and_results_name_the_navigation_parameters_and_their_digest(
@@ -676,7 +680,7 @@ def test_the_summary_and_results_name_the_navigation_parameters_and_their_digest
     import hashlib
 
     params = nav_params(tmp_path)
-    chosen = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params)
+    chosen = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=str(params))
     quietly(tmp_path, chosen, fake())
     digest = hashlib.sha256(params.read_bytes()).hexdigest()
     summary = json.loads((chosen.out / "summary.json").read_text())
@@ -686,15 +690,20 @@ def test_the_summary_and_results_name_the_navigation_parameters_and_their_digest
         chosen.out / "results.md").read_text()
     default = settings(tmp_path, episodes=1, scenarios=("random",), out=tmp_path / "default")
     quietly(tmp_path, default, fake())
-    assert json.loads((default.out / "summary.json").read_text())["bt"]["nav_params"] is None
+    summary = json.loads((default.out / "summary.json").read_text())
+    assert summary["bt"]["nav_params"]["file"] == str(DEFAULT_NAV_PARAMS)
+    assert summary["baseline"]["nav_params"] is None
+    assert "baseline's robot navigates with the servicebot's configuration" in (
+        default.out / "results.md").read_text()
 
 
 def test_resume_reruns_every_episode_when_the_navigation_parameters_changed(
         tmp_path: Path) -> None:
     params = nav_params(tmp_path)
-    first = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params)
+    first = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=str(params))
     quietly(tmp_path, first, fake())
-    same = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=params, resume=True)
+    same = settings(tmp_path, episodes=1, scenarios=("random",), nav_params=str(params),
+                    resume=True)
     assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
     nav_params(tmp_path, tolerance="0.2")
     assert not any(row.get("resumed") for row in quietly(tmp_path, same, fake()))
