@@ -34,8 +34,8 @@ prints
   timing's factor pooled over its missions (all sim seconds over all wall seconds) and
   lockstep against the others mission by mission;
 * with ``--free-running-code DIR``, the free-running missions run the code of another checkout
-  of this repository (``DIR``, e.g. ``git worktree add /tmp/filed 5094628^``, the code issue 15
-  was filed on, which knew no lockstep) on this checkout's Python environment, interleaved
+  of this repository (``DIR``, e.g. ``git worktree add /tmp/free 5094628^``, a commit from before
+  lockstep) on this checkout's Python environment, interleaved
   with this checkout's lockstep missions: lockstep now against free running as it was, on the
   same machine at the same time;
 * the CPU time the executive's and the simulator's processes spent over the task (from

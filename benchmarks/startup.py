@@ -13,7 +13,7 @@ failed`` (the shipped task, or seed ``S``), one run at a time, and prints, from 
 
 With ``--fast-dds-defaults`` every other run gets Fast DDS's own periods instead of the
 project's profile (``bt_servicesim/ros/fastdds_profile.xml``: announcements and heartbeats every
-0.5 s rather than 3 s), so the two are measured in the same session, interleaved. Wall-clock
+0.5 s rather than 3 s), so the two are measured in one sitting, interleaved. Wall-clock
 figures follow the machine's load (it prints the load average); nothing is asserted. Bad
 arguments give one line and exit status 2.
 """

@@ -6,7 +6,7 @@ the same ``N``
 episodes of one scenario set twice with the evaluation's own machinery
 (:func:`~bt_servicesim.evaluation.episodes.run_episodes`), ``J`` at once: cold (each episode a
 ``python -m bt_servicesim.run`` process with its own simulator) and warm (``J`` warm pairs
-kept alive between episodes, issue 16). It prints, for each, the wall time, episodes per hour
+kept alive between episodes). It prints, for each, the wall time, episodes per hour
 and the share completed, how the episodes' sim time is spread (the longest episode's share: a
 mission failing only at the time limit costs many others' worth), then the ratio warm/cold and
 how many episodes' reports agree between the two on what lockstep makes replayable (completed,

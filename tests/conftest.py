@@ -6,7 +6,7 @@ see each other's nodes. This runs at import, before any test
 calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
 
 Every test starts and ends with an empty py_trees blackboard. The fakes these fixtures build are
-in ``fakes.py``.
+in the ``fakes`` package.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from bt_servicesim.ros.domain import DomainClaim, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults, delete_participant
 
 if TYPE_CHECKING:
-    from tests.fakes import SensorWorld, SimTimeGraph
+    from tests.fakes.graphs import SensorWorld, SimTimeGraph
 
 def _claim_test_domain() -> DomainClaim:
     """A domain for this test process, claimed as a run claims one (``ros/domain.py``), so that
@@ -66,7 +66,7 @@ def clean_blackboard() -> Iterator[None]:
 @pytest.fixture
 def sim_clock(ros_context: object) -> Iterator[SimTimeGraph]:
     """A node on sim time ("executive") and a simulator publishing /clock, spun by the test."""
-    from tests.fakes import SimTimeGraph
+    from tests.fakes.graphs import SimTimeGraph
 
     graph = SimTimeGraph(ros_context)
     yield graph
@@ -76,7 +76,7 @@ def sim_clock(ros_context: object) -> Iterator[SimTimeGraph]:
 @pytest.fixture
 def world(ros_context: object) -> Iterator[SensorWorld]:
     """:func:`sim_clock` whose simulator also publishes the robot's RFID and odometry."""
-    from tests.fakes import SensorWorld
+    from tests.fakes.graphs import SensorWorld
 
     graph = SensorWorld(ros_context)
     yield graph

@@ -28,7 +28,6 @@ backend without it (Gazebo, a real robot) is run free on
 
 from __future__ import annotations
 
-import struct
 import time
 from collections import deque
 from collections.abc import Callable
@@ -39,7 +38,6 @@ from rclpy.clock import ROSClock
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos import ReliabilityPolicy as Reliability
-from rclpy.serialization import serialize_message
 from rclpy.time import Time
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 from servicesim_competition.srv import LockstepJoin
@@ -194,7 +192,7 @@ class LockstepClient:
         self._answer_offsets: dict[str, int] = {}
         self._answers_at_join: dict[str, int] = {}
         self._sent_at_join: dict[str, int] = {}
-        self._done_message: DoneBytes | None = None
+        self._done_message: LockstepDone | None = None
         self._done_counts: dict[str, int] = {}
         self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
         node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
@@ -514,49 +512,16 @@ class LockstepClient:
         """Say the tick of ``period`` is done, with the requests sent since the join.
 
         Most ticks send nothing: the message of the last tick then goes again with the new
-        period alone, rather than its endpoint names and counts being built and checked anew,
-        and as the bytes it was serialised to (:class:`DoneBytes`), not converted again.
+        period alone, rather than its endpoint names and counts being built and checked anew.
         """
         sent = self.traffic.sent
         if self._done_message is None or self._done_counts != sent:
             counts = {endpoint: count - self._sent_at_join.get(endpoint, 0)
                       for endpoint, count in sent.items()}
             endpoints = sorted(counts)
-            self._done_message = DoneBytes(LockstepDone(
+            self._done_message = LockstepDone(
                 client=self.client_id or 0, endpoints=endpoints,
-                requests=[counts[e] for e in endpoints]))
+                requests=[counts[e] for e in endpoints])
             self._done_counts = dict(sent)
-        self._done.publish(self._done_message.at(period))
-
-
-_PERIOD = struct.Struct("<Q")
-_PERIOD_OFFSET = 12
-"""Where ``period`` lies in a little-endian CDR ``LockstepDone``: after the 4-byte encapsulation
-header and ``uint32 client``, aligned to 8 from the data's start."""
-_PROBE = 0x0123_4567_89AB_CDEF
-
-
-class DoneBytes:
-    """A ``LockstepDone`` serialised once, handed out again for any period.
-
-    The lockstep client says "done" every period with the same client and counts (they change
-    only when a request went out); publishing the serialised bytes with the period written in
-    spares rclpy converting the message anew each time. The bytes are exactly what
-    ``serialize_message`` gives for the message with that period.
-
-    Args:
-        message: the message to send; its ``period`` is replaced by :meth:`at`'s
-    """
-
-    def __init__(self, message: LockstepDone) -> None:
-        message.period = _PROBE  # found where it is looked for, or the layout is not known
-        self._data = bytearray(serialize_message(message))
-        if (self._data[:2] != b"\x00\x01"
-                or _PERIOD.unpack_from(self._data, _PERIOD_OFFSET)[0] != _PROBE):
-            raise ValueError("LockstepDone does not serialise as little-endian CDR with the "
-                             f"period at byte {_PERIOD_OFFSET}")
-
-    def at(self, period: int) -> bytes:
-        """The message's bytes with ``period`` as its period."""
-        _PERIOD.pack_into(self._data, _PERIOD_OFFSET, period)
-        return bytes(self._data)
+        self._done_message.period = period
+        self._done.publish(self._done_message)

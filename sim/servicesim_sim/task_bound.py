@@ -7,11 +7,13 @@ force. It is computed from the same scenario the simulator plays for the same (w
 sim args) (:func:`servicesim_sim.model.playable.playable_engine`), with the simulator's own
 constants, so it needs nothing the executive may know and never runs the simulator.
 
-The route, checkpoint by checkpoint (the referee's rules, :mod:`servicesim_sim.model.engine`):
+The route, checkpoint by checkpoint (the referee's rules,
+:mod:`servicesim_sim.model.task_rules`):
 
 1. from the start pose until the robot's origin is in the pick-up area (checkpoint 1);
-2. on until it is within :data:`~servicesim_sim.model.engine.PICKUP_RANGE_M` (2 m, straight-line
-   distance, walls or not) of the waiting guest (a pick-up is valid only after checkpoint 1);
+2. on until it is within :data:`~servicesim_sim.model.task_rules.PICKUP_RANGE_M` (2 m,
+   straight-line distance, walls or not) of the waiting guest (a pick-up is valid only after
+   checkpoint 1);
 3. on until the robot's origin has been in the drop-off area: the drop-off needs the guest's
    origin inside it, and the guest walks the robot's trail (the default ``trail`` guest), so
    the robot was there first; but a guest picked up walks straight to where the robot stood
@@ -56,11 +58,11 @@ from typing import Any, NoReturn
 import numpy as np
 from numpy.typing import NDArray
 
-from servicesim_sim.model.engine import PICKUP_RANGE_M
 from servicesim_sim.model.guest import LOST_DISTANCE
 from servicesim_sim.model.referee import CHECKPOINT_NAMES
 from servicesim_sim.model.robot import BODY_RADIUS, MAX_SPEED, WallClearance
 from servicesim_sim.model.scenario import Scenario
+from servicesim_sim.model.task_rules import PICKUP_RANGE_M
 from servicesim_sim.navigation.geodesic import LatticeGraph, Search
 from servicesim_sim.world.files import AreaBox, World, load_world
 

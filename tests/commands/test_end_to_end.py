@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 from tests.mission_script import matches
 
 if TYPE_CHECKING:

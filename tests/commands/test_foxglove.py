@@ -34,7 +34,7 @@ from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 
 from servicesim_sim.world.files import DEFAULT_WORLD, load_world
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 #: One run serves the whole module: its tests go to one pytest-xdist worker (``make test``'s
 #: ``--dist loadgroup``), or each worker given some of them would start a run of its own.

@@ -1,7 +1,8 @@
 """Seeing the tree over time: ``python -m bt_servicesim.replay`` and the live view of a run.
 
-The run is the errand tree of ``tests.fakes.RecordedRun``; what replay prints is compared with
-the live tree drawn at the same tick. The live view draws to a stream that says it is a terminal.
+The run is the errand tree of ``tests.fakes.recorded_run.RecordedRun``; what replay prints is
+compared with the live tree drawn at the same tick. The live view draws to a stream that says it
+is a terminal.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from bt_servicesim import replay
 from bt_servicesim.mission.live_view import HOME, LiveTreeView
 from bt_servicesim.mission.progress import ProgressView
 from bt_servicesim.tree.shape import plain, walk
-from tests.fakes import RecordedRun
+from tests.fakes.recorded_run import RecordedRun
 
 
 def replay_output(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:

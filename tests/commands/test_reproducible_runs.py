@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 #: flat out, with a short time limit: the mission gets past its first two checkpoints
 RUN = ["--headless", "--speed", "0", "--seed", "3", "--time-limit", "60"]

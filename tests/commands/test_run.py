@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 
 def run(*arguments: str, cwd: Path) -> subprocess.CompletedProcess[str]:

@@ -9,7 +9,7 @@ import pytest
 
 from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.run import build_parser, groot_address, settings_from
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 
 def assert_refused(tmp_path: Path, *arguments: str, named: str) -> None:

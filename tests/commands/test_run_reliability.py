@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 from mcap.reader import make_reader
 
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 from tests.raising_leaf import MESSAGE
 
 REPO = Path(__file__).resolve().parents[2]

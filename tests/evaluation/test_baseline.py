@@ -27,7 +27,9 @@ from bt_servicesim.mission.settings import RunSettings
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.run import executive_factory
 from bt_servicesim.tree.loading import MissionTreeError
-from tests.fakes import FakeSimulator, Task, clock_message, unique_name
+from tests.fakes.referee import Task
+from tests.fakes.simulator import FakeSimulator
+from tests.fakes.spinning import clock_message, unique_name
 
 Status = py_trees.common.Status
 

@@ -37,7 +37,7 @@ from bt_servicesim.evaluation.report import PLOTS, markdown_report
 from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
 from bt_servicesim.evaluation.summary import summarise, summary_of
 from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS, SERVICEBOT
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 FAKE_EPISODE = r"""
 import json, os, signal, subprocess, sys, time

@@ -14,7 +14,7 @@ from bt_servicesim.evaluation.path_excess import (
     path_figures,
     summary_lines,
 )
-from tests.fakes import run_module
+from tests.fakes.commands import run_module
 
 
 def straight_drive(*, wait_s: float, drive_s: float, speed: float) -> list[Sample]:

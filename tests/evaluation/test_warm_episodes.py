@@ -1,4 +1,5 @@
-"""Warm episodes (issue 16): one simulator and one executive process play episode after episode.
+"""Warm episodes: one simulator and one executive process play episode after episode, sparing
+an evaluation a process pair's start-up for each.
 
 Nothing leaks from one episode into the next: two different seeds played one after the other
 on one warm pair give, each, the report the same seed gives played cold (a process pair of its

@@ -1,4 +1,4 @@
-"""Warm pairs that misbehave are replaced (issue 16): a worker that answers garbage, answers for
+"""Warm pairs that misbehave are replaced: a worker that answers garbage, answers for
 another run, hangs past the episode's wall-time limit or dies is stopped with its process tree
 and never used again; its episode is failed with the reason and the next one plays on a new
 pair. The worker here is a stand-in without ROS (``fake_warm_worker.py``), chosen by seed; the

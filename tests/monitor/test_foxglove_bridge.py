@@ -26,7 +26,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
 from bt_servicesim.monitor.live_server import LiveAddress, LiveServer
 from bt_servicesim.records.mcap import AREA_MARKERS_TOPIC, RECORDED_TOPICS, RecordedTopic
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 TOPICS = [topic for topic in RECORDED_TOPICS if topic.name in ("/tf", AREA_MARKERS_TOPIC)]
 WAIT_S = 30.0  # a bound on each wait, never a duration the test relies on

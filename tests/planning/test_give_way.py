@@ -28,7 +28,7 @@ from bt_servicesim.planning.give_way import (
 from bt_servicesim.planning.goals import ROBOT_CLEARANCE
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.rules import FOLLOW_GAP, PEOPLE_LANE_HALF_WIDTH, PEOPLE_LANE_LENGTH
-from tests.fakes import cells, fill, grid_message
+from tests.fakes.maps import cells, fill, grid_message
 
 CORRIDOR = (4.0, 5.6)
 DOOR = (9.45, 10.55)

@@ -22,16 +22,8 @@ from bt_servicesim.planning.guest_localisation import (
     locate_bystanders,
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
-from tests.fakes import (
-    GUEST,
-    RFID_RANGE,
-    cells,
-    check_approach,
-    drive,
-    fill,
-    grid_message,
-    open_room,
-)
+from tests.fakes.guest import GUEST, RFID_RANGE, check_approach, drive
+from tests.fakes.maps import cells, fill, grid_message, open_room
 
 
 def corridor() -> OccupancyGrid2D:

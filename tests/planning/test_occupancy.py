@@ -1,7 +1,7 @@
 """The occupancy model: message conventions, clearance, free-space queries, reachability, routes.
 
-Maps are small synthetic nav_msgs/OccupancyGrid messages (``tests.fakes.grid_message``), so every
-expected figure can be worked out by hand from the walls the test draws.
+Maps are small synthetic nav_msgs/OccupancyGrid messages (``tests.fakes.maps.grid_message``), so
+every expected figure can be worked out by hand from the walls the test draws.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from bt_servicesim.planning.occupancy import Cell, OccupancyGrid2D
-from tests.fakes import RESOLUTION, cells, fill, grid_message
+from tests.fakes.maps import RESOLUTION, cells, fill, grid_message
 
 
 def two_rooms(door_width: float) -> OccupancyGrid2D:

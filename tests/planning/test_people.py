@@ -12,7 +12,7 @@ import pytest
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
-from tests.fakes import costmap_of, grid_message
+from tests.fakes.maps import costmap_of, grid_message
 
 WIDTH, HEIGHT, RESOLUTION = 10.0, 6.0, 0.1
 

@@ -46,7 +46,7 @@ from bt_servicesim.records.mcap import (
 from bt_servicesim.records.tree_log import TickRecord
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.shared_subscription import shared_subscription
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 SIM_NS = 42_500_000_000
 

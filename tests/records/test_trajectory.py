@@ -37,7 +37,7 @@ from bt_servicesim.records.trajectory import (
     trace_from_recording,
 )
 from bt_servicesim.records.tree_log import TickRecord, TreeLog
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 CHECKPOINTS = ["go_to_pick_up", "pick_up_guest", "drop_off_guest", "return_to_start"]
 

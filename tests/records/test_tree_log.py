@@ -1,9 +1,9 @@
 """The snapshot log: what a run writes tick by tick, and what reading it back reconstructs.
 
 A small XML tree (a sequence, a subtree with a fallback, a decorator) of scripted leaves
-(``tests.fakes.RecordedRun``) runs to its end with the log attached as a post-tick handler; the
-live tree's statuses are captured at every tick and compared with what the log says about that
-tick.
+(``tests.fakes.recorded_run.RecordedRun``) runs to its end with the log attached as a post-tick
+handler; the live tree's statuses are captured at every tick and compared with what the log says
+about that tick.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from bt_servicesim.records.tree_log import (
     stable_key,
 )
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
-from tests.fakes import RecordedRun, errand_tree
+from tests.fakes.recorded_run import RecordedRun, errand_tree
 
 Status = py_trees.common.Status
 

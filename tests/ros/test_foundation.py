@@ -16,7 +16,9 @@ from rclpy.node import Node
 from servicesim_competition.srv import PickUpGuest, RoomInfo
 
 from bt_servicesim.ros.environment import apply_localhost_defaults, delete_participant
-from tests.fakes import FakeNavigator, FakeReferee, spin_until
+from tests.fakes.navigator import FakeNavigator
+from tests.fakes.referee import FakeReferee
+from tests.fakes.spinning import spin_until
 
 
 def referee_and_client(context: object, name: str, kind: Any,

@@ -4,14 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
-import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile
-from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.task import Future
-from servicesim_competition.msg import LockstepDone
 
-from bt_servicesim.ros.lockstep import DoneBytes, offered
+from bt_servicesim.ros.lockstep import offered
 from bt_servicesim.ros.node import ExecutiveNode, reliable
 from bt_servicesim.ros.traffic import Traffic
 
@@ -202,19 +199,3 @@ def test_the_join_waits_until_every_announced_topics_reader_has_matched_a_writer
     assert unmatched() == ["/odom"]
     readers[0].publishers = 1
     assert unmatched() == []
-
-
-@pytest.mark.parametrize(("client", "endpoints", "requests"), [
-    (0, [], []),
-    (7, ["/servicebot/cmd_vel", "/servicesim/room_info"], [1234, 2]),
-    (4_000_000_000, ["/a"], [2**64 - 1]),
-])
-def test_the_done_bytes_are_the_message_serialised_with_each_period(
-        client: int, endpoints: list[str], requests: list[int]) -> None:
-    done = DoneBytes(LockstepDone(client=client, endpoints=endpoints, requests=requests))
-    for period in (0, 1, 2345, 2**40 + 3, 2**64 - 1, 17):
-        expected = LockstepDone(client=client, period=period, endpoints=endpoints,
-                                requests=requests)
-        data = done.at(period)
-        assert data == serialize_message(expected), f"period {period}"
-        assert deserialize_message(data, LockstepDone) == expected

@@ -24,7 +24,7 @@ from std_msgs.msg import Int32
 
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.shared_subscription import SharedSubscription, shared_subscription
-from tests.fakes import spin_until, wait_for_subscription
+from tests.fakes.spinning import spin_until, wait_for_subscription
 
 N = TypeVar("N", bound=Node)
 RELIABLE_50 = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bt_servicesim.ros.sim_clock import SimStopwatch
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 
 def test_stopwatch_restarts_when_the_clock_jumps_back(sim_clock: SimTimeGraph) -> None:

@@ -15,7 +15,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
 from bt_servicesim.ros.sim_ticker import SimTicker
-from tests.fakes import clock_message, spin_until, wait_for_subscription
+from tests.fakes.spinning import clock_message, spin_until, wait_for_subscription
 
 
 class SimClockGraph:

@@ -177,7 +177,7 @@ def drift_at_6_s(*, task_at: float = 0.0) -> SimEngine:
     pick-up beside the guest."""
     sim = engine()
     sim.scenario = dataclasses.replace(sim.scenario, drift_times=(6.0, 500.0))
-    sim._drifts = list(sim.scenario.drift_times)
+    sim.task_rules._drifts = list(sim.scenario.drift_times)
     while sim.sim_time < task_at:
         sim.step()
     sim.new_task()

@@ -1,5 +1,6 @@
-"""The episode reset (issue 16): a running simulator starts a new episode as a start would, and
-refuses a bad request with the command's own one-line error, playing on with what it had.
+"""The episode reset, which warm pairs play on: a running simulator starts a new episode as a
+start would, and refuses a bad request with the command's own one-line error, playing on with
+what it had.
 
 Over real DDS against ``python -m servicesim_sim`` in a subprocess: the task the simulator
 plays is read back through the competition's own services (``new_task``, ``task_info``) and

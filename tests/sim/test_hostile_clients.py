@@ -1,5 +1,6 @@
-"""The simulator survives hostile and heavy clients (issue 13): every request is answered,
-nothing crashes it, and a goal it cannot execute is aborted the way Nav2 aborts it.
+"""The simulator survives hostile and heavy clients, so that no executive under test can bring
+it down: every request is answered, nothing crashes it, and a goal it cannot execute is aborted
+the way Nav2 aborts it.
 
 Over real DDS, a simulator node looping in a thread of the test process: goals at 1e308, inf
 and nan; goals in frames other than ``map``, with a zero quaternion; a burst of 200 goals and

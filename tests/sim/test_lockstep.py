@@ -113,6 +113,7 @@ def test_a_join_is_answered_once_every_reader_acknowledged_what_was_published(
     from std_msgs.msg import String
 
     from servicesim_sim.lockstep import server as lockstep
+    from servicesim_sim.lockstep.joining import JOIN_ACK_WAIT_S
 
     node = Node("acknowledged_join", context=ros_context)
     asked: list[tuple[str, float]] = []
@@ -125,14 +126,14 @@ def test_a_join_is_answered_once_every_reader_acknowledged_what_was_published(
     try:
         server = lockstep.LockstepServer(node)
         node.create_publisher(String, "/first", 10)
-        answer = server._on_join(LockstepJoin.Request(name="a"), LockstepJoin.Response())
+        answer = server.joining.answer(LockstepJoin.Request(name="a"), LockstepJoin.Response())
         assert sorted(topic for topic, _ in asked) == sorted(
             publisher.topic_name for publisher in node.publishers)
-        assert all(0.0 < timeout <= lockstep.JOIN_ACK_WAIT_S for _, timeout in asked)
+        assert all(0.0 < timeout <= JOIN_ACK_WAIT_S for _, timeout in asked)
         assert answer.client == 1
         asked.clear()
         node.create_publisher(String, "/stuck", 10)
-        answer = server._on_join(LockstepJoin.Request(name="b"), LockstepJoin.Response())
+        answer = server.joining.answer(LockstepJoin.Request(name="b"), LockstepJoin.Response())
         assert ("/stuck" in {topic for topic, _ in asked}) and answer.client == 2
     finally:
         node.destroy_node()

@@ -6,7 +6,9 @@ when the gate (:mod:`servicesim_sim.lockstep.gate`) admits it: one at a time, in
 order, each run to its first wait before the next starts. :class:`CountingActionServer` does
 the same for the navigation action's goal, cancel and result requests, which rclpy would
 answer as it takes them. With nobody joined every handler runs at once, ungated: a client that
-never joins (a ``ros2`` command, an executive that runs free) sees no difference.
+never joins (a ``ros2`` command, an executive that runs free) sees no difference. Clients join
+through :class:`~servicesim_sim.lockstep.joining.JoinService` and say they are done through
+:class:`~servicesim_sim.lockstep.dones.DoneInbox`.
 
 The protocol (join, period announcements, done messages) is described in
 ``docs/reference/simulator.md#lockstep``.
@@ -23,18 +25,16 @@ from typing import Any
 
 from rclpy.action import ActionServer
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.duration import Duration
-from rclpy.exceptions import InvalidHandle
-from rclpy.impl.implementation_singleton import rclpy_implementation
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from rclpy.task import Future
-from servicesim_competition.msg import LockstepDone, LockstepPeriod
-from servicesim_competition.srv import LockstepJoin
+from servicesim_competition.msg import LockstepPeriod
 
+from servicesim_sim.lockstep.dones import DoneInbox
 from servicesim_sim.lockstep.gate import PIPELINE_LAG, Admission, LockstepGate
-from servicesim_sim.lockstep.message import AnnouncementBytes, DoneReader
+from servicesim_sim.lockstep.joining import JoinService
+from servicesim_sim.lockstep.message import AnnouncementBytes
 from servicesim_sim.process.executor import DrainingExecutor
 
 __all__ = ["DONE_TOPIC", "JOIN_SERVICE", "PERIOD_TOPIC", "CountingActionServer",
@@ -48,8 +48,6 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           durability=DurabilityPolicy.VOLATILE)
 GATE_WAIT_S = 0.05
 """Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
-JOIN_ACK_WAIT_S = 1.0
-"""Wall seconds a join waits at most for every reader to acknowledge what was published."""
 LOOK_EVERY_PERIODS = 10
 """In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
 request; at least this often it looks for other work (a join, a request from outside)."""
@@ -82,7 +80,6 @@ class LockstepServer:
         """The endpoints the node answers on, announced from the start (with 0 answers): a
         client holds answers only on those, and passes on the answers of anyone else's."""
         self._announcements = AnnouncementBytes()
-        self._done_reader = DoneReader()
         self._last: bytes | None = None
         """The last announcement, serialised (:mod:`servicesim_sim.lockstep.message`)."""
         self.callback_group = ReentrantCallbackGroup()
@@ -90,11 +87,11 @@ class LockstepServer:
         must not keep the others from running, as one mutually exclusive group would -- the
         done message that opens the gate among them. The loop is one thread all the same."""
         self._announcer = node.create_publisher(LockstepPeriod, PERIOD_TOPIC, PROTOCOL_QOS)
-        node.create_service(LockstepJoin, JOIN_SERVICE, self._on_join,
-                            callback_group=self.callback_group)
-        self._dones = node.create_subscription(  # raw: DoneReader reads the bytes
-            LockstepDone, DONE_TOPIC, self._on_done, PROTOCOL_QOS, raw=True,
-            callback_group=self.callback_group)
+        self.joining = JoinService(node, gate=self.gate, service=JOIN_SERVICE,
+                                   announced=self.last_announcement,
+                                   callback_group=self.callback_group)
+        self.dones = DoneInbox(node, gate=self.gate, topic=DONE_TOPIC, qos=PROTOCOL_QOS,
+                               callback_group=self.callback_group)
         self._periods_unlooked = 0
 
     @property
@@ -187,17 +184,15 @@ class LockstepServer:
     def hold(self, executor: DrainingExecutor) -> None:
         """Until every joined client is done with the period, then serve its requests in order.
 
-        The done messages are taken here, straight from their subscription, and waited for on
-        a wait set of that subscription alone: handing each over to rclpy's executor (a wait
-        set of every entity, its callback bookkeeping, a look for more) cost the loop about as
-        much as the rest of the gate. The executor runs only when the gate lacks requests
-        (they must be taken to be served) and every :data:`LOOK_EVERY_PERIODS` periods.
+        The done messages are taken and waited for by :class:`DoneInbox`, without rclpy's
+        executor, which runs only when the gate lacks requests (they must be taken to be
+        served) and every :data:`LOOK_EVERY_PERIODS` periods.
         A client the gate waited on for too long is dropped, with one warning naming it.
         """
         self._periods_unlooked += 1
-        while self.gate.active and not self._take_dones():
+        while self.gate.active and not self.dones.take():
             if self.gate.lacks_done():
-                self._wait_for_done(executor, timeout_s=GATE_WAIT_S)
+                self.dones.wait(executor, timeout_s=GATE_WAIT_S)
             else:
                 self._periods_unlooked = 0
                 executor.wait_and_run(timeout_sec=GATE_WAIT_S)
@@ -215,34 +210,6 @@ class LockstepServer:
                 f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
                 f"{'running free' if not self.gate.active else 'going on with the rest'}")
 
-    def _take_dones(self) -> bool:
-        """Take the done messages waiting; whether the gate is open now."""
-        while True:
-            try:
-                with self._dones.handle:  # None once the queue is empty (rclpy's stub omits it)
-                    taken: tuple[bytes, Any] | None = self._dones.handle.take_message(
-                        LockstepDone, True)
-            except InvalidHandle:
-                return self.gate.is_open()
-            if taken is None:
-                return self.gate.is_open()
-            self._on_done(taken[0])
-
-    def _wait_for_done(self, executor: DrainingExecutor, *, timeout_s: float) -> None:
-        """Block until a done message waits, the context shuts down or ``timeout_s`` passed."""
-        guard = executor.shutting_down
-        context = self.node.context.handle
-        if context is None:
-            raise RuntimeError("lockstep: the simulator's context is destroyed")
-        with self._dones.handle, guard.handle, context:
-            wait_set = rclpy_implementation.WaitSet(1, 1, 0, 0, 0, 0, context)
-            try:
-                wait_set.add_subscription(self._dones.handle)
-                wait_set.add_guard_condition(guard.handle)
-                wait_set.wait(int(timeout_s * 1e9))
-            finally:
-                wait_set.destroy_when_not_in_use()
-
     def admit(self, executor: DrainingExecutor) -> None:
         """Serve the admitted requests one at a time, in the gate's order."""
         for admission in self.gate.due_admissions():
@@ -257,46 +224,6 @@ class LockstepServer:
             return LockstepPeriod(period=0)
         return deserialize_message(self._last, LockstepPeriod)
 
-    def _on_join(self, request: LockstepJoin.Request,
-                 response: LockstepJoin.Response) -> LockstepJoin.Response:
-        if not self._wait_for_acks(deadline=time.monotonic() + JOIN_ACK_WAIT_S):
-            self.node.get_logger().warning(
-                f"lockstep: a reader had not acknowledged everything published within "
-                f"{JOIN_ACK_WAIT_S:g} s of wall time; client {request.name!r} joins all the "
-                "same, and may count a message sent before its join as one sent after")
-        response.client = self.gate.join(request.name)
-        response.joined_at = self.last_announcement()
-        self.node.get_logger().info(
-            f"lockstep: client {request.name!r} joined at period {response.joined_at.period} "
-            f"(id {response.client})")
-        return response
-
-    def _wait_for_acks(self, *, deadline: float) -> bool:
-        """Until every reliable reader has acknowledged everything published so far (or the
-        deadline passed); whether all had.
-
-        Before a join is answered: a reader acknowledges a message once it holds it, and its
-        process queued the message's arrival then, so what was sent before the join is queued
-        in the client ahead of the answer (an executor takes its queue in order) instead of
-        possibly after it, where the client's short wait for quiet would have to catch it
-        (``bt_servicesim/ros/lockstep.py``, "JOIN_QUIET_S"). Acknowledgements take about a
-        millisecond here (0.4-41 ms in three joins).
-        """
-        for publisher in list(self.node.publishers):
-            left = deadline - time.monotonic()
-            if left <= 0.0 or not publisher.wait_for_all_acked(Duration(seconds=left)):
-                return False
-        return True
-
-    def _on_done(self, data: bytes) -> None:
-        """A done message, serialised (:class:`~servicesim_sim.lockstep.message.DoneReader`)."""
-        done = self._done_reader.read(data)
-        if done.leaving:
-            name = self.gate.leave(done.client)
-            if name is not None:
-                self.node.get_logger().info(f"lockstep: client {name!r} left")
-            return
-        self.gate.done(done.client, done.period, done.requests)
 
 
 def drain_completely(executor: DrainingExecutor) -> None:

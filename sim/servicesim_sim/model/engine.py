@@ -9,14 +9,11 @@ One :meth:`SimEngine.step` is ``dt`` sim seconds: the robot drives (navigation's
 the last ``cmd_vel``, which persists as with ``gazebo_ros_diff_drive``: there is no timeout),
 the guest follows, the crowd walks, the guest drifts at the scheduled world times or falls too
 far behind, the referee checks the checkpoints that depend on where things are (1 and 4), and
-contact and approximation penalties are booked from the start of the world.
+contact and approximation penalties are booked from the start of the world
+(:mod:`servicesim_sim.model.contacts`).
 
-The referee's services play the original's rules (``Checkpoint.cc``, ``CP_PickUp.cc``,
-``CP_DropOff.cc``, ``FollowActorPlugin.cc``): a pick-up or drop-off before its checkpoint
-started is a failed attempt (before ``new_task`` too); one after its checkpoint is done answers
-success with no penalty, and still acts on the guest (a pick-up within reach makes them follow
-again, a drop-off makes them stop); ``drift`` always answers true and arms a drift that fires
-once the guest follows and is more than 1.2 m from the robot.
+The referee's services and the checks of each step are the task's rules
+(:mod:`servicesim_sim.model.task_rules`).
 """
 
 from __future__ import annotations
@@ -27,14 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from servicesim_sim.model import referee as rules
 from servicesim_sim.model.camera import render_front_camera
+from servicesim_sim.model.contacts import PERSON_BODY_RADIUS, PenaltyChecker
 from servicesim_sim.model.guest import (
-    DRIFT_TIME_TOLERANCE,
-    LOST_DISTANCE,
-    STOP_DISTANCE,
     Guest,
-    GuestState,
 )
 from servicesim_sim.model.localisation import (
     IDENTITY,
@@ -50,19 +43,14 @@ from servicesim_sim.model.referee import Referee, RefereeReport
 from servicesim_sim.model.robot import Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
 from servicesim_sim.model.scenario import Scenario
+from servicesim_sim.model.task_rules import TaskRules
 from servicesim_sim.navigation.navigator import Navigator
 from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.world.files import OccupancyMap, PlacedWalker, WalkerRoute, World
 from servicesim_sim.world.footprint import CIRCUMSCRIBED_RADIUS
 
 PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
-ROBOT_NAME = "servicebot"
 RFID_RANGE_M = 2.0
-PICKUP_RANGE_M = 2.0
-PERSON_BODY_RADIUS = 0.25  # a person's collision box (0.44 x 0.60 m) as a disc
-PERSON_APPROXIMATION_M = 0.75  # ghost cylinder radius, centred on the base (servicebot.urdf)
-OBJECT_APPROXIMATION_M = 0.35  # ghost cylinder radius, centred on the base (servicebot.urdf)
-CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
 CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
 CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
 TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
@@ -103,7 +91,6 @@ class SimEngine:
                  navigation: NavigationParameters = SERVICEBOT) -> None:
         self.world, self.scenario, self.dt = world, scenario, dt
         self.sim_time = 0.0
-        self.task_started_at: float | None = None
         self.referee = Referee()
         walls = wall_clearance(world.map)
         task = scenario.task
@@ -120,6 +107,10 @@ class SimEngine:
                            idling_areas=world.idling_areas,
                            walker_patience_s=world.people.walker_patience_s,
                            routes=routes, placed=placed)
+        self.task_rules = TaskRules(referee=self.referee, guest=self.guest, robot=self.robot,
+                                    world=world, task=task, drift_times=scenario.drift_times)
+        self.penalty_checker = PenaltyChecker(robot=self.robot, guest=self.guest,
+                                             crowd=self.crowd, referee=self.referee)
         self._knobs = np.random.default_rng(scenario.knob_seed)
         difficulty = scenario.difficulty
         self.odometry = WheelOdometry(drift=difficulty.odom_drift,
@@ -141,11 +132,8 @@ class SimEngine:
         self._cmd_vel = (0.0, 0.0)
         self._nav_driving = False
         self._next_control = 0.0
-        self._drifts = list(scenario.drift_times)
-        self._drift_armed = False
         self._seen_revision = -1
         self._steps = 0
-        self._nobody_near_until = -math.inf
 
     def _walker_routes(self) -> tuple[tuple[WalkerRoute, ...], tuple[PlacedWalker, ...]]:
         """The world's walker loops unless the knob asks for random ones (none: random), and
@@ -173,84 +161,16 @@ class SimEngine:
         return self.referee.running
 
     def new_task(self) -> tuple[bool, str]:
-        if self.referee.started:
-            state = "is running" if self.referee.running else "has ended"
-            return False, f"a task {state}; one task per simulator run"
-        self.referee.start()
-        self.task_started_at = self.sim_time
-        self._check_area_checkpoints()
-        return True, "task started"
+        return self.task_rules.new_task(now=self.sim_time)
 
     def pickup(self, guest_name: str, robot_name: str) -> tuple[bool, str]:
-        referee = self.referee
-        if not referee.checkpoint_started(rules.PICK_UP_GUEST):
-            referee.failed_pickup()  # booked even before new_task; scored once it starts
-            return False, ("no task is running" if not referee.started
-                           else "checkpoint 1 (reach the pick-up area) is not done")
-        if referee.checkpoint_done[rules.PICK_UP_GUEST]:
-            return True, self._pick_up_again(guest_name, robot_name)
-        reason = self._pickup_refusal(guest_name, robot_name)
-        if reason:
-            referee.failed_pickup()
-            return False, reason
-        self.guest.start_following(self.robot.x, self.robot.y)
-        referee.reach(rules.PICK_UP_GUEST)
-        return True, f"{guest_name} follows {robot_name}"
-
-    def _pick_up_again(self, guest_name: str, robot_name: str) -> str:
-        """Checkpoint 2 is done: the answer is success whatever happens; the guest follows
-        (again) only if the names are right and the robot is within reach."""
-        if self._pickup_refusal(guest_name, robot_name) or self.guest.following:
-            return "checkpoint 2 is done; the guest's state is unchanged"
-        self.guest.start_following(self.robot.x, self.robot.y)
-        return f"checkpoint 2 is done; {guest_name} follows {robot_name} again"
-
-    def _pickup_refusal(self, guest_name: str, robot_name: str) -> str:
-        if robot_name != ROBOT_NAME:
-            return f"unknown robot {robot_name!r}"
-        if guest_name != self.guest.name:
-            return f"{guest_name!r} is not the guest"
-        distance = self.guest.distance_to(self.robot.x, self.robot.y)
-        if distance > PICKUP_RANGE_M:
-            return f"the guest is {distance:.2f} m away (more than {PICKUP_RANGE_M} m)"
-        return ""
+        return self.task_rules.pickup(guest_name, robot_name)
 
     def dropoff(self, guest_name: str) -> tuple[bool, str]:
-        referee = self.referee
-        if referee.checkpoint_done[rules.DROP_OFF_GUEST]:
-            if guest_name == self.guest.name and self.guest.following:
-                self.guest.stop_following(GuestState.DROPPED_OFF)
-            return True, "checkpoint 3 is done"
-        reason = self._dropoff_refusal(guest_name)
-        if reason:
-            referee.failed_dropoff()  # booked even before new_task; scored once it starts
-            return False, reason
-        self.guest.stop_following(GuestState.DROPPED_OFF)
-        referee.reach(rules.DROP_OFF_GUEST)
-        return True, f"{guest_name} dropped off in {self.scenario.task.drop_off}"
-
-    def _dropoff_refusal(self, guest_name: str) -> str:
-        if not self.referee.running:
-            return "no task is running"
-        if guest_name != self.guest.name:
-            return f"{guest_name!r} is not the guest"
-        if self.referee.current != rules.DROP_OFF_GUEST or not self.guest.following:
-            return "the guest is not following the robot"
-        box = self.world.areas[self.scenario.task.drop_off]
-        if not box.contains(self.guest.x, self.guest.y):
-            return (f"the guest at ({self.guest.x:.2f}, {self.guest.y:.2f}) is outside "
-                    f"{self.scenario.task.drop_off}")
-        return ""
+        return self.task_rules.dropoff(guest_name)
 
     def force_drift(self) -> tuple[bool, str]:
-        """The debug ``drift``: always true; the drift fires once the guest follows and is
-        more than 1.2 m from the robot (now, or after the next pick-up)."""
-        self._drift_armed = True
-        return True, "drift armed"
-
-    def _drift(self) -> None:
-        self.guest.stop_following(GuestState.DRIFTED)
-        self.referee.guest_stopped_following(too_fast=False)
+        return self.task_rules.force_drift()
 
     # ---------------------------------------------------------------- the robot
     def set_initial_pose(self, x: float, y: float, yaw: float) -> None:
@@ -363,9 +283,9 @@ class SimEngine:
         self.sim_time += dt
         self.referee.advance(dt)
         if self.referee.running:
-            self._check_area_checkpoints()
-        self._check_guest()
-        self._book_contacts(dt)
+            self.task_rules.check_areas()
+        self.task_rules.check_guest(now=self.sim_time)
+        self.penalty_checker.book(dt, now=self.sim_time)
 
     def _drive_command(self) -> tuple[float, float]:
         """Navigation's controller publishes on ``cmd_vel`` too: at 20 Hz while a goal runs, and
@@ -388,105 +308,6 @@ class SimEngine:
         robot that turns back towards them sees them and does not drive into them."""
         return [(person.x, person.y) for person in self.crowd.people] + [
             (self.guest.x, self.guest.y)]
-
-    def _check_area_checkpoints(self) -> None:
-        referee, areas = self.referee, self.world.areas
-        x, y = self.robot.x, self.robot.y
-        if (referee.current == rules.GO_TO_PICK_UP
-                and areas[self.scenario.task.pick_up].contains(x, y)):
-            referee.reach(rules.GO_TO_PICK_UP)
-        if (referee.current == rules.RETURN_TO_START
-                and areas[self.scenario.task.start_area].contains(x, y)):
-            referee.reach(rules.RETURN_TO_START)
-
-    def _check_guest(self) -> None:
-        """The original's order (``FollowActorPlugin.cc``): a guest more than 4 m behind stops
-        following ("too fast"); else a drift fires whatever the distance while a scheduled
-        world time is within 0.5 s (either side: a guest picked up again inside that second
-        drifts again, as the original keeps its times), or, when armed by the ``drift``
-        service, once the guest is more than 1.2 m from the robot. A scheduled drift whose
-        second passes with nobody following is skipped."""
-        guest = self.guest
-        while self._drifts and self.sim_time > self._drifts[0] + DRIFT_TIME_TOLERANCE:
-            self._drifts.pop(0)  # its second is over
-        due = bool(self._drifts) and self.sim_time >= self._drifts[0] - DRIFT_TIME_TOLERANCE
-        if not guest.following:
-            return
-        distance = guest.distance_to(self.robot.x, self.robot.y)
-        if distance > LOST_DISTANCE:
-            guest.stop_following(GuestState.LOST)
-            self.referee.guest_stopped_following(too_fast=True)
-        elif due or (self._drift_armed and distance > STOP_DISTANCE):
-            self._drift_armed = False
-            self._drift()
-
-    def _book_contacts(self, dt: float) -> None:
-        """Contact and approximation depths, as the original's ``PenaltyChecker`` took them.
-
-        Approximation: the depth of a ghost cylinder centred on the base (0.75 m for people,
-        0.35 m for objects) into each person's body and into the nearest wall. Contact: the
-        depth of the robot's 0.4 x 0.5 m body into each person's body and into walls and
-        furniture, as :mod:`servicesim_sim.world.footprint` measures them. Booked from the start of
-        the world.
-        """
-        robot = self.robot
-        clearance = robot.walls.at(robot.x, robot.y)  # centre to nearest wall
-        if (clearance >= OBJECT_APPROXIMATION_M and robot.wall_depth == 0.0
-                and not self._anyone_may_be_near()):
-            return  # nobody and nothing near: the common case, nothing to book
-        xs, ys = self._person_positions()
-        distances = np.hypot(xs - robot.x, ys - robot.y)
-        # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
-        # constant minus a distance), without np.clip's wrappers, every step someone is near;
-        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
-        touching = robot.footprint.person_depths(robot.pose, xs, ys, radius=PERSON_BODY_RADIUS)
-        causes = self._person_causes()
-        self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
-                             object_depth=robot.wall_depth, dt=dt,
-                             people=list(zip(causes, touching.tolist(), strict=True)))
-        approach = np.minimum(
-            np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
-            PERSON_APPROXIMATION_M)
-        self.referee.approximation(
-            person_depth=float(np.add.reduce(approach, axis=None)),
-            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
-            dt=dt, people=list(zip(causes, approach.tolist(), strict=True)))
-
-    def _person_causes(self) -> list[str]:
-        """Each person's cause key for the referee's books by cause (``ROLE/NAME``), in
-        :meth:`_person_distances`' order."""
-        return [*(f"{person.role}/{person.name}" for person in self.crowd.people),
-                f"guest/{self.guest.name}"]
-
-    def _anyone_may_be_near(self) -> bool:
-        """Whether someone's body may be within the people's ghost cylinder.
-
-        When the nearest person is farther, nobody can come within it before the gap closes
-        at :data:`CLOSING_SPEED_BOUND`, so the people need not be looked at again until then.
-        """
-        if self.sim_time < self._nobody_near_until:
-            return False
-        gap = self._nearest_person_distance() - (PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS)
-        if gap < 0.0:
-            return True
-        self._nobody_near_until = self.sim_time + gap / CLOSING_SPEED_BOUND
-        return False
-
-    def _nearest_person_distance(self) -> float:
-        """Distance from the robot's origin to the nearest person's origin (plain floats:
-        this runs every step)."""
-        x, y = self.robot.x, self.robot.y
-        nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
-                       for person in self.crowd.people),
-                      default=math.inf)
-        nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
-        return math.sqrt(nearest)
-
-    def _person_positions(self) -> tuple[np.ndarray, np.ndarray]:
-        """Everyone's origin, the guest last."""
-        xs = [person.x for person in self.crowd.people] + [self.guest.x]
-        ys = [person.y for person in self.crowd.people] + [self.guest.y]
-        return np.asarray(xs), np.asarray(ys)
 
     # ------------------------------------------------------------------ sensors
     def rfid_names(self) -> list[str] | None:

@@ -2,8 +2,8 @@
 lidar and the RFID reader, as the original robot's plugins publish them.
 
 Design intent: these go out every I/O period (0.1 sim s) and only a few numbers in them
-change, so the high-rate ones are serialised by hand (:mod:`servicesim_sim.wire.pose_messages`,
-:mod:`servicesim_sim.wire.actor_messages`); the lidar is built only while someone listens.
+change, so the high-rate ones are serialised by hand
+(:mod:`servicesim_sim.wire.pose_messages`); the lidar is built only while someone listens.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.localisation import Pose
 from servicesim_sim.model.scan import LIDAR_HEIGHT_M, LIDAR_OFFSET
 from servicesim_sim.ros.publishing import LATCHED, Publishing, stamp, stamp_ns
-from servicesim_sim.wire.actor_messages import ActorNamesBytes
 from servicesim_sim.wire.pose_messages import (
     ClockBytes,
     Link,
@@ -65,7 +64,6 @@ class RobotTopics:
         self._tf_localised = TransformsBytes([odom_link, Link(parent=MAP_FRAME,
                                                               child=ODOM_FRAME)])
         self._scan_next = 0.0
-        self._rfid_bytes = ActorNamesBytes()
 
     def send_static_transforms(self) -> None:
         """The robot's fixed frames on ``/tf_static`` (latched): base, body, lidar."""
@@ -83,7 +81,7 @@ class RobotTopics:
         self._publish_scan()
         names = self.engine.rfid_names()
         if names is not None:  # silent when nobody is near, or when a reading is dropped
-            self._send(self._rfid, self._rfid_bytes.encode(names))
+            self._send(self._rfid, ActorNames(actor_names=names))
 
     def repeat_clock(self) -> None:
         """The last clock message, again (for subscribers that came late)."""

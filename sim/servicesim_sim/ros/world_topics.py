@@ -12,14 +12,14 @@ from __future__ import annotations
 
 import array
 
+from geometry_msgs.msg import Point
 from nav_msgs.msg import OccupancyGrid
 from servicesim_competition.msg import ActorStates, RefereeState, Score
 
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.ros.marker_topics import MarkerTopics
 from servicesim_sim.ros.penalty_causes import PenaltyCausesTopic
-from servicesim_sim.ros.publishing import LATCHED, Publishing, stamp, stamp_ns
-from servicesim_sim.wire.actor_messages import ActorStatesBytes
+from servicesim_sim.ros.publishing import LATCHED, Publishing, stamp
 from servicesim_sim.wire.costmap_message import OccupancyValues, serialised_occupancy_grid
 from servicesim_sim.world.files import World
 
@@ -47,7 +47,6 @@ class WorldTopics:
                                                   send=send, latched=LATCHED)
         self._score_message = Score()  # refilled: publish serialises at the call
         self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
-        self._actor_states_bytes = ActorStatesBytes()
 
     def send_map(self) -> None:
         self._send(self._map, self._map_message())
@@ -126,8 +125,12 @@ class WorldTopics:
         state.approximation = float(penalties["approximation"])
         return state
 
-    def _actor_states(self) -> bytes:
-        """Everyone's place, serialised (:mod:`servicesim_sim.wire.actor_messages`)."""
-        return self._actor_states_bytes.encode(
-            stamp=divmod(stamp_ns(self.engine.sim_time), 1_000_000_000),
-            people=self.engine.people_states(), guest_state=self.engine.guest_state())
+    def _actor_states(self) -> ActorStates:
+        """Everyone's place."""
+        message = ActorStates(guest_state=self.engine.guest_state())
+        message.stamp = stamp(self.engine.sim_time)
+        for name, role, x, y in self.engine.people_states():
+            message.names.append(name)
+            message.roles.append(role)
+            message.positions.append(Point(x=float(x), y=float(y)))
+        return message

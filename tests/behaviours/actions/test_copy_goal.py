@@ -8,7 +8,7 @@ from py_trees.blackboard import Blackboard
 from bt_servicesim.behaviours.actions.copy_goal import CopyGoal
 from bt_servicesim.behaviours.node import kind_of
 from bt_servicesim.planning.geometry import Pose2D
-from tests.fakes import ready
+from tests.fakes.leaves import ready
 
 
 def copier() -> CopyGoal:

@@ -35,7 +35,9 @@ from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.guest_localisation import RfidHistory
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.tree.loading import DEFAULT_TREE
-from tests.fakes import cells, costmap_of, drive, fill, grid_message, open_room, wire
+from tests.fakes.guest import drive
+from tests.fakes.leaves import wire
+from tests.fakes.maps import cells, costmap_of, fill, grid_message, open_room
 from tests.planning.test_give_way import ROBOT, office
 
 Status = py_trees.common.Status

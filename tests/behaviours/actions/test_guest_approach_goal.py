@@ -1,8 +1,8 @@
 """GuestApproachGoal: a goal near where the RFID history says the guest is.
 
 A robot drives a path on a small map, hearing the guest within RFID range as the simulator's
-sensor does (``tests.fakes.drive``); the goal must put it within pick-up reach of the true guest
-without crowding them, on free space it can reach.
+sensor does (``tests.fakes.guest.drive``); the goal must put it within pick-up reach of the true
+guest without crowding them, on free space it can reach.
 """
 
 from __future__ import annotations
@@ -13,7 +13,9 @@ from py_trees.blackboard import Blackboard
 from bt_servicesim.behaviours.actions.guest_approach_goal import GuestApproachGoal
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.guest_localisation import RfidHistory
-from tests.fakes import GUEST, check_approach, drive, open_room, wire
+from tests.fakes.guest import GUEST, check_approach, drive
+from tests.fakes.leaves import wire
+from tests.fakes.maps import open_room
 from tests.mission_script import ManualClock
 
 Status = py_trees.common.Status

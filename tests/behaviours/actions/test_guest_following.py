@@ -11,7 +11,9 @@ from py_trees.blackboard import Blackboard
 
 from bt_servicesim.behaviours.actions.guest_following import GuestFollowing
 from bt_servicesim.planning.geometry import Pose2D
-from tests.fakes import GUEST, SensorWorld, ready
+from tests.fakes.graphs import SensorWorld
+from tests.fakes.guest import GUEST
+from tests.fakes.leaves import ready
 
 Status = py_trees.common.Status
 

@@ -6,7 +6,8 @@ import py_trees
 
 from bt_servicesim.behaviours.actions.guest_steadily_in_range import GuestSteadilyInRange
 from bt_servicesim.planning.guest_localisation import RfidHistory, RfidReading
-from tests.fakes import GUEST, RFID_PERIOD, wire
+from tests.fakes.guest import GUEST, RFID_PERIOD
+from tests.fakes.leaves import wire
 from tests.mission_script import ManualClock
 
 Status = py_trees.common.Status

@@ -18,7 +18,8 @@ from tf2_msgs.msg import TFMessage
 from bt_servicesim.behaviours.actions.localised_pose import LocalisedPoseToBlackboard
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.ros.messages import pose_to_msg
-from tests.fakes import SensorWorld, ready
+from tests.fakes.graphs import SensorWorld
+from tests.fakes.leaves import ready
 
 Status = py_trees.common.Status
 SPAWN = Pose2D(10.975, 3.75, math.pi)  # the shipped start pose: far from the origin, facing west

@@ -22,7 +22,9 @@ from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from servicesim_sim.model.camera import render_front_camera
 from servicesim_sim.world.files import OccupancyMap
-from tests.fakes import SensorWorld, costmap_of, wire
+from tests.fakes.graphs import SensorWorld
+from tests.fakes.leaves import wire
+from tests.fakes.maps import costmap_of
 
 Status = py_trees.common.Status
 GUEST = "human_20843"

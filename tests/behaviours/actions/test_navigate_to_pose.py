@@ -18,7 +18,11 @@ from py_trees.blackboard import Blackboard
 from bt_servicesim.behaviours.actions.navigate_to_pose import NavigateToPose
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.ros.messages import pose_from_msg
-from tests.fakes import ExecutiveGraph, FakeNavigator, ServerThread, ready, unique_name
+from tests.fakes.graphs import ExecutiveGraph
+from tests.fakes.leaves import ready
+from tests.fakes.navigator import FakeNavigator
+from tests.fakes.servers import ServerThread
+from tests.fakes.spinning import unique_name
 
 Status = py_trees.common.Status
 Result = NavigateToPoseAction.Result

@@ -13,7 +13,8 @@ from bt_servicesim.behaviours.actions.publish_initial_pose import PublishInitial
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.ros.initial_pose import INITIAL_POSE_QOS
 from bt_servicesim.ros.messages import pose_from_msg
-from tests.fakes import ready, spin_until
+from tests.fakes.leaves import ready
+from tests.fakes.spinning import spin_until
 
 Status = py_trees.common.Status
 

@@ -7,7 +7,8 @@ from py_trees.blackboard import Blackboard
 
 from bt_servicesim.behaviours.actions.record_rfid_readings import RecordRfidReadings
 from bt_servicesim.planning.geometry import Pose2D
-from tests.fakes import GUEST, wire
+from tests.fakes.guest import GUEST
+from tests.fakes.leaves import wire
 from tests.mission_script import ManualClock
 
 Status = py_trees.common.Status

@@ -9,7 +9,8 @@ from py_trees.blackboard import Blackboard
 from bt_servicesim.behaviours.actions.robot_state_ready import RobotStateReady
 from bt_servicesim.behaviours.node import kind_of
 from bt_servicesim.planning.geometry import Pose2D
-from tests.fakes import open_room, ready
+from tests.fakes.leaves import ready
+from tests.fakes.maps import open_room
 
 Status = py_trees.common.Status
 

@@ -27,7 +27,9 @@ from bt_servicesim.behaviours.actions.room_info import RoomInfo
 from bt_servicesim.behaviours.actions.service_call import ServiceCall
 from bt_servicesim.behaviours.actions.task import NewTask, TaskInfo
 from bt_servicesim.planning.geometry import Pose2D
-from tests.fakes import ROOMS, ExecutiveGraph, FakeReferee, ready
+from tests.fakes.graphs import ExecutiveGraph
+from tests.fakes.leaves import ready
+from tests.fakes.referee import ROOMS, FakeReferee
 
 Status = py_trees.common.Status
 

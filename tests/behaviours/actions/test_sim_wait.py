@@ -8,7 +8,7 @@ import py_trees
 import pytest
 
 from bt_servicesim.behaviours.actions.sim_wait import SimWait
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 Status = py_trees.common.Status
 

@@ -24,7 +24,9 @@ from bt_servicesim.behaviours.actions.topic_readers import (
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D
-from tests.fakes import GUEST, SensorWorld, ready
+from tests.fakes.graphs import SensorWorld
+from tests.fakes.guest import GUEST
+from tests.fakes.leaves import ready
 
 Status = py_trees.common.Status
 

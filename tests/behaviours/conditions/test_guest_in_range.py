@@ -8,7 +8,8 @@ from py_trees.blackboard import Blackboard
 
 from bt_servicesim.behaviours.conditions.guest_in_range import GuestInRange
 from bt_servicesim.behaviours.node import ConditionNode, kind_of
-from tests.fakes import GUEST, ready
+from tests.fakes.guest import GUEST
+from tests.fakes.leaves import ready
 
 Status = py_trees.common.Status
 

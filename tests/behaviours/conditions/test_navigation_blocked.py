@@ -14,7 +14,7 @@ from bt_servicesim.behaviours.conditions.navigation_blocked import (
     NavigationBlocked,
 )
 from bt_servicesim.behaviours.node import ConditionNode, kind_of
-from tests.fakes import wire
+from tests.fakes.leaves import wire
 
 Status = py_trees.common.Status
 

@@ -13,7 +13,7 @@ from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from bt_servicesim.behaviours.conditions.robot_in_area import RobotInArea
 from bt_servicesim.behaviours.node import ConditionNode, kind_of
 from bt_servicesim.planning.geometry import Box, Pose2D
-from tests.fakes import wire
+from tests.fakes.leaves import wire
 
 Status = py_trees.common.Status
 AREA = Box(-1.5, 0.0, 1.5, 2.7)

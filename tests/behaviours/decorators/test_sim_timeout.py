@@ -5,7 +5,7 @@ from __future__ import annotations
 import py_trees
 
 from bt_servicesim.behaviours.decorators.sim_timeout import SimTimeout
-from tests.fakes import SimTimeGraph
+from tests.fakes.graphs import SimTimeGraph
 
 Status = py_trees.common.Status
 

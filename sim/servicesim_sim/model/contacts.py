@@ -1,0 +1,101 @@
+"""Contact and approximation, booked every physics step as the original's ``PenaltyChecker``
+takes them, with no ROS in it.
+
+Approximation: the depth of a ghost cylinder centred on the robot's base (0.75 m for people,
+0.35 m for objects) into each person's body and into the nearest wall. Contact: the depth of
+the robot's 0.4 x 0.5 m body into each person's body and into walls and furniture, as
+:mod:`servicesim_sim.world.footprint` measures them. Both are booked from the start of the world,
+by cause (``ROLE/NAME`` for a person), in the referee's books.
+
+Design intent: most steps nobody is near, so :class:`PenaltyChecker` looks at the people again
+only once the nearest of them could have closed the gap at :data:`CLOSING_SPEED_BOUND`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from servicesim_sim.model.guest import Guest
+from servicesim_sim.model.people import Crowd
+from servicesim_sim.model.referee import Referee
+from servicesim_sim.model.robot import Robot
+
+__all__ = ["CLOSING_SPEED_BOUND", "OBJECT_APPROXIMATION_M", "PERSON_APPROXIMATION_M",
+           "PERSON_BODY_RADIUS", "PenaltyChecker"]
+
+PERSON_BODY_RADIUS = 0.25  # a person's collision box (0.44 x 0.60 m) as a disc
+PERSON_APPROXIMATION_M = 0.75  # ghost cylinder radius, centred on the base (servicebot.urdf)
+OBJECT_APPROXIMATION_M = 0.35  # ghost cylinder radius, centred on the base (servicebot.urdf)
+CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
+
+
+class PenaltyChecker:
+    """Books ``robot``'s contact and approximation with ``crowd``, ``guest`` and the walls into
+    ``referee``."""
+
+    def __init__(self, *, robot: Robot, guest: Guest, crowd: Crowd, referee: Referee) -> None:
+        self.robot, self.guest, self.crowd, self.referee = robot, guest, crowd, referee
+        self._nobody_near_until = -math.inf
+
+    def book(self, dt: float, *, now: float) -> None:
+        """The step of ``dt`` sim seconds ending at sim time ``now``."""
+        robot = self.robot
+        clearance = robot.walls.at(robot.x, robot.y)  # centre to nearest wall
+        if (clearance >= OBJECT_APPROXIMATION_M and robot.wall_depth == 0.0
+                and not self._anyone_may_be_near(now)):
+            return  # nobody and nothing near: the common case, nothing to book
+        xs, ys = self._person_positions()
+        distances = np.hypot(xs - robot.x, ys - robot.y)
+        # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
+        # constant minus a distance), without np.clip's wrappers, every step someone is near;
+        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
+        touching = robot.footprint.person_depths(robot.pose, xs, ys, radius=PERSON_BODY_RADIUS)
+        causes = self._person_causes()
+        self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
+                             object_depth=robot.wall_depth, dt=dt,
+                             people=list(zip(causes, touching.tolist(), strict=True)))
+        approach = np.minimum(
+            np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
+            PERSON_APPROXIMATION_M)
+        self.referee.approximation(
+            person_depth=float(np.add.reduce(approach, axis=None)),
+            object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
+            dt=dt, people=list(zip(causes, approach.tolist(), strict=True)))
+
+    def _person_causes(self) -> list[str]:
+        """Each person's cause key for the referee's books by cause (``ROLE/NAME``), in
+        :meth:`_person_positions`' order."""
+        return [*(f"{person.role}/{person.name}" for person in self.crowd.people),
+                f"guest/{self.guest.name}"]
+
+    def _anyone_may_be_near(self, now: float) -> bool:
+        """Whether someone's body may be within the people's ghost cylinder.
+
+        When the nearest person is farther, nobody can come within it before the gap closes
+        at :data:`CLOSING_SPEED_BOUND`, so the people need not be looked at again until then.
+        """
+        if now < self._nobody_near_until:
+            return False
+        gap = self._nearest_person_distance() - (PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS)
+        if gap < 0.0:
+            return True
+        self._nobody_near_until = now + gap / CLOSING_SPEED_BOUND
+        return False
+
+    def _nearest_person_distance(self) -> float:
+        """Distance from the robot's origin to the nearest person's origin (plain floats:
+        this runs every step)."""
+        x, y = self.robot.x, self.robot.y
+        nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
+                       for person in self.crowd.people),
+                      default=math.inf)
+        nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
+        return math.sqrt(nearest)
+
+    def _person_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """Everyone's origin, the guest last."""
+        xs = [person.x for person in self.crowd.people] + [self.guest.x]
+        ys = [person.y for person in self.crowd.people] + [self.guest.y]
+        return np.asarray(xs), np.asarray(ys)
