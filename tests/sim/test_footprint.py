@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from servicesim_sim.model.engine import SimEngine
+from servicesim_sim.model.people import IDLER, Person
 from servicesim_sim.model.referee import CONTACT_REPORT_RATE_HZ, OBJECT_CONTACT_WEIGHT
 from servicesim_sim.model.scenario import make_scenario
 from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
@@ -106,4 +107,46 @@ def test_navigation_turns_the_box_clear_of_a_wall_it_stands_beside() -> None:
         if sim.navigation_state(ticket).status != "running":
             break
     assert sim.navigation_state(ticket).status == "succeeded"
+    assert sim.referee.penalties.contact == 0.0
+
+
+def navigate(sim: SimEngine, goal: tuple[float, float, float], *, seconds: float) -> str:
+    """Run navigation to ``goal`` until it ends or ``seconds`` pass; its last status."""
+    ticket = sim.navigate(*goal)
+    for _ in range(round(seconds / sim.dt)):
+        sim.step()
+        if sim.navigation_state(ticket).status != "running":
+            break
+    return sim.navigation_state(ticket).status
+
+
+def person_beside(sim: SimEngine, *, across: float) -> Person:
+    """Someone standing ``across`` metres to the robot's left (right when negative), 0.56 m
+    from its centre: clear of its side, but within reach of its corners (0.32 m) and their
+    0.25 m body as it turns."""
+    x, y, _ = sim.robot.pose
+    person = Person(name="human_00001", role=IDLER, x=x, y=y + across, yaw=0.0)
+    sim.crowd.people.append(person)
+    return person
+
+
+@pytest.mark.parametrize("across", [0.56, -0.56])
+def test_navigation_sets_off_without_sweeping_a_corner_into_a_person_beside_it(
+        across: float) -> None:
+    # the goal lies behind: a turn on the spot towards the person's side sweeps a corner into
+    # them, as when the robot sets off again beside a walker who stopped for it
+    sim = robot_at((WALL_X, 2.0, 0.0))
+    person = person_beside(sim, across=across)
+    assert navigate(sim, (WALL_X - 1.5, 2.0, math.pi), seconds=40.0) == "succeeded"
+    assert sim.referee.penalties.contact == 0.0
+    assert any(math.dist((mark.x, mark.y), (person.x, person.y)) < 0.05
+               for mark in sim.navigator.costmap.marks)  # navigation knew of them
+
+
+def test_navigation_turns_to_the_goal_yaw_clear_of_a_person_beside_it() -> None:
+    # at the goal already, facing the wrong way: the turn to the goal's yaw sweeps a corner
+    # into the person standing beside the robot unless the box is moved clear first
+    sim = robot_at((WALL_X, 2.0, 0.0))
+    person_beside(sim, across=0.56)
+    assert navigate(sim, (WALL_X, 2.0, math.pi), seconds=40.0) == "succeeded"
     assert sim.referee.penalties.contact == 0.0

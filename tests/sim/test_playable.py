@@ -18,10 +18,10 @@ import pytest
 from PIL import Image
 
 from servicesim_sim.model.engine import SimEngine
-from servicesim_sim.model.people import IDLER
+from servicesim_sim.model.people import IDLER, WALKER, WALKER_STOP_DISTANCE, WalkerStartError
 from servicesim_sim.model.playable import playable_engine, unreachable_areas
-from servicesim_sim.model.scenario import ScenarioError, make_scenario
-from servicesim_sim.world.files import World, load_world
+from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
+from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 
 RESOLUTION = 0.05
 DOORWAY = (4.05, 1.5)
@@ -97,8 +97,6 @@ def test_a_draw_that_cannot_be_played_is_drawn_again_the_same_way_every_time(
 
 
 def test_the_office_plays_its_shipped_task_and_seeds_at_their_first_draw() -> None:
-    from servicesim_sim.world.files import DEFAULT_WORLD
-
     office: World = load_world(DEFAULT_WORLD)
     for seed in (None, 0, 1):
         engine = playable_engine(office, seed=seed)
@@ -116,3 +114,26 @@ def test_a_fixed_task_the_walls_cut_off_is_refused_in_one_line(tmp_path: Path) -
     assert result.returncode == 2 and result.stdout == ""
     (line,) = result.stderr.strip().splitlines()
     assert "the task cannot be played" in line and "Closet" in line
+
+
+def test_a_seed_whose_walkers_find_no_start_is_drawn_again_the_same_way_every_time() -> None:
+    """Seeds 59 and 41 (hard) draw a guest and a robot start beside the short 'private_a'
+    loop, whose other waypoints the walkers drawn onto it already start at: the first draw
+    has no free start for a walker, so the seed plays its next draw, every time."""
+    office: World = load_world(DEFAULT_WORLD)
+    for seed, difficulty in ((59, Difficulty.default()), (41, Difficulty.hard())):
+        first = make_scenario(office, seed=seed, difficulty=difficulty)
+        with pytest.raises(WalkerStartError, match="'private_a'"):
+            SimEngine(world=office, scenario=first)
+        engine = playable_engine(office, seed=seed, difficulty=difficulty)
+        assert engine.scenario == make_scenario(office, seed=seed, difficulty=difficulty,
+                                                draw=1)
+        assert unreachable_areas(engine) == []
+        task = engine.scenario.task
+        walkers = [(x, y) for _, role, x, y in engine.crowd.states() if role == WALKER]
+        assert len(walkers) == office.people.walkers
+        for x, y in walkers:  # none starts within a stop distance of the robot or the guest
+            assert min(np.hypot(x - task.start_x, y - task.start_y),
+                       np.hypot(x - task.guest_x, y - task.guest_y)) >= WALKER_STOP_DISTANCE
+        again = playable_engine(office, seed=seed, difficulty=difficulty)
+        assert again.crowd.states() == engine.crowd.states()

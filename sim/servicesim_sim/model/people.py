@@ -91,6 +91,12 @@ class CrowdError(ValueError):
     """The map has no room for the people the world asks for; the message is one line."""
 
 
+class WalkerStartError(CrowdError):
+    """A walker's drawn route has no waypoint left to start at (the others' starts and the
+    task's bodies take them all): the original's generator failed so too, and the draw is
+    made again (:mod:`servicesim_sim.model.playable`)."""
+
+
 @dataclass
 class Person:
     """One walker or idler; ``yaw`` is the way they face (a walker: the way they walk)."""
@@ -635,7 +641,8 @@ def _free_start(route: WalkerRoute, draw: int, *, taken: set[tuple[float, float]
                 and all(math.hypot(x - ox, y - oy) >= WALKER_STOP_DISTANCE + radius
                         for ox, oy, radius in occupied)):
             return first
-    raise CrowdError(f"walker route {route.name!r}: no waypoint is free to start a walker at")
+    raise WalkerStartError(f"walker route {route.name!r}: no waypoint is free to start a "
+                           f"walker at")
 
 
 def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> list[str]:

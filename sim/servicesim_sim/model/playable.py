@@ -6,7 +6,10 @@ The original's idlers stand in curated idling areas, clear of every target; a wo
 behind it cannot be played: the robot fails checkpoint 1 for the whole run. So a task the
 simulator draws is checked once the people are placed, and drawn again from the seed when it
 cannot be played (deterministically: the n-th draw of a seed is always the same); a world's
-fixed task that the walls alone make unplayable is refused, in one line.
+fixed task that the walls alone make unplayable is refused, in one line. A draw whose walkers
+find no free waypoint to start at (a short loop whose other waypoints the drawn guest and
+robot start crowd, :class:`~servicesim_sim.model.people.WalkerStartError`) is drawn again
+alike: the original's world generator failed there and was run again.
 
 The check is made on a costmap of its own (:data:`PASSAGE`): the static layer with each idler
 marked as the lidar would mark them, cells below inscribed cost passable, and the areas reached
@@ -24,7 +27,7 @@ import numpy as np
 from scipy import ndimage
 
 from servicesim_sim.model.engine import SimEngine
-from servicesim_sim.model.people import IDLER
+from servicesim_sim.model.people import IDLER, WalkerStartError
 from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
 from servicesim_sim.navigation.costmap import INSCRIBED, Costmap
 from servicesim_sim.navigation.parameters import (
@@ -96,9 +99,14 @@ def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | 
     """The engine of the seed's first playable draw (without a seed: the world's fixed task,
     its people drawn again while idlers cut it off), its robot navigating with
     ``navigation``, or :class:`ScenarioError` saying why there is none."""
+    crowded: WalkerStartError | None = None
     for draw in range(MAX_DRAWS):
         scenario = make_scenario(world, seed=seed, difficulty=difficulty, draw=draw)
-        engine = SimEngine(world=world, scenario=scenario, navigation=navigation)
+        try:
+            engine = SimEngine(world=world, scenario=scenario, navigation=navigation)
+        except WalkerStartError as error:
+            crowded = error
+            continue
         if not unreachable_areas(engine):
             return engine
         walled_off = unreachable_areas(engine, with_idlers=False)
@@ -106,5 +114,8 @@ def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | 
             raise ScenarioError(f"{world.path}: the task cannot be played: navigation finds no "
                                 f"way from the robot's start to {', '.join(walled_off)}")
     what = f"seed {seed}" if seed is not None else "the fixed task"
+    if crowded is not None:
+        raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws "
+                            f"(the last: {crowded})")
     raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (idlers "
                         f"or walls cut the robot off from an area of every one)")

@@ -22,6 +22,11 @@ Design intent:
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
   other time. Each wait is a recovery. Blocked for 20 s in all, navigation aborts.
+* Every command is checked for the robot's 0.4 x 0.5 m box 0.15 and 0.3 s ahead, as
+  move_base's local planner checked the footprint of each trajectory against its costmap: the
+  box must keep 1 cm off walls and off the bodies of the people marked in the costmap (or come
+  no nearer than it is), else the nearest sampled twist that does is taken, else it stops. So
+  the corners do not sweep into a person beside the robot as it turns or sets off.
 * A robot that has not moved 0.25 m in 10 s clears the costmap, backs up 0.15 m when the
   costmap has room behind it, and replans (a recovery); after 20 s without progress navigation
   aborts.
@@ -112,7 +117,8 @@ class Tuning:
     backup_speed: float = 0.15
     backup_time: float = 1.0
     body_horizon: float = 0.3  # s: a command is checked for the body this far ahead ...
-    body_margin: float = 0.01  # m: ... to keep its outline this far off walls
+    body_margin: float = 0.01  # m: ... to keep its outline this far off walls and people,
+    person_body: float = 0.25  # m: a marked person's body as the lidar outlines it
 
 
 class PolylinePath:
@@ -226,12 +232,17 @@ class Body(Protocol):
         """Metres between the body at ``pose`` and the nearest wall (see Footprint)."""
         ...
 
+    def gaps_to(self, pose: Pose, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Signed metres between the body at ``pose`` and each point (see Footprint)."""
+        ...
+
 
 BODY_SAMPLES: tuple[Twist, ...] = (
     *((v, w) for v in (0.3, 0.15) for w in (1.0, 0.5, 0.0, -0.5, -1.0)),
     (0.0, 1.0), (0.0, 0.5), (0.0, -0.5), (0.0, -1.0), (-0.1, 0.0), (-0.1, 0.5), (-0.1, -0.5))
 """The twists tried, as a sampling local planner would, when the follower's own would bring
-the body against a wall: forward arcs, turns on the spot, backing off."""
+the body against a wall or a marked person: forward arcs, turns on the spot, backing off."""
+Clearances = tuple[float, float]  # metres from the body to walls, and to marked people
 
 
 def arc_end(pose: Pose, twist: Twist, seconds: float) -> Pose:
@@ -323,34 +334,51 @@ class Navigator:
 
     def command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
         """The (v, w) for this step; observes people first, stops unless a goal is running.
-        A command that would bring the body against a wall is changed for one that does not."""
+        A command that would bring the body against a wall or a person the costmap holds is
+        changed for one that does not."""
         twist = self._command(pose=pose, people=people, now=now)
         return self._keeping_the_body_clear(pose, twist)
 
     def _keeping_the_body_clear(self, pose: Pose, twist: Twist) -> Twist:
-        """``twist`` if it keeps the body's outline :attr:`Tuning.body_margin` off walls over
+        """``twist`` if it keeps the body's outline :attr:`Tuning.body_margin` off walls and
+        off the bodies (:attr:`Tuning.person_body`) of the people marked in the costmap over
         the next :attr:`Tuning.body_horizon` (or no nearer than now), else the sampled twist
         nearest it that does (turn first, then speed), else stop: the footprint check
-        move_base's local planner made of every trajectory it sampled."""
+        move_base's local planner made of every trajectory it sampled against its costmap,
+        where the lidar's hits on people are obstacles as walls are."""
         if self.body is None or twist == STOP or self._body_keeps_clear(pose, twist, None):
             return twist
-        now = self.body.clearance(pose, beyond=self.tuning.body_margin)
+        now = self._clearances(pose)
         options = sorted(BODY_SAMPLES, key=lambda option: (abs(option[1] - twist[1]),
                                                            abs(option[0] - twist[0])))
         return next((option for option in options
                      if self._body_keeps_clear(pose, option, now)), STOP)
 
-    def _body_keeps_clear(self, pose: Pose, twist: Twist, now: float | None) -> bool:
-        """Whether ``twist`` keeps the body off walls over the horizon (halfway and at its
-        end), or, given its clearance ``now``, brings it no nearer."""
+    def _body_keeps_clear(self, pose: Pose, twist: Twist, now: Clearances | None) -> bool:
+        """Whether ``twist`` keeps the body off walls and marked people over the horizon
+        (halfway and at its end), or, given its clearances ``now``, brings it no nearer to
+        either that it is within the margin of."""
+        margin = self.tuning.body_margin
+        for share in (0.5, 1.0):
+            ahead = self._clearances(arc_end(pose, twist, share * self.tuning.body_horizon))
+            for index, gap in enumerate(ahead):
+                if gap < margin and (now is None or gap <= now[index] + 1e-4):
+                    return False
+        return True
+
+    def _clearances(self, pose: Pose) -> Clearances:
+        """Metres from the body at ``pose`` to the nearest wall and to the nearest marked
+        person's body (gaps wider than the margin may be any gap wider than it)."""
         assert self.body is not None
         tuning = self.tuning
-        for share in (0.5, 1.0):
-            ahead = self.body.clearance(arc_end(pose, twist, share * tuning.body_horizon),
-                                        beyond=tuning.body_margin)
-            if ahead < tuning.body_margin and (now is None or ahead <= now + 1e-4):
-                return False
-        return True
+        walls = self.body.clearance(pose, beyond=tuning.body_margin)
+        marks = self.costmap.marks
+        if not marks:
+            return walls, math.inf
+        xs = np.fromiter((mark.x for mark in marks), dtype=np.float64, count=len(marks))
+        ys = np.fromiter((mark.y for mark in marks), dtype=np.float64, count=len(marks))
+        people = float(self.body.gaps_to(pose, xs, ys).min()) - tuning.person_body
+        return walls, people
 
     def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
         self._people = people

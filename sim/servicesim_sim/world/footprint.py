@@ -6,7 +6,8 @@ x ±0.2 m, y ±0.25 m; its corners 0.32 m from the centre), and its referee book
 the robot with a wall, a piece of furniture or a person, by depth (``PenaltyChecker.cc``). This
 module is the one place that measures those touches: :meth:`Footprint.wall_depth` says how
 deep the box is in the map's obstacles, :meth:`Footprint.person_depths` how deep it is in each
-person's disc. The physics (:mod:`servicesim_sim.model.robot`) stops the box at the walls, the
+person's disc (from :meth:`Footprint.gaps_to`, which navigation asks about the people it
+marked). The physics (:mod:`servicesim_sim.model.robot`) stops the box at the walls, the
 engine books what it touches, and navigation checks its commands with the same box. It lives
 with the world because both the model and navigation need it.
 
@@ -137,6 +138,11 @@ class Footprint:
     def person_depths(pose: Pose, xs: np.ndarray, ys: np.ndarray, *,
                       radius: float) -> np.ndarray:
         """Metres the box reaches into each person's disc of ``radius`` (0 when apart)."""
+        return np.maximum(radius - Footprint.gaps_to(pose, xs, ys), 0.0)
+
+    @staticmethod
+    def gaps_to(pose: Pose, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+        """Signed metres from the box at ``pose`` to each point: negative inside the box."""
         x, y, yaw = pose
         cos, sin = math.cos(yaw), math.sin(yaw)
         dx, dy = np.asarray(xs) - x, np.asarray(ys) - y
@@ -144,4 +150,5 @@ class Footprint:
         across = np.abs(-sin * dx + cos * dy) - HALF_WIDTH
         outside = np.hypot(np.maximum(along, 0.0), np.maximum(across, 0.0))
         inside = np.minimum(np.maximum(along, across), 0.0)
-        return np.maximum(radius - (outside + inside), 0.0)
+        gaps: np.ndarray = outside + inside
+        return gaps
