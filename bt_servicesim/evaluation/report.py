@@ -37,6 +37,7 @@ from bt_servicesim.evaluation.summary import (
 )
 from bt_servicesim.evaluation.throughput import throughput_section
 from bt_servicesim.mission.report import left_lockstep
+from bt_servicesim.tree.files import shown_path
 
 
 def markdown_report(settings: EvaluationSettings, rows: list[dict[str, Any]],
@@ -85,13 +86,13 @@ def _tree_note(settings: EvaluationSettings) -> str:
     executives: each path and its file's digest."""
     trees = {**({"the bt executive": settings.tree} if settings.own_tree else {}),
              **settings.trees}
-    note = "".join(f"; {name} plays `{tree}` (SHA-256 {tree_digest(tree)[:16]})"
+    note = "".join(f"; {name} plays `{shown_path(tree)}` (SHA-256 {tree_digest(tree)[:16]})"
                    for name, tree in trees.items())
     for executive in settings.executives:
         nav_params = settings.nav_params_of(executive)
         note += (f"; {executive}'s robot navigates with the servicebot's configuration"
                  if nav_params is None else
-                 f"; {executive}'s robot navigates with `{nav_params}` "
+                 f"; {executive}'s robot navigates with `{shown_path(nav_params)}` "
                  f"(SHA-256 {tree_digest(nav_params)[:16]})")
     return note
 

@@ -78,6 +78,7 @@ from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import clock_now_ns, sim_now_s
 from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.tree.executive import Executive
+from bt_servicesim.tree.files import shown_path
 
 TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
 DISCOVERY_LIMIT_S = 10.0  # wall seconds the backend may take to discover the readers set up
@@ -539,10 +540,10 @@ def reproduce_command(settings: RunSettings, sim_args: tuple[str, ...]) -> str:
         words.append(f"--seed {settings.seed}")
     if settings.world is not None:
         words.append(f"--world {settings.world}")
-    words += [f"--tree {settings.tree}", f"--executive {settings.executive}",
+    words += [f"--tree {shown_path(settings.tree)}", f"--executive {settings.executive}",
               f"--speed {settings.speed:g}", f"--time-limit {settings.time_limit_s:g}"]
     if settings.nav_params is not None:
-        words.append(f"--nav-params {settings.nav_params}")
+        words.append(f"--nav-params {shown_path(settings.nav_params)}")
     words += [f"--sim-arg={argument}" for argument in sim_args]
     if settings.free_running:
         words.append("--free-running")

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["DEFAULT_NAV_PARAMS", "DEFAULT_TREE", "SERVICEBOT", "TREES_DIRECTORY", "nav_params_for"]
+__all__ = [
+    "DEFAULT_NAV_PARAMS", "DEFAULT_TREE", "SERVICEBOT", "TREES_DIRECTORY", "nav_params_for",
+    "shown_path",
+]
 
 TREES_DIRECTORY = Path(__file__).resolve().parents[2] / "trees"
 """The repository's ``trees/``: the shipped mission and its node model."""
@@ -32,3 +35,12 @@ def nav_params_for(executive: str, given: str | None) -> Path | None:
     if given is not None:
         return Path(given).resolve()
     return DEFAULT_NAV_PARAMS if executive == "bt" else None
+
+
+def shown_path(path: Path) -> str:
+    """How a command or a page shows a file: relative to the repository's root when the file is
+    in this checkout (a command in the docs runs from there, on any clone), else as given."""
+    try:
+        return str(path.resolve().relative_to(TREES_DIRECTORY.parent))
+    except ValueError:
+        return str(path)

@@ -89,7 +89,7 @@ def settings_from_arguments(args: argparse.Namespace, *,
 
 def navigation_from(args: argparse.Namespace) -> NavigationParameters:
     """The robot's navigation parameters: ``--nav-params``'s file, else the servicebot's."""
-    path = getattr(args, "nav_params", None)
+    path: str | None = args.nav_params
     if path is None:
         return SERVICEBOT
     try:

@@ -21,6 +21,7 @@ from bt_servicesim.mission import run as mission_run
 from bt_servicesim.mission.referee_monitor import RefereeMonitor
 from bt_servicesim.mission.run import SIM_TIME_BACKSTOP_S, MissionRun, outlived_time_limit
 from bt_servicesim.mission.settings import RunSettings
+from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS
 from bt_servicesim.tree.loading import DEFAULT_TREE
 
 
@@ -192,3 +193,17 @@ def test_the_run_keeps_a_copy_of_its_navigation_parameters_and_names_their_diges
     assert not (out / "nav_params.yaml").exists(), "an earlier run's copy is not this run's"
     assert default._header("running")["nav_params"] is None
     assert "--nav-params" not in default._header("running")["reproduce"]
+
+
+def test_the_reproduce_command_names_the_checkout_s_own_files_from_the_repository_root(
+        tmp_path: Path) -> None:
+    settings = RunSettings(world=None, seed=3, speed=0.0, tree=DEFAULT_TREE, out=tmp_path / "run",
+                           time_limit_s=900.0, headless=True, executive="bt", attach=True,
+                           nav_params=DEFAULT_NAV_PARAMS)
+    words = mission_run.reproduce_command(settings, ()).split()
+    assert words[words.index("--tree") + 1] == "trees/servicesim_mission.xml"
+    assert words[words.index("--nav-params") + 1] == "trees/servicesim_nav2_params.yaml"
+    elsewhere = tmp_path / "mine.xml"
+    words = mission_run.reproduce_command(dataclasses.replace(settings, tree=elsewhere),
+                                          ()).split()
+    assert words[words.index("--tree") + 1] == str(elsewhere)
