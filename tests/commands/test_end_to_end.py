@@ -133,6 +133,24 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
     assert len(set(spots)) >= 2, spots  # in the corridor, and again in the room
 
 
+def test_a_random_abort_beside_an_idler_keeps_the_costmaps_and_touches_nobody(
+        tmp_path: Path) -> None:
+    """Hard seed 11: exploring for the guest, the robot passes an idler and turns its back on
+    them; then navigation aborts at random (error 9000, no obstacle). Had the recovery cleared
+    the costmaps, the idler behind, out of the lidar's 240 degrees, would be forgotten, and the
+    local planner's escape (backing off while no turn keeps the box off the walls) would drive
+    into them: over 500 000 contact points. The recovery keeps the costmaps after an abort no
+    obstacle caused."""
+    code, report = mission(tmp_path, "--seed", "11", "--sim-arg=--difficulty",
+                           "--sim-arg=hard")
+    assert_completed(code, report)
+    kept = [message for message in tree_log_feedback(tmp_path, "WaypointRecovery.WayBlocked")
+            if message.startswith("navigation error 9000")]
+    assert kept, "the seed still plays a random abort while exploring"
+    assert "SUCCESS" not in tree_log_statuses(
+        tmp_path, "ClearCostmapsForWaypointIfBlocked.ClearCostmaps")
+
+
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
     # paced: what the run waits for in wall time after the end shows as sim time
     code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed",

@@ -665,6 +665,30 @@ def test_a_robot_stuck_with_a_person_behind_it_does_not_back_up() -> None:
     assert nav.recoveries >= 1 and all(v >= 0.0 for v, _ in commands)
 
 
+def test_a_stuck_robot_keeps_the_people_near_marked_while_it_backs_up() -> None:
+    # seen while facing them, then behind the robot, out of the lidar's view: move_base's
+    # conservative reset forgets only the marks outside a 3 m square round the robot
+    nav = navigator(door_map())
+    nav.start(8.5, 5.0, 0.0, now=0.0)
+    behind_left = (0.9, 0.3)  # 0.92 m away, off the line the robot backs along
+    commands = []
+    now = 0.0
+    while nav.status == "running" and now < 12.0:
+        yaw = math.pi + 0.6 if now < 1.0 else 0.6
+        commands.append(nav.command(pose=(1.5, 1.0, yaw), people=[behind_left], now=now))
+        now += 0.05
+    assert nav.recoveries == 1 and any(v < 0.0 for v, _ in commands)  # it did back up
+    assert [(mark.x, mark.y) for mark in nav.costmap.marks] == [behind_left]
+
+
+def test_the_conservative_reset_forgets_only_the_marks_outside_its_square() -> None:
+    costmap = Costmap(door_map(), lidar=MARK_AT_ANY_RANGE)
+    costmap.observe(1.5, 1.0, 0.0, [(2.4, 1.5), (3.5, 1.0)], now=0.0)
+    assert len(costmap.marks) == 2
+    costmap.clear_beyond(1.5, 1.0, 1.5)
+    assert [(mark.x, mark.y) for mark in costmap.marks] == [(2.4, 1.5)]
+
+
 def test_an_unknown_pose_or_goal_aborts() -> None:
     nav = navigator(door_map())
     nav.start(8.5, 5.0, 0.0, now=0.0)

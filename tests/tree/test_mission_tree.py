@@ -140,7 +140,20 @@ NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100}
 """Navigation failed for some other reason than people in the way: no giving way."""
 
 
-def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> None:
+WAYPOINT_CLEARING = "ClearCostmapsForWaypointIfBlocked.ClearCostmaps"
+
+
+def waypoint_steps(script: Script) -> list[str]:
+    """The waypoint visits' steps in order: next waypoint, navigate, clear the costmaps."""
+    names = {"NextWaypoint": "NextWaypoint", "NavigateToWaypoint": "NavigateToWaypoint",
+             WAYPOINT_CLEARING: "ClearCostmaps"}
+    return [short for call in script.calls for key, short in names.items()
+            if matches(call, key)]
+
+
+def test_a_waypoint_that_aborts_for_another_reason_is_tried_again_with_the_costmaps_kept(
+) -> None:
+    # a random abort or a timeout: the marks are all the robot knows of people behind it
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
         "Explore.GuestInRange": [Status.FAILURE] * 25,
@@ -149,11 +162,19 @@ def test_a_waypoint_that_fails_is_tried_again_after_clearing_the_costmaps() -> N
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
-    assert script.count("ClearCostmapsForWaypoint") == 1
-    steps = [c.rsplit(".", 1)[-1] for c in script.calls
-             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint"))]
-    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint",
-                         "NavigateToWaypoint"], "the same waypoint once more, not the next"
+    assert script.count(WAYPOINT_CLEARING) == 0
+    assert waypoint_steps(script)[:3] == ["NextWaypoint", "NavigateToWaypoint",
+                                          "NavigateToWaypoint"], "the same waypoint once more"
+
+
+def test_navigation_that_aborts_for_another_reason_keeps_the_costmaps() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [Status.FAILURE, Status.FAILURE],
+                     **NOT_BLOCKED, **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 3
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 0
+    assert script.count("GoToPickUpArea.JitterGoal") == 2  # the rest of the ladder as before
 
 
 def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps() -> None:
@@ -165,11 +186,11 @@ def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps()
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     steps = [c.rsplit(".", 1)[-1] for c in script.calls
-             if c.endswith(("NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
-                            "ClearCostmapsForWaypoint"))]
+             if c.endswith(("NavigateToWaypoint", "FindGiveWaySpot", "StepAside"))
+             or matches(c, "GiveWayForWaypoint.WayBlocked") or matches(c, WAYPOINT_CLEARING)]
     # the spot is found on the costmap as the robot was blocked: before the clearing wipes it
     assert steps[:6] == ["NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
-                         "ClearCostmapsForWaypoint", "NavigateToWaypoint"]
+                         "ClearCostmaps", "NavigateToWaypoint"]
 
 
 def test_a_waypoint_that_fails_twice_is_skipped() -> None:
@@ -191,17 +212,14 @@ def test_a_waypoint_that_fails_twice_is_skipped() -> None:
 def test_a_waypoint_whose_costmaps_cannot_be_cleared_is_skipped() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
-        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "Explore.GuestInRange": [Status.FAILURE] * 400,  # while it gives way
         "NavigateToWaypoint": [Status.FAILURE, (Status.SUCCESS, 10), (Status.RUNNING, 0)],
-        "ClearCostmapsForWaypoint": [Status.FAILURE],
-        **NOT_BLOCKED,
+        WAYPOINT_CLEARING: [Status.FAILURE],
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
-    steps = [c.rsplit(".", 1)[-1] for c in script.calls
-             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint"))]
-    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmapsForWaypoint",
-                         "NextWaypoint"]
+    assert waypoint_steps(script)[:4] == ["NextWaypoint", "NavigateToWaypoint", "ClearCostmaps",
+                                          "NextWaypoint"]
 
 
 def test_a_guest_out_of_range_is_explored_for_then_picked_up() -> None:

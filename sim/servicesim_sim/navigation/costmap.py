@@ -280,6 +280,13 @@ class Costmap:
         """Forget every mark (what clear_costmaps does)."""
         self._set_marks(())
 
+    def clear_beyond(self, x: float, y: float, reach: float) -> None:
+        """Forget the marks outside the square of half side ``reach`` round (x, y), keeping
+        those near: move_base's conservative reset (``clear_costmap_recovery`` clears outside a
+        ``reset_distance`` square round the robot)."""
+        self._set_marks(tuple(mark for mark in self.marks
+                              if abs(mark.x - x) <= reach and abs(mark.y - y) <= reach))
+
     def _set_marks(self, marks: tuple[PersonMark, ...]) -> None:
         if sorted((m.x, m.y) for m in marks) != sorted((m.x, m.y) for m in self.marks):
             self.version += 1

@@ -27,9 +27,11 @@ Design intent:
   box must keep 1 cm off walls and off the bodies of the people marked in the costmap (or come
   no nearer than it is), else the nearest sampled twist that does is taken, else it stops. So
   the corners do not sweep into a person beside the robot as it turns or sets off.
-* A robot that has not moved 0.25 m in 10 s clears the costmap, backs up 0.15 m when the
-  costmap has room behind it, and replans (a recovery); after 20 s without progress navigation
-  aborts.
+* A robot that has not moved 0.25 m in 10 s forgets the people marked outside a 3 m square
+  round it (move_base's conservative reset), backs up 0.15 m when the costmap has room behind
+  it, and replans (a recovery); after 20 s without progress navigation aborts. The people near
+  stay marked, so the backing is checked against them as every command is (Nav2's BackUp stops
+  on a collision ahead in its costmap).
 * Failures carry Nav2's numeric codes: the planner's (ComputePathToPose), the follower's
   (FollowPath) or the navigator's own (NavigateToPose), with a sentence for a human.
 """
@@ -116,6 +118,7 @@ class Tuning:
     progress_window: float = 10.0
     backup_speed: float = 0.15
     backup_time: float = 1.0
+    reset_distance: float = 3.0  # m: a recovery forgets marks outside this square round it
     body_horizon: float = 0.3  # s: a command is checked for the body this far ahead ...
     body_margin: float = 0.01  # m: ... to keep its outline this far off walls and people,
     person_body: float = 0.25  # m: a marked person's body as the lidar outlines it
@@ -594,8 +597,9 @@ class Navigator:
         if still > tuning.progress_window and not self._backed_up:
             self._backed_up, self._replan_needed = True, True
             self.recoveries += 1
-            room_behind = self._room_behind(pose)  # judged on the marks before clearing them
-            self.costmap.clear()
+            room_behind = self._room_behind(pose)
+            # the people near stay marked, so the body check keeps the backing off them
+            self.costmap.clear_beyond(x, y, tuning.reset_distance / 2.0)
             if room_behind:
                 self._backing_until = now + tuning.backup_time
                 return -tuning.backup_speed, 0.0
