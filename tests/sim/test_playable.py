@@ -4,7 +4,9 @@ the pick-up area, the drop-off area and back with every idler in place.
 The first world here is a hall with a closet off it, through one 1.2 m door. One of its two idling
 spots stands in that doorway: an idler there cuts the closet off (it is small enough that the
 idlers' own rule, never to split the robot's floor, lets a pocket that size go), so a draw
-that puts the idler there is drawn again; with the door walled up the task is refused.
+that puts the idler there is drawn again; with the door walled up the task is refused. The
+second (a deeper closet, the guest waiting inside) has walkers on a loop at its door: the
+waiting guest holds them there for good, which cuts the closet off alike.
 """
 
 from __future__ import annotations
