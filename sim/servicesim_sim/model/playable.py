@@ -150,5 +150,6 @@ def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | 
     if crowded is not None:
         raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws "
                             f"(the last: {crowded})")
-    raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (idlers "
-                        f"or walls cut the robot off from an area of every one)")
+    raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (people "
+                        f"standing for good or walls cut the robot off from an area or the "
+                        f"guest in every one)")
