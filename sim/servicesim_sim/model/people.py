@@ -814,23 +814,26 @@ class Crowd:
             return []
         still = [*self._standing, *others]
         if not math.isinf(self.standoff_s):  # walkers turn back from a held walker: no queue
-            stops = [walker.stops_for_good(np.array(still, dtype=float).reshape(-1, 2))
-                     for walker in self._walkers]
-            return [(x, y) for _, x, y in filter(None, stops)]
+            points = np.array(still, dtype=float).reshape(-1, 2)
+            return [(x, y) for _, x, y in filter(None, (walker.stops_for_good(points)
+                                                        for walker in self._walkers))]
         held: list[tuple[float, float]] = []
         waiting = list(self._walkers)
-        while waiting:
-            points = np.array(still, dtype=float).reshape(-1, 2)
+        points = np.array(still, dtype=float).reshape(-1, 2)
+        stops = [walker.stops_for_good(points) for walker in waiting]
+        while True:
             arrivals = [(stop[0] / walker.speed, index, stop[1], stop[2])
-                        for index, walker in enumerate(waiting)
-                        if (stop := walker.stops_for_good(points)) is not None]
+                        for index, (walker, stop) in enumerate(zip(waiting, stops, strict=True))
+                        if stop is not None]
             if not arrivals:
-                break
+                return held
             _, first, x, y = min(arrivals)
+            del waiting[first], stops[first]
             held.append((x, y))
-            still.append((x, y))
-            del waiting[first]
-        return held
+            # the first stop among more people: the earlier of the old one and the new one's
+            spot = np.array([[x, y]])
+            stops = [min(filter(None, (stop, walker.stops_for_good(spot))), default=None)
+                     for walker, stop in zip(waiting, stops, strict=True)]
 
     def states(self) -> list[tuple[str, str, float, float]]:
         """(name, role, x, y) of everybody, walkers first."""
