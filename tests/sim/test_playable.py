@@ -1,14 +1,17 @@
 """A task the simulator plays can be played: navigation finds a way from the robot's start to
 the pick-up area, the drop-off area and back with every idler in place.
 
-The world here is a hall with a closet off it, through one 1.2 m door. One of its two idling
+The first world here is a hall with a closet off it, through one 1.2 m door. One of its two idling
 spots stands in that doorway: an idler there cuts the closet off (it is small enough that the
 idlers' own rule, never to split the robot's floor, lets a pocket that size go), so a draw
-that puts the idler there is drawn again; with the door walled up the task is refused.
+that puts the idler there is drawn again; with the door walled up the task is refused. The
+second (a deeper closet, the guest waiting inside) has walkers on a loop at its door: the
+waiting guest holds them there for good, which cuts the closet off alike.
 """
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -19,7 +22,7 @@ from PIL import Image
 
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import IDLER, WALKER, WALKER_STOP_DISTANCE, WalkerStartError
-from servicesim_sim.model.playable import playable_engine, unreachable_areas
+from servicesim_sim.model.playable import GUEST, playable_engine, unreachable_areas
 from servicesim_sim.model.scenario import Difficulty, ScenarioError, make_scenario
 from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 
@@ -80,7 +83,7 @@ def test_an_idler_in_the_only_doorway_cuts_the_pick_up_area_off(tmp_path: Path) 
         world=world, scenario=make_scenario(world, draw=draw))) == DOORWAY]
     assert blocked, "no draw put the idler in the doorway"
     engine = SimEngine(world=world, scenario=make_scenario(world, draw=blocked[0]))
-    assert unreachable_areas(engine) == ["Closet"]
+    assert unreachable_areas(engine) == ["Closet", GUEST]
     assert unreachable_areas(engine, with_idlers=False) == []
 
 
@@ -135,5 +138,134 @@ def test_a_seed_whose_walkers_find_no_start_is_drawn_again_the_same_way_every_ti
         for x, y in walkers:  # none starts within a stop distance of the robot or the guest
             assert min(np.hypot(x - task.start_x, y - task.start_y),
                        np.hypot(x - task.guest_x, y - task.guest_y)) >= WALKER_STOP_DISTANCE
+        again = playable_engine(office, seed=seed, difficulty=difficulty)
+        assert again.crowd.states() == engine.crowd.states()
+
+
+# A hall and a deep closet through one door, with the guest waiting 1.5 m inside it: a walker
+# on the 'door' loop walks at the door, has the guest in its lane from the doorway on and
+# stands there for good (the world's routes: it waits as long as its lane is blocked).
+GUEST_IN_THE_LANE = """\
+name: deep closet
+map: map.yaml
+areas:
+  Closet: {min: [4.2, 0.8], max: [6.5, 2.2]}
+  Hall: {min: [0.5, 0.5], max: [2.0, 2.0]}
+  Entry: {min: [2.5, 0.5], max: [3.5, 2.5]}
+task:
+  pick_up: Closet
+  drop_off: Hall
+  guest: {name: human_12345, x: 5.55, y: 1.5, yaw: 0.0}
+  start: {area: Entry, x: 3.0, y: 2.2, yaw: 0.0}
+people: {walkers: 2, idlers: 0}
+walker_routes:
+  - {name: door, waypoints: [[0.5, 1.5], [1.5, 1.5], [4.6, 1.5], [2.0, 2.7], [0.5, 2.7]]}
+  - {name: corner, waypoints: [[0.4, 0.4], [1.4, 0.4], [1.4, 0.9], [0.4, 0.9]]}
+"""
+DEEP_DOORWAY_X = 4.05
+
+
+def deep_closet_world(directory: Path) -> Path:
+    pixels = np.full((round(3.0 / RESOLUTION), round(7.0 / RESOLUTION)), 0, dtype=np.uint8)
+    box(pixels, 0.1, 0.1, 4.0, 2.9, 254)  # the hall
+    box(pixels, 4.1, 0.7, 6.6, 2.3, 254)  # the closet, 2.5 x 1.6 m
+    box(pixels, 4.0, 0.9, 4.1, 2.1, 254)  # its 1.2 m door
+    Image.fromarray(pixels).save(directory / "map.pgm")
+    (directory / "map.yaml").write_text(
+        f"image: map.pgm\nresolution: {RESOLUTION}\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    path = directory / "world.yaml"
+    path.write_text(GUEST_IN_THE_LANE)
+    return path
+
+
+def held(engine: SimEngine) -> list[tuple[float, float]]:
+    task = engine.scenario.task
+    return engine.crowd.held_for_good(others=[(task.guest_x, task.guest_y)])
+
+
+def door_walkers(engine: SimEngine) -> int:
+    return sum(1 for walker in engine.crowd.walkers if walker.route[:, 0].max() > 4.0)
+
+
+def draws(world: World) -> list[SimEngine]:
+    engines = []
+    for draw in range(12):
+        try:
+            engines.append(SimEngine(world=world, scenario=make_scenario(world, draw=draw)))
+        except WalkerStartError:
+            continue
+    return engines
+
+
+def test_a_walker_the_waiting_guest_holds_in_the_only_doorway_cuts_the_closet_off(
+        tmp_path: Path) -> None:
+    world = load_world(deep_closet_world(tmp_path))
+    engines = draws(world)
+    one = [engine for engine in engines if door_walkers(engine) == 1]
+    assert one, "no draw put one walker on the door loop"
+    ((x, y),) = held(one[0])
+    assert DEEP_DOORWAY_X - 0.1 < x < DEEP_DOORWAY_X + 0.1 and y == pytest.approx(1.5)
+    assert unreachable_areas(one[0]) == ["Closet", GUEST]
+    assert unreachable_areas(one[0], with_idlers=False) == []
+    clear = [engine for engine in engines if door_walkers(engine) == 0]
+    assert clear and held(clear[0]) == [] and unreachable_areas(clear[0]) == []
+
+
+def test_walkers_queue_behind_a_walker_held_for_good(tmp_path: Path) -> None:
+    world = load_world(deep_closet_world(tmp_path))
+    two = [engine for engine in draws(world) if door_walkers(engine) == 2]
+    assert two, "no draw put both walkers on the door loop"
+    first, second = held(two[0])
+    assert DEEP_DOORWAY_X - 0.1 < first[0] < DEEP_DOORWAY_X + 0.1
+    # the second stops as the first did, with the first in its lane: 1.5 m behind it
+    assert first[0] - second[0] == pytest.approx(WALKER_STOP_DISTANCE, abs=0.1)
+    assert second[1] == pytest.approx(1.5)
+
+
+def test_the_walker_model_stands_where_the_walking_crowd_stands_for_good(
+        tmp_path: Path) -> None:
+    """Walked on for a minute (the robot parked at its start), the held walkers stand where
+    held_for_good said, and wait."""
+    world = load_world(deep_closet_world(tmp_path))
+    engine = next(engine for engine in draws(world) if door_walkers(engine) == 2)
+    expected = held(engine)
+    task = engine.scenario.task
+    for _ in range(600):
+        engine.crowd.step(0.1, robot=(task.start_x, task.start_y, task.start_yaw),
+                          others=[(task.guest_x, task.guest_y)])
+    standing = sorted((w.person.x, w.person.y) for w in engine.crowd.walkers if w.waited > 1.0)
+    assert len(standing) == len(expected) == 2
+    for (x, y), (ex, ey) in zip(standing, sorted(expected), strict=True):
+        assert math.hypot(x - ex, y - ey) < 0.15
+
+
+def test_a_draw_whose_walker_the_guest_holds_in_the_doorway_is_drawn_again(
+        tmp_path: Path) -> None:
+    world = load_world(deep_closet_world(tmp_path))
+    first = SimEngine(world=world, scenario=make_scenario(world))
+    assert door_walkers(first) == 1 and unreachable_areas(first) == ["Closet", GUEST]
+    engine = playable_engine(world, seed=None)
+    assert unreachable_areas(engine) == [] and door_walkers(engine) == 0
+    assert engine.scenario == make_scenario(world, draw=1)  # the first draw that plays
+    again = playable_engine(world, seed=None)
+    assert (again.scenario, again.crowd.states()) == (engine.scenario, engine.crowd.states())
+
+
+def test_seeds_whose_walkers_stand_in_the_cafes_only_door_play_their_next_draw() -> None:
+    """Random 43 and 91 and hard 14: the waiting guest holds a walker in the only door of the
+    room the robot must reach, for good (in the cafe's for 43 and 14, hard 14's guest drawn
+    out of range into the cafe); each seed plays its next draw, every time."""
+    office: World = load_world(DEFAULT_WORLD)
+    for seed, difficulty in ((43, Difficulty.default()), (91, Difficulty.default()),
+                             (14, Difficulty.hard())):
+        first = SimEngine(world=office, scenario=make_scenario(office, seed=seed,
+                                                               difficulty=difficulty))
+        assert GUEST in unreachable_areas(first)
+        assert unreachable_areas(first, with_idlers=False) == []
+        engine = playable_engine(office, seed=seed, difficulty=difficulty)
+        assert engine.scenario == make_scenario(office, seed=seed, difficulty=difficulty,
+                                                draw=1)
+        assert unreachable_areas(engine) == []
         again = playable_engine(office, seed=seed, difficulty=difficulty)
         assert again.crowd.states() == engine.crowd.states()

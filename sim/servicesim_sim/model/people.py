@@ -42,6 +42,7 @@ import math
 import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,6 +67,7 @@ WALKER_IDLER_CLEARANCE = 0.75  # ... and this far from idlers (beyond the lane's
 WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns back (ours: the
 # original's hand-drawn loops run one way and rarely meet head on; random loops do, and without
 # this every walker of the office stands deadlocked within about 100 s)
+STOP_SEARCH_STEP = 0.05  # metres between the spots of a loop searched for a lasting stop
 ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of standing people
 FIRST_WAYPOINT_DRAW = 21  # the original draws a walker's first waypoint as rand(0..20)
 ROUTE_CELL = 0.25  # metres per route-grid cell
@@ -459,6 +461,23 @@ def route_meets(route: np.ndarray, standing: np.ndarray) -> bool:
 
 
 # ----------------------------------------------------------------------------------- walkers
+@overload
+def in_stop_lane(dx: float, dy: float, cos: float, sin: float, *,
+                 below: float = 0.0) -> bool: ...
+@overload
+def in_stop_lane(dx: NDArray[np.float64], dy: NDArray[np.float64], cos: NDArray[np.float64],
+                 sin: NDArray[np.float64], *, below: float = 0.0) -> NDArray[np.bool_]: ...
+def in_stop_lane(dx: Any, dy: Any, cos: Any, sin: Any, *, below: float = 0.0) -> Any:
+    """Whether a point (dx, dy) from a walker facing (cos, sin) stops it: nearer than
+    :data:`WALKER_STOP_DISTANCE` in 3-D (the point's origin ``below`` metres under the
+    walker's), ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
+    walker's own position is never ahead of it). Floats or arrays, element by element: the
+    walking step and the playability check (:meth:`Walker.stops_for_good`) share the rule."""
+    reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
+    return ((dx * dx + dy * dy < reach) & (dx * cos + dy * sin > 0.0)
+            & (abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH))
+
+
 def facing(heading: float, *, forwards: bool) -> tuple[float, float, float]:
     """(yaw, cos yaw, sin yaw) of a walker on a leg of the given heading, walking it forwards
     or backwards (the reverse heading as atan2 gives it)."""
@@ -522,18 +541,36 @@ class Walker:
         self.advance(0.0)
 
     def blocked(self, points: Sequence[tuple[float, float]], *, below: float = 0.0) -> bool:
-        """Whether any point lies in the lane ahead: nearer than :data:`WALKER_STOP_DISTANCE`
-        in 3-D (the points' origins ``below`` metres under the walker's), ahead of the walker
-        and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the walker's own position is
-        never ahead of it)."""
+        """Whether any point lies in the lane ahead (:func:`in_stop_lane`)."""
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
-        reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
-        for px, py in points:
-            dx, dy = px - x, py - y
-            if (dx * dx + dy * dy < reach and dx * cos + dy * sin > 0.0
-                    and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
-                return True
-        return False
+        return any(in_stop_lane(px - x, py - y, cos, sin, below=below) for px, py in points)
+
+    def stops_for_good(self, still: NDArray[np.float64]) -> tuple[float, float, float] | None:
+        """Where this walker, walking on from here, first has one of ``still`` (n, 2: people
+        who never move) in its lane, and so stands for good, as (metres walked to get there,
+        x, y); None when its loop passes them all.
+
+        The loop is sampled every :data:`STOP_SEARCH_STEP` metres, each sample facing the way
+        :meth:`advance` faces the walker there; the lane is :meth:`blocked`'s.
+        """
+        if still.size == 0:
+            return None
+        along = self.along
+        length = float(along[-1])
+        steps = np.arange(0.0, length, STOP_SEARCH_STEP)
+        spots = (self.travelled + self.direction * steps) % length
+        legs = np.clip(np.searchsorted(along, spots, side="right") - 1, 0, len(along) - 2)
+        t = (spots - along[legs]) / (along[legs + 1] - along[legs])
+        xs = self.route[legs, 0] + t * (self.route[legs + 1, 0] - self.route[legs, 0])
+        ys = self.route[legs, 1] + t * (self.route[legs + 1, 1] - self.route[legs, 1])
+        ways = np.array([(cos, sin) for _, cos, sin in self._facings[self.direction > 0]])
+        cos, sin = ways[legs, 0:1], ways[legs, 1:2]
+        hits = in_stop_lane(still[None, :, 0] - xs[:, None], still[None, :, 1] - ys[:, None],
+                            cos, sin).any(axis=1)
+        if not hits.any():
+            return None
+        first = int(np.argmax(hits))
+        return float(steps[first]), float(xs[first]), float(ys[first])
 
 
 # ------------------------------------------------------------------------------------ crowd
@@ -761,6 +798,42 @@ class Crowd:
         by_walkers = walker.blocked([moving[i - first_walker] for i in within
                                      if i >= first_walker])
         return by_people, by_walkers
+
+    def held_for_good(self, *, others: Sequence[tuple[float, float]] = ()
+                      ) -> list[tuple[float, float]]:
+        """Where walkers will stand for good, held by someone who never moves: an idler (on
+        the world's routes) or ``others`` (the guest waiting to be picked up), or, where
+        walkers wait for each other for ever, a walker held so (a queue behind it).
+
+        Each walker is taken to walk on from its start at its speed, the robot and the moving
+        walkers aside, and to stop at the first such person in its lane. The walker that gets
+        to its stop first is held there; the others are looked at again with it standing,
+        until none is held. None when walkers turn back from the people who block them.
+        """
+        if not math.isinf(self.walker_patience_s):
+            return []
+        still = [*self._standing, *others]
+        if not math.isinf(self.standoff_s):  # walkers turn back from a held walker: no queue
+            points = np.array(still, dtype=float).reshape(-1, 2)
+            return [(x, y) for _, x, y in filter(None, (walker.stops_for_good(points)
+                                                        for walker in self._walkers))]
+        held: list[tuple[float, float]] = []
+        waiting = list(self._walkers)
+        points = np.array(still, dtype=float).reshape(-1, 2)
+        stops = [walker.stops_for_good(points) for walker in waiting]
+        while True:
+            arrivals = [(stop[0] / walker.speed, index, stop[1], stop[2])
+                        for index, (walker, stop) in enumerate(zip(waiting, stops, strict=True))
+                        if stop is not None]
+            if not arrivals:
+                return held
+            _, first, x, y = min(arrivals)
+            del waiting[first], stops[first]
+            held.append((x, y))
+            # the first stop among more people: the earlier of the old one and the new one's
+            spot = np.array([[x, y]])
+            stops = [min(filter(None, (stop, walker.stops_for_good(spot))), default=None)
+                     for walker, stop in zip(waiting, stops, strict=True)]
 
     def states(self) -> list[tuple[str, str, float, float]]:
         """(name, role, x, y) of everybody, walkers first."""

@@ -15,8 +15,14 @@ The check is made on a costmap of its own (:data:`PASSAGE`): the static layer wi
 marked as the lidar would mark them, cells below inscribed cost passable, and the areas reached
 when the passable cells connected to the robot's start meet their boxes. It keeps the robot's
 half-width, 0.25 m, off walls and idlers' marks whatever navigation parameters the robot was
-given (``--nav-params``): which task a seed plays is the simulator's, never the robot's. Walkers
-move on and the guest follows, so neither counts.
+given (``--nav-params``): which task a seed plays is the simulator's, never the robot's. The
+guest's own spot must be reached too (a guest drawn out of range waits outside the pick-up area).
+
+Walkers move on and the guest follows, so neither counts as such; but on the world's routes a
+walker waits as long as someone stands in its lane, and an idler or the guest waiting to be
+picked up never moves on: each walker that would stop for good so (and those that would queue
+behind it) is marked where it would stand, as an idler is
+(:meth:`~servicesim_sim.model.people.Crowd.held_for_good`, the people model's own lane rule).
 """
 
 from __future__ import annotations
@@ -38,8 +44,10 @@ from servicesim_sim.navigation.parameters import (
 )
 from servicesim_sim.world.files import AreaBox, OccupancyMap, World
 
+GUEST = "the guest"  # unreachable_areas' name for the guest's spot
 MAX_DRAWS = 20  # draws of a seed's task (or of a fixed task's people) before giving up
-START_ESCAPE_M = 0.5  # a start in lethal cost may reach passable floor this far off
+START_ESCAPE_M = 0.5  # a start (or the guest's spot) in lethal cost may reach passable floor
+# this far off
 PASSAGE = CostmapParameters(inscribed_radius=0.25, walls=(InflationLayer(),),
                             people=(InflationLayer(),))
 """The playability check's costmap: passable where the servicebot's half-width (its footprint
@@ -59,17 +67,30 @@ def passage_costmap(occupancy_map: OccupancyMap) -> Costmap:
 
 
 def unreachable_areas(engine: SimEngine, *, with_idlers: bool = True) -> list[str]:
-    """The task's areas (pick-up, drop-off, start; in that order) the robot's navigation
-    cannot reach from its start, with the idlers in place unless ``with_idlers`` is False."""
+    """The task's areas (pick-up, drop-off, start; in that order, then :data:`GUEST` for the
+    guest's spot, where the robot goes to fetch them wherever they wait) the robot's
+    navigation cannot reach from its start, with the people who stand for good
+    (:func:`standing_for_good`) in place unless ``with_idlers`` is False."""
     costmap = passage_costmap(engine.world.map)
-    idlers = [(x, y) for _, role, x, y in engine.crowd.states() if role == IDLER]
-    costs = costmap.costs_with(idlers if with_idlers else [])
+    costs = costmap.costs_with(standing_for_good(engine) if with_idlers else [])
     labels, _ = ndimage.label(costs < INSCRIBED, structure=np.ones((3, 3), dtype=bool))
     task = engine.scenario.task
     region = _region_at(costmap, labels, task.start_x, task.start_y)
     names = (task.pick_up, task.drop_off, task.start_area)
-    return [name for name in names
-            if region == 0 or not _meets(costmap, labels, region, engine.world.areas[name])]
+    cut_off = [name for name in names
+               if region == 0 or not _meets(costmap, labels, region, engine.world.areas[name])]
+    if region == 0 or not _near(costmap, labels, region, task.guest_x, task.guest_y):
+        cut_off.append(GUEST)
+    return cut_off
+
+
+def standing_for_good(engine: SimEngine) -> list[tuple[float, float]]:
+    """Where people will stand for good before the guest is picked up: every idler, and each
+    walker an idler or the waiting guest holds in its lane (with those queued behind it,
+    :meth:`~servicesim_sim.model.people.Crowd.held_for_good`)."""
+    idlers = [(x, y) for _, role, x, y in engine.crowd.states() if role == IDLER]
+    guest = engine.scenario.task
+    return idlers + engine.crowd.held_for_good(others=[(guest.guest_x, guest.guest_y)])
 
 
 def _region_at(costmap: Costmap, labels: np.ndarray, x: float, y: float) -> int:
@@ -92,6 +113,18 @@ def _meets(costmap: Costmap, labels: np.ndarray, region: int, box: AreaBox) -> b
     row1, col1 = frame.cell_of(box.max_x, box.max_y)
     row0, col0 = max(row0, 0), max(col0, 0)
     return bool(np.any(labels[row0:row1 + 1, col0:col1 + 1] == region))
+
+
+def _near(costmap: Costmap, labels: np.ndarray, region: int, x: float, y: float) -> bool:
+    """Whether the region has a cell within :data:`START_ESCAPE_M` of (x, y)."""
+    frame = costmap.frame
+    row0, col0 = frame.cell_of(x - START_ESCAPE_M, y - START_ESCAPE_M)
+    row1, col1 = frame.cell_of(x + START_ESCAPE_M, y + START_ESCAPE_M)
+    row0, col0 = max(row0, 0), max(col0, 0)
+    rows, cols = np.nonzero(labels[row0:row1 + 1, col0:col1 + 1] == region)
+    return bool(np.any(np.hypot((cols + col0 + 0.5) * frame.resolution + frame.origin_x - x,
+                                (rows + row0 + 0.5) * frame.resolution + frame.origin_y - y)
+                       <= START_ESCAPE_M))
 
 
 def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | None = None,
@@ -117,5 +150,6 @@ def playable_engine(world: World, *, seed: int | None, difficulty: Difficulty | 
     if crowded is not None:
         raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws "
                             f"(the last: {crowded})")
-    raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (idlers "
-                        f"or walls cut the robot off from an area of every one)")
+    raise ScenarioError(f"{world.path}: {what}: no playable task in {MAX_DRAWS} draws (people "
+                        f"standing for good or walls cut the robot off from an area or the "
+                        f"guest in every one)")
