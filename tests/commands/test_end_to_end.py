@@ -119,6 +119,22 @@ def test_a_guest_who_drifts_again_and_again_while_guided_is_found_and_delivered(
         tmp_path, "PickUpGuestAgain.CallPickUpGuest"))
 
 
+def test_a_hard_mission_that_looks_for_its_guest_with_the_camera_stays_in_lockstep(
+        tmp_path: Path) -> None:
+    """Hard seed 22: the guest drifts twice while led and the camera finds them. While the
+    robot looks, three 0.9 MB frames go out each period, and under them a latched message
+    (the referee's penalty causes) was lost on the way; its one-deep writer had replaced it
+    before a heartbeat could ask for it again, lockstep counted one message more than ever
+    came, and once the topic fell quiet the simulator dropped the run (at 277 s sim)."""
+    code, report = mission(tmp_path, "--seed", "22", "--sim-arg=--difficulty",
+                           "--sim-arg=hard", "--trajectory", "failed")
+    assert code == 0, report.get("failure")
+    assert report["completed"] is True
+    assert (report["lockstep_dropped"], report["lockstep_stalls"]) == (None, 0)
+    assert any(message.startswith("guest seen at") for message in tree_log_feedback(
+        tmp_path, "LookForLostGuest.LookForGuest"))
+
+
 def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobody_near(
         tmp_path: Path) -> None:
     """Random seed 10: leading its guest west along the office's 1.65 m top corridor, the robot
