@@ -46,7 +46,8 @@ from bt_servicesim.ros.node_features import ErrorKeeper
 from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.ros.traffic import Traffic
 
-__all__ = ["LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of", "offered"]
+__all__ = ["Expectation", "LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of",
+           "offered"]
 
 JOIN_SERVICE = "/servicesim/lockstep/join"
 PERIOD_TOPIC = "/servicesim/lockstep/period"
@@ -147,6 +148,21 @@ class LockstepTicker:
             self.client.host.note_error(error, where="a tick")
 
 
+class Expectation:
+    """A message the client's ticks wait for (:meth:`LockstepClient.expect`)."""
+
+    def __init__(self, client: LockstepClient, *, due_ns: int, arrived: Callable[[], bool],
+                 what: str) -> None:
+        self.client = client
+        self.due_ns = due_ns
+        self.arrived = arrived
+        self.what = what
+
+    def cancel(self) -> None:
+        """Withdraw it: the ticks no longer wait for it."""
+        self.client.withdraw(self)
+
+
 class LockstepClient:
     """One node's lockstep with the simulator; see the module docstring."""
 
@@ -173,6 +189,7 @@ class LockstepClient:
         """The first period the simulator announced without waiting for this client (it dropped
         it); from then on the client runs free on the announcements. None while in step."""
         self._tickers: list[LockstepTicker] = []
+        self._expectations: list[Expectation] = []
         self._after_done: list[Callable[[], None]] | None = None
         """Work left for after this period's done (:meth:`after_done`); None between periods."""
         self._idle_periods: int | None = None
@@ -347,6 +364,27 @@ class LockstepClient:
         else:
             self._after_done.append(work)
 
+    def expect(self, *, due_s: float, arrived: Callable[[], bool], what: str) -> Expectation:
+        """Tick no period whose sim time reaches ``due_s`` until ``arrived()`` says so.
+
+        For a message the announcements' counts do not cover: one on a subscription made after
+        the join (the camera's, made for a look), which is neither counted nor held. A
+        behaviour that judges such a message at a fixed sim time says so here, once the
+        message is sure to come (its writer is sending), so that the judgement falls on the
+        same tick in every run however late the message comes. Looked at again on every
+        arrival; a client out of step ignores it. What lacks is named as ``what``.
+        """
+        expectation = Expectation(self, due_ns=round(due_s * 1e9), arrived=arrived, what=what)
+        self._expectations.append(expectation)
+        self._ready_no_sooner = 0  # look again at the next arrival
+        return expectation
+
+    def withdraw(self, expectation: Expectation) -> None:
+        if expectation in self._expectations:
+            self._expectations.remove(expectation)
+            self._ready_no_sooner = 0
+            self._check()
+
     @property
     def holding(self) -> bool:
         """Whether the client holds the simulator still (its executive has finished)."""
@@ -404,12 +442,22 @@ class LockstepClient:
                    if self.traffic.received[key] < count]
         lacking.extend(endpoint for endpoint, count in answers.items()
                        if self.traffic.answered.get(endpoint, 0) < count)
+        awaited = self._awaited(head)
+        lacking.extend(awaited)
         shortfall = (sum(max(0, count - self.traffic.received[key])
                          for key, count in messages.items())
                      + sum(max(0, count - self.traffic.answered.get(endpoint, 0))
-                           for endpoint, count in answers.items()))
+                           for endpoint, count in answers.items()) + len(awaited))
         self._ready_no_sooner = self.traffic.arrivals + shortfall
         return lacking
+
+    def _awaited(self, period: LockstepPeriod) -> list[str]:
+        """The expectations due by ``period`` that have not arrived (:meth:`expect`)."""
+        if not self._expectations:
+            return []
+        now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
+        return [expectation.what for expectation in self._expectations
+                if now_ns + DUE_TOLERANCE_NS >= expectation.due_ns and not expectation.arrived()]
 
     def _targets(self, period: LockstepPeriod) -> tuple[dict[int, int], dict[str, int]]:
         """What ``period`` counts, in this node's own terms: messages per reader (by topic

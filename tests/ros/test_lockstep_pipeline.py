@@ -173,3 +173,33 @@ def test_work_left_for_after_the_done_runs_after_it_goes_out_and_at_once_between
         assert "ZeroDivisionError" in (client.node.callback_traceback or "")
         client.after_done(lambda: events.append("between periods"))
         assert events[-1] == "between periods"
+
+
+def test_a_period_due_for_an_expected_message_waits_for_it_and_no_earlier_one_does(
+        ros_context: Any) -> None:
+    """A reader made after the join (the camera's, for a look) is not counted: the tick that
+    judges its message waits for it only when the behaviour says so (``expect``)."""
+    with joined(ros_context) as fake:
+        client = fake.client
+        late_topic = "/servicebot/camera_front/image_raw"
+        pictures: list[str] = []
+        simulator = next(node for node in fake.executor.get_nodes()
+                         if node.get_name() == "fake_simulator")
+        late_writer = simulator.create_publisher(String, late_topic, RELIABLE)
+        client.node.create_subscription(String, late_topic, lambda m: pictures.append(m.data),
+                                        RELIABLE)
+        fake.spin_until(lambda: late_writer.get_subscription_count() > 0, "matching")
+        expectation = client.expect(due_s=0.2, arrived=lambda: bool(pictures),
+                                    what="a picture")
+        fake.announce(1, 0)  # before the due time: ticked as ever
+        fake.spin_until(lambda: 1 in fake.seen_at_done, "done 1")
+        fake.announce(2, 0)
+        for _ in range(20):
+            fake.executor.spin_once(timeout_sec=0.02)
+        assert 2 not in fake.seen_at_done and client.missing() == ["a picture"]
+        late_writer.publish(String(data="picture"))
+        fake.spin_until(lambda: 2 in fake.seen_at_done, "done 2 once the picture is in")
+        expectation.cancel()
+        pictures.clear()
+        fake.announce(3, 0)  # withdrawn: nothing is waited for
+        fake.spin_until(lambda: 3 in fake.seen_at_done, "done 3")

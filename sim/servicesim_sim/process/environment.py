@@ -12,13 +12,14 @@ the simulator's own copy of what the executive's ``bt_servicesim/ros/environment
   3 s, and a join is answered as soon as the client's readers have acknowledged what they hold
   (they acknowledge when a heartbeat asks);
 * Fast DDS publishes synchronously (``RMW_FASTRTPS_PUBLICATION_MODE=SYNCHRONOUS``, whatever the
-  user set): lockstep counts every message the simulator publishes, and a latched topic's
-  writer keeps one message. Published asynchronously, a message waits in that one-deep history
-  for Fast DDS's own thread to send it, and the next one published on the topic can replace it
-  unsent: a client then never gets (say) the referee's state of one period, and lockstep waits
-  for it 10 s before it drops the client (4 of 14 runs with the user's setting
-  ``ASYNCHRONOUS``, at the join or later). Sent within ``publish``, a message is in the
-  reader's queue before the next replaces it;
+  user set): lockstep counts every message the simulator publishes, and a writer keeps only
+  its last few (:data:`~servicesim_sim.ros.publishing.REPAIR_DEPTH`). Published asynchronously,
+  a message waits in that history for Fast DDS's own thread to send it, and later ones
+  published on the topic can replace it unsent: a client then never gets (say) the referee's
+  state of one period, and lockstep waits for it 10 s before it drops the client (4 of 14 runs
+  with the user's setting ``ASYNCHRONOUS`` and one-deep latched writers, at the join or
+  later). Sent within ``publish``, a message is on its way before the next replaces it, and
+  one lost on the way is still held to be sent again;
 * the Fast DDS shared-memory segments that dead participants of this user left in ``/dev/shm``
   (``fastdds_<16 hex digits>`` and its lock file ``…_el``) are removed: a participant holds an
   exclusive ``flock`` on its lock file while it lives, so a segment whose lock this process can

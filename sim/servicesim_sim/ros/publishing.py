@@ -7,6 +7,7 @@ refuses costs that message only, never the simulator.
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 from builtin_interfaces.msg import Duration, Time
@@ -36,6 +37,30 @@ REQUEST_DEPTH = 10_000
 EVERY_REQUEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=REQUEST_DEPTH,
                            reliability=ReliabilityPolicy.RELIABLE,
                            durability=DurabilityPolicy.VOLATILE)
+REPAIR_DEPTH = 10
+"""The fewest messages a reliable writer of the node keeps. Reliable delivery repairs a lost
+message only while its writer still holds it: a reader asks for what it lacks when the writer's
+heartbeat comes (every 0.1 s of wall time, ``process/fastdds_profile.xml``), and a KEEP_LAST
+writer drops its oldest message for each new one. Lockstep counts every message, and a client
+waits for the message of period *k* before it ticks *k*, while the simulator goes on to publish
+period *k* + 1 (docs/reference/simulator.md, "The pipeline"): so a writer keeps two periods'
+worth (the score comes five times a period). A one-deep latched writer replaced a message a
+flood of camera frames had made the client's socket drop, and the client, one message short
+for good, waited in vain for it once the topic fell quiet. A latched topic keeps its meaning:
+a reader one deep still gets the latest message alone."""
+
+
+def repairable(qos: QoSProfile | int) -> QoSProfile | int:
+    """``qos`` keeping at least :data:`REPAIR_DEPTH` messages if it is reliable and keeps the
+    last ones (best effort ones, whose losses stay lost, and KEEP_ALL are left as they are)."""
+    if isinstance(qos, int):
+        return max(qos, REPAIR_DEPTH)
+    if (qos.history == HistoryPolicy.KEEP_ALL or qos.depth >= REPAIR_DEPTH
+            or qos.reliability != ReliabilityPolicy.RELIABLE):
+        return qos
+    deeper = copy.copy(qos)
+    deeper.depth = REPAIR_DEPTH
+    return deeper
 
 
 def stamp_ns(seconds: float) -> int:
@@ -63,7 +88,9 @@ class Publishing:
         self._topic_names: dict[Any, str] = {}
 
     def publisher(self, kind: type, topic: str, qos: QoSProfile | int) -> Any:
-        return self.node.create_publisher(kind, topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
+        """A publisher on ``topic``, keeping at least :data:`REPAIR_DEPTH` messages if reliable."""
+        return self.node.create_publisher(kind, topic, repairable(qos),
+                                          event_callbacks=NO_PUBLISHER_EVENTS)
 
     def send(self, publisher: Any, message: Any) -> None:
         """Publish; a message DDS refuses is dropped with a warning, never the simulator.
