@@ -82,6 +82,7 @@ def test_the_default_shipped_task_completes(shipped_task_run: FinishedRun) -> No
     assert [row for row in ticks if row["kind"] == "tick"][-1]["root"] == "SUCCESS"
 
 
+@pytest.mark.long
 def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(
         tmp_path: Path) -> None:
     # what an evaluation asks: the picture only of a mission that did not complete
@@ -93,6 +94,7 @@ def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(
     assert (tmp_path / "trajectory.png").stat().st_size > 0
 
 
+@pytest.mark.long
 def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
         tmp_path: Path) -> None:
     code, report = mission(tmp_path, "--seed", "3", "--sim-arg=--guest-out-of-range")
@@ -101,6 +103,7 @@ def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
     assert report["seed"] == 3
 
 
+@pytest.mark.long
 def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
     # drift times are world times, the shipped world file's (487, 654, ... s): at scale 0.15
     # the first is due at 72.6 s, while the shipped task guides the guest from about 30 s to 95 s
@@ -114,6 +117,7 @@ def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
     assert picked_up_again or "SUCCESS" in tree_log_statuses(tmp_path, "GuestCaughtUp")
 
 
+@pytest.mark.long
 def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobody_near(
         tmp_path: Path) -> None:
     """Random seed 10: leading its guest west along the office's 1.65 m top corridor, the robot
@@ -133,6 +137,7 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
     assert len(set(spots)) >= 2, spots  # in the corridor, and again in the room
 
 
+@pytest.mark.long
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
     # paced: what the run waits for in wall time after the end shows as sim time
     code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed",

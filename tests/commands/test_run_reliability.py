@@ -100,6 +100,7 @@ def test_a_stop_signal_ends_the_run_with_its_report_and_no_simulator_left(
     assert summary is not None and summary.statistics.message_count > 0
 
 
+@pytest.mark.long
 def test_a_run_started_as_nohup_starts_it_outlives_its_terminal(tmp_path: Path) -> None:
     """SIGHUP ignored at the start (``nohup``) stays ignored: the terminal closing does not
     stop the run, Ctrl-C still does."""
@@ -149,6 +150,7 @@ def test_a_killed_simulator_fails_the_run_and_says_so(
     assert report["failure"] == "the simulator was killed by SIGKILL"
 
 
+@pytest.mark.long
 def test_an_exception_in_a_tick_fails_the_mission_with_its_reason(tmp_path: Path) -> None:
     tree = tmp_path / "raising.xml"
     tree.write_text('<root BTCPP_format="4" main_tree_to_execute="Main">'
@@ -164,6 +166,7 @@ def test_an_exception_in_a_tick_fails_the_mission_with_its_reason(tmp_path: Path
     assert "raise RuntimeError(MESSAGE)" in (tmp_path / "run" / report["traceback"]).read_text()
 
 
+@pytest.mark.long
 def test_two_runs_in_one_shell_each_talk_only_to_their_own_simulator(tmp_path: Path) -> None:
     shell = os.environ["ROS_DOMAIN_ID"]
     runs = [start_run(tmp_path / name, "--speed", "0", "--seed", seed)  # lockstep: flat out
@@ -192,6 +195,7 @@ def standalone_simulator(tmp_path: Path) -> Iterator[subprocess.Popen[bytes]]:
             process.wait()
 
 
+@pytest.mark.long
 def test_a_run_beside_a_standalone_simulator_uses_its_own(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     result = run_module("bt_servicesim.run", "--headless", "--speed", "10", "--out",
@@ -201,6 +205,7 @@ def test_a_run_beside_a_standalone_simulator_uses_its_own(
     assert standalone_simulator.poll() is None
 
 
+@pytest.mark.long
 def test_attach_runs_against_the_backend_already_on_the_shells_domain(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     result = run_module("bt_servicesim.run", "--headless", "--attach", "--out",
@@ -213,6 +218,7 @@ def test_attach_runs_against_the_backend_already_on_the_shells_domain(
     assert not (tmp_path / "run" / "sim.log").exists()
 
 
+@pytest.mark.long
 def test_attach_on_the_system_clock_runs_without_sim_time(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     """As on a real robot, which publishes no /clock: the tree ticks on the system clock, and

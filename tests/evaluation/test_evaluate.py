@@ -160,6 +160,7 @@ def quietly(tmp_path: Path, chosen: EvaluationSettings,
     return rows
 
 
+@pytest.mark.long
 def test_summary_maps_each_executive_to_its_statistics_and_rows(tmp_path: Path) -> None:
     chosen = settings(tmp_path, seed=1)
     quietly(tmp_path, chosen, fake())
@@ -219,6 +220,7 @@ def test_episodes_running_at_once_have_distinct_ros_domains_as_their_reports_say
         assert a["ros_domain_id"] != b["ros_domain_id"]
 
 
+@pytest.mark.long
 def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     chosen = settings(tmp_path, docs=tmp_path / "docs")
     quietly(tmp_path, chosen, fake())
@@ -496,6 +498,7 @@ def files_under(directory: Path) -> dict[str, tuple[int, int]]:
             for path in directory.rglob("*") if path.is_file()}
 
 
+@pytest.mark.long
 @pytest.mark.parametrize(("stop", "code"), [(signal.SIGTERM, 143), (signal.SIGHUP, 129),
                                             (signal.SIGINT, 130)])
 def test_a_stop_signal_stops_every_episode_and_nothing_writes_after_the_exit(
@@ -524,6 +527,7 @@ def test_a_stop_signal_stops_every_episode_and_nothing_writes_after_the_exit(
     assert f"(stopped by {stop.name})" in stderr
 
 
+@pytest.mark.long
 def test_a_million_episodes_start_at_once_and_ctrl_c_ends_them_cleanly(tmp_path: Path) -> None:
     process = start_evaluation(tmp_path, "report", "--episodes", "1000000", "--jobs", "2",
                                "--speed", "1")
