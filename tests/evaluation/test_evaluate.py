@@ -34,7 +34,12 @@ from bt_servicesim.evaluation.episodes import (
     start_time,
 )
 from bt_servicesim.evaluation.report import PLOTS, markdown_report
-from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
+from bt_servicesim.evaluation.settings import (
+    EPISODE_NAME,
+    INTERRUPTED,
+    PENALTY_KEYS,
+    EvaluationSettings,
+)
 from bt_servicesim.evaluation.summary import summarise, summary_of
 from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS, SERVICEBOT
 from tests.fakes.commands import run_module
@@ -532,8 +537,9 @@ def test_a_million_episodes_start_at_once_and_ctrl_c_ends_them_cleanly(tmp_path:
     process = start_evaluation(tmp_path, "report", "--episodes", "1000000", "--jobs", "2",
                                "--speed", "1")
     out = tmp_path / "evaluation"
-    wait_for([out / "bt" / "default" / "0" / "report.json"], process, 10.0)
-    time.sleep(1.0)
+    first = out / "bt" / "default" / "0"
+    wait_for([first / "report.json"], process, 10.0)
+    wait_for([first / EPISODE_NAME], process, 60.0)  # the first episode's row: it was played
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr
