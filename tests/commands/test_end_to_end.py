@@ -4,6 +4,7 @@ DDS between them, the mission tree on sim time, judged by the referee's own repo
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,6 +17,7 @@ if TYPE_CHECKING:
     from tests.commands.conftest import FinishedRun
 
 SHIPPED_TASK_GROUP = "shipped_task_run"
+GUEST_OUT_OF_RANGE_GROUP = "guest_out_of_range_run"
 
 #: Flat out: a run joins the simulator's lockstep, so the executive never falls behind sim time
 #: and the speed changes nothing but the wall time.
@@ -83,23 +85,28 @@ def test_the_default_shipped_task_completes(shipped_task_run: FinishedRun) -> No
 
 
 @pytest.mark.long
+@pytest.mark.xdist_group(GUEST_OUT_OF_RANGE_GROUP)
 def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(
-        tmp_path: Path) -> None:
-    # what an evaluation asks: the picture only of a mission that did not complete
-    code, report = mission(tmp_path, "--trajectory", "failed", "--speed", "0")
+        guest_out_of_range_run: FinishedRun, tmp_path: Path) -> None:
+    # what an evaluation asks (--trajectory failed): the picture only of a mission that did not
+    # complete
+    code, report = guest_out_of_range_run.code, guest_out_of_range_run.report
     assert_completed(code, report)
-    assert not (tmp_path / "trajectory.png").exists()
-    drawn = run_module("bt_servicesim.trajectory", str(tmp_path), timeout=WALL_LIMIT_S)
+    assert not (guest_out_of_range_run.out / "trajectory.png").exists()
+    out = shutil.copytree(guest_out_of_range_run.out, tmp_path / "run")  # drawn in a copy
+    drawn = run_module("bt_servicesim.trajectory", str(out), timeout=WALL_LIMIT_S)
     assert drawn.returncode == 0, drawn.stderr[-2000:]
-    assert (tmp_path / "trajectory.png").stat().st_size > 0
+    assert (out / "trajectory.png").stat().st_size > 0
 
 
 @pytest.mark.long
+@pytest.mark.xdist_group(GUEST_OUT_OF_RANGE_GROUP)
 def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
-        tmp_path: Path) -> None:
-    code, report = mission(tmp_path, "--seed", "3", "--sim-arg=--guest-out-of-range")
+        guest_out_of_range_run: FinishedRun) -> None:
+    out, code, report = (guest_out_of_range_run.out, guest_out_of_range_run.code,
+                         guest_out_of_range_run.report)
     assert_completed(code, report)
-    assert "SUCCESS" in tree_log_statuses(tmp_path, "PlanExploration")
+    assert "SUCCESS" in tree_log_statuses(out, "PlanExploration")
     assert report["seed"] == 3
 
 
