@@ -6,7 +6,7 @@ see each other's nodes. This runs at import, before any test
 calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
 
 Every test starts and ends with an empty py_trees blackboard. The fakes these fixtures build are
-in the ``fakes`` package.
+in the ``fakes`` package. Tests marked ``long`` are collected first.
 """
 
 from __future__ import annotations
@@ -37,6 +37,13 @@ def _claim_test_domain() -> DomainClaim:
 apply_localhost_defaults()
 TEST_DOMAIN = _claim_test_domain()
 os.environ["ROS_DOMAIN_ID"] = str(TEST_DOMAIN.domain_id)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked ``long`` (tens of seconds of real processes each) start first, in their
+    order: pytest-xdist hands tests out in this order, so the workers end together rather than
+    one playing a long test alone at the end. Only the order changes; every test runs."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)
 
 
 @pytest.fixture

@@ -72,6 +72,7 @@ def test_block_options_are_read() -> None:
         Block(script="true\n", exit_status=0, creates=())]
 
 
+@pytest.mark.long
 @pytest.mark.timeout(BLOCK_TIMEOUT_S * 4)
 @pytest.mark.parametrize("page", TUTORIALS, ids=[page.stem for page in TUTORIALS])
 def test_tutorial_commands_run_as_written(page: Path, tmp_path: Path) -> None:

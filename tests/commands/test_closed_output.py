@@ -11,6 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from bt_servicesim.cli import EXIT_OUTPUT_CLOSED, interruptible
 from tests.commands.test_run_reliability import WALL_LIMIT_S, alive, children, start_run
 
@@ -21,6 +23,7 @@ def test_the_exit_status_of_a_closed_output_is_sigpipes() -> None:
     assert EXIT_OUTPUT_CLOSED == SIGPIPE_STATUS
 
 
+@pytest.mark.long
 def test_a_run_whose_output_is_closed_stops_and_says_so(tmp_path: Path) -> None:
     out = tmp_path / "run"
     out.mkdir()

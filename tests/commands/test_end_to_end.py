@@ -4,6 +4,7 @@ DDS between them, the mission tree on sim time, judged by the referee's own repo
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,6 +17,7 @@ if TYPE_CHECKING:
     from tests.commands.conftest import FinishedRun
 
 SHIPPED_TASK_GROUP = "shipped_task_run"
+GUEST_OUT_OF_RANGE_GROUP = "guest_out_of_range_run"
 
 #: Flat out: a run joins the simulator's lockstep, so the executive never falls behind sim time
 #: and the speed changes nothing but the wall time.
@@ -82,25 +84,33 @@ def test_the_default_shipped_task_completes(shipped_task_run: FinishedRun) -> No
     assert [row for row in ticks if row["kind"] == "tick"][-1]["root"] == "SUCCESS"
 
 
+@pytest.mark.long
+@pytest.mark.xdist_group(GUEST_OUT_OF_RANGE_GROUP)
 def test_a_completed_mission_leaves_its_picture_to_be_drawn_later_when_asked_to(
-        tmp_path: Path) -> None:
-    # what an evaluation asks: the picture only of a mission that did not complete
-    code, report = mission(tmp_path, "--trajectory", "failed", "--speed", "0")
+        guest_out_of_range_run: FinishedRun, tmp_path: Path) -> None:
+    # what an evaluation asks (--trajectory failed): the picture only of a mission that did not
+    # complete
+    code, report = guest_out_of_range_run.code, guest_out_of_range_run.report
     assert_completed(code, report)
-    assert not (tmp_path / "trajectory.png").exists()
-    drawn = run_module("bt_servicesim.trajectory", str(tmp_path), timeout=WALL_LIMIT_S)
+    assert not (guest_out_of_range_run.out / "trajectory.png").exists()
+    out = shutil.copytree(guest_out_of_range_run.out, tmp_path / "run")  # drawn in a copy
+    drawn = run_module("bt_servicesim.trajectory", str(out), timeout=WALL_LIMIT_S)
     assert drawn.returncode == 0, drawn.stderr[-2000:]
-    assert (tmp_path / "trajectory.png").stat().st_size > 0
+    assert (out / "trajectory.png").stat().st_size > 0
 
 
+@pytest.mark.long
+@pytest.mark.xdist_group(GUEST_OUT_OF_RANGE_GROUP)
 def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
-        tmp_path: Path) -> None:
-    code, report = mission(tmp_path, "--seed", "3", "--sim-arg=--guest-out-of-range")
+        guest_out_of_range_run: FinishedRun) -> None:
+    out, code, report = (guest_out_of_range_run.out, guest_out_of_range_run.code,
+                         guest_out_of_range_run.report)
     assert_completed(code, report)
-    assert "SUCCESS" in tree_log_statuses(tmp_path, "PlanExploration")
+    assert "SUCCESS" in tree_log_statuses(out, "PlanExploration")
     assert report["seed"] == 3
 
 
+@pytest.mark.long
 def test_a_guest_who_drifts_again_and_again_while_guided_is_found_and_delivered(
         tmp_path: Path) -> None:
     """Drift times are world times, the shipped world file's (487, 654, ... s): at scale 0.15
@@ -119,6 +129,7 @@ def test_a_guest_who_drifts_again_and_again_while_guided_is_found_and_delivered(
         tmp_path, "PickUpGuestAgain.CallPickUpGuest"))
 
 
+@pytest.mark.long
 def test_a_hard_mission_that_looks_for_its_guest_with_the_camera_stays_in_lockstep(
         tmp_path: Path) -> None:
     """Hard seed 22: the guest drifts twice while led and the camera finds them. While the
@@ -135,6 +146,7 @@ def test_a_hard_mission_that_looks_for_its_guest_with_the_camera_stays_in_lockst
         tmp_path, "LookForLostGuest.LookForGuest"))
 
 
+@pytest.mark.long
 def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobody_near(
         tmp_path: Path) -> None:
     """Random seed 10: leading its guest west along the office's 1.65 m top corridor, the robot
@@ -154,6 +166,7 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
     assert len(set(spots)) >= 2, spots  # in the corridor, and again in the room
 
 
+@pytest.mark.long
 def test_a_random_abort_beside_an_idler_keeps_the_costmaps_and_touches_nobody(
         tmp_path: Path) -> None:
     """Hard seed 11: exploring for the guest, the robot passes an idler and turns its back on
@@ -172,6 +185,7 @@ def test_a_random_abort_beside_an_idler_keeps_the_costmaps_and_touches_nobody(
         tmp_path, "ClearCostmapsForWaypointIfBlocked.ClearCostmaps")
 
 
+@pytest.mark.long
 def test_a_hopeless_mission_ends_at_the_time_limit_with_exit_1(tmp_path: Path) -> None:
     # paced: what the run waits for in wall time after the end shows as sim time
     code, report = mission(tmp_path, "--time-limit", "20", "--trajectory", "failed",

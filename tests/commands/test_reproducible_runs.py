@@ -13,6 +13,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from tests.fakes.commands import run_module
 
 #: flat out, with a short time limit: the mission gets past its first two checkpoints
@@ -36,6 +38,7 @@ def tick_times(out: Path) -> list[float]:
     return [row["sim_time_s"] for row in rows if row.get("kind") == "tick"]
 
 
+@pytest.mark.long
 def test_the_same_seed_twice_in_lockstep_gives_the_same_report(tmp_path: Path) -> None:
     first, output = run(tmp_path / "first")
     second, _ = run(tmp_path / "second")

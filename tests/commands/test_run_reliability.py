@@ -100,6 +100,7 @@ def test_a_stop_signal_ends_the_run_with_its_report_and_no_simulator_left(
     assert summary is not None and summary.statistics.message_count > 0
 
 
+@pytest.mark.long
 def test_a_run_started_as_nohup_starts_it_outlives_its_terminal(tmp_path: Path) -> None:
     """SIGHUP ignored at the start (``nohup``) stays ignored: the terminal closing does not
     stop the run, Ctrl-C still does."""
@@ -149,6 +150,7 @@ def test_a_killed_simulator_fails_the_run_and_says_so(
     assert report["failure"] == "the simulator was killed by SIGKILL"
 
 
+@pytest.mark.long
 def test_an_exception_in_a_tick_fails_the_mission_with_its_reason(tmp_path: Path) -> None:
     tree = tmp_path / "raising.xml"
     tree.write_text('<root BTCPP_format="4" main_tree_to_execute="Main">'
@@ -164,15 +166,29 @@ def test_an_exception_in_a_tick_fails_the_mission_with_its_reason(tmp_path: Path
     assert "raise RuntimeError(MESSAGE)" in (tmp_path / "run" / report["traceback"]).read_text()
 
 
+@pytest.mark.long
 def test_two_runs_in_one_shell_each_talk_only_to_their_own_simulator(tmp_path: Path) -> None:
     shell = os.environ["ROS_DOMAIN_ID"]
-    runs = [start_run(tmp_path / name, "--speed", "0", "--seed", seed)  # lockstep: flat out
+    runs = [start_run(tmp_path / name, "--speed", "0", "--seed", seed,  # lockstep: flat out
+                      "--time-limit", SHORT_MISSION_S)
             for name, seed in (("first", "3"), ("second", "5"))]
-    for process in runs:
+    for name, process in zip(("first", "second"), runs, strict=True):
         _, stderr = process.communicate(timeout=WALL_LIMIT_S)
-        assert process.returncode == 0, stderr[-2000:]
+        assert process.returncode == 1, stderr[-2000:]
+        assert_played_to_its_time_limit(report_of(tmp_path / name))
     domains = {report_of(tmp_path / name)["ros_domain_id"] for name in ("first", "second")}
     assert len(domains) == 2 and int(shell) not in domains
+
+
+#: A mission time limit for tests about something else than the mission's end (sim seconds).
+SHORT_MISSION_S = "20"
+
+
+def assert_played_to_its_time_limit(report: dict[str, Any]) -> None:
+    """The run played its mission, with its simulator, until the short time limit ended it."""
+    assert report["status"] == "failed", report.get("failure")
+    assert "MissionTimeLimit: timed out" in report["last_activity"], report["last_activity"]
+    assert float(SHORT_MISSION_S) - 1.0 <= report["sim_time_s"] <= float(SHORT_MISSION_S) + 2.0
 
 
 @pytest.fixture
@@ -192,15 +208,18 @@ def standalone_simulator(tmp_path: Path) -> Iterator[subprocess.Popen[bytes]]:
             process.wait()
 
 
+@pytest.mark.long
 def test_a_run_beside_a_standalone_simulator_uses_its_own(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
-    result = run_module("bt_servicesim.run", "--headless", "--speed", "10", "--out",
-                        str(tmp_path / "run"), timeout=WALL_LIMIT_S)
-    assert result.returncode == 0, result.stderr[-2000:]
+    result = run_module("bt_servicesim.run", "--headless", "--speed", "10", "--time-limit",
+                        SHORT_MISSION_S, "--out", str(tmp_path / "run"), timeout=WALL_LIMIT_S)
+    assert result.returncode == 1, result.stderr[-2000:]
+    assert_played_to_its_time_limit(report_of(tmp_path / "run"))
     assert report_of(tmp_path / "run")["ros_domain_id"] != int(os.environ["ROS_DOMAIN_ID"])
     assert standalone_simulator.poll() is None
 
 
+@pytest.mark.long
 def test_attach_runs_against_the_backend_already_on_the_shells_domain(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     result = run_module("bt_servicesim.run", "--headless", "--attach", "--out",
@@ -213,6 +232,7 @@ def test_attach_runs_against_the_backend_already_on_the_shells_domain(
     assert not (tmp_path / "run" / "sim.log").exists()
 
 
+@pytest.mark.long
 def test_attach_on_the_system_clock_runs_without_sim_time(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     """As on a real robot, which publishes no /clock: the tree ticks on the system clock, and

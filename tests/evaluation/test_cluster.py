@@ -1,4 +1,5 @@
-"""``evaluate --cluster``: the episodes on a Dask cluster of two workers the test starts.
+"""``evaluate --cluster``: the episodes on a Dask cluster of two workers the tests start (one
+for the tests that leave it whole, one for each test that kills a part of it).
 
 The cluster is the real thing, on loopback only: ``dask scheduler`` and two ``dask worker``
 processes of one thread each, bound to 127.0.0.1, no dashboard. Real episodes (short missions of
@@ -103,15 +104,53 @@ class Cluster:
         with Client(self.address, timeout=CLUSTER_UP_S, set_as_default=False) as client:
             client.wait_for_workers(count, timeout=CLUSTER_UP_S)
 
+    def wait_until_idle(self) -> None:
+        """Until both workers are up and neither runs a task (an earlier test's episode)."""
+        from distributed import Client
 
-@pytest.fixture
-def cluster(tmp_path: Path) -> Iterator[Cluster]:
-    started = Cluster(tmp_path / "cluster")
+        deadline = time.monotonic() + CLUSTER_UP_S
+        with Client(self.address, timeout=CLUSTER_UP_S, set_as_default=False) as client:
+            client.wait_for_workers(2, timeout=CLUSTER_UP_S)
+            while any(client.run(_executing).values()):
+                assert time.monotonic() < deadline, "the cluster's workers stayed busy"
+                time.sleep(0.1)
+
+
+def _executing(dask_worker: Any) -> int:
+    return int(dask_worker.state.executing_count)
+
+
+def started_cluster(directory: Path) -> Iterator[Cluster]:
+    started = Cluster(directory)
     started.directory.mkdir()
     try:
         yield started.start()
     finally:
         started.stop()
+
+
+@pytest.fixture
+def cluster(tmp_path: Path) -> Iterator[Cluster]:
+    """A cluster of the test's own, for a test that kills a part of it."""
+    yield from started_cluster(tmp_path / "cluster")
+
+
+@pytest.fixture(scope="module")
+def module_cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cluster]:
+    yield from started_cluster(tmp_path_factory.mktemp("shared") / "cluster")
+
+
+#: The tests that leave the cluster whole share one (``shared_cluster``), on one pytest-xdist
+#: worker (``make test`` runs ``--dist loadgroup``): starting a scheduler and two workers is
+#: seconds of processes each time.
+SHARED_CLUSTER = pytest.mark.xdist_group("dask_cluster")
+
+
+@pytest.fixture
+def shared_cluster(module_cluster: Cluster) -> Cluster:
+    """The module's cluster, once no episode of an earlier test is under way on it."""
+    module_cluster.wait_until_idle()
+    return module_cluster
 
 
 def evaluation(out: Path, *arguments: str) -> subprocess.CompletedProcess[str]:
@@ -134,13 +173,15 @@ def statistics(summary: dict[str, Any]) -> dict[str, Any]:
             for executive, figures in summary.items()}
 
 
+@pytest.mark.long
+@SHARED_CLUSTER
 def test_a_cluster_of_two_workers_gives_the_local_pools_results(
-        tmp_path: Path, cluster: Cluster) -> None:
+        tmp_path: Path, shared_cluster: Cluster) -> None:
     common = ("--episodes", "2", "--scenarios", "random", "--executive", "bt", "--seed", "3",
               "--speed", "0", "--time-limit", "40")
     local = evaluation(tmp_path / "local", *common, "--jobs", "2")
     assert local.returncode == 0, local.stderr
-    remote = evaluation(tmp_path / "remote", *common, "--cluster", cluster.address)
+    remote = evaluation(tmp_path / "remote", *common, "--cluster", shared_cluster.address)
     assert remote.returncode == 0, remote.stderr
     summaries = [json.loads((tmp_path / name / "summary.json").read_text())
                  for name in ("local", "remote")]
@@ -186,11 +227,13 @@ def still_running(processes: dict[int, int]) -> list[int]:
             and alive(pid)]
 
 
+@pytest.mark.long
+@SHARED_CLUSTER
 def test_sigterm_stops_the_episodes_under_way_on_every_worker(
-        tmp_path: Path, cluster: Cluster) -> None:
+        tmp_path: Path, shared_cluster: Cluster) -> None:
     process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
-                               "--cluster", cluster.address)
-    played = episodes_on(cluster.processes[1:], process)
+                               "--cluster", shared_cluster.address)
+    played = episodes_on(shared_cluster.processes[1:], process)
     process.send_signal(signal.SIGTERM)
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 143, stderr
@@ -209,6 +252,7 @@ def test_sigterm_stops_the_episodes_under_way_on_every_worker(
     assert files_under(out) == written, "nothing writes into --out after the evaluation exited"
 
 
+@pytest.mark.long
 def test_an_episode_whose_worker_dies_is_played_again_on_another(
         tmp_path: Path, cluster: Cluster) -> None:
     process = start_evaluation(tmp_path, "hang", "--episodes", "1", "--scenarios", "random",
@@ -295,14 +339,16 @@ def test_a_server_that_is_no_dask_scheduler_is_refused_in_one_line(
     assert "\n" not in str(refused.value)
 
 
+@pytest.mark.long
+@SHARED_CLUSTER
 def test_the_rows_come_back_in_plan_order_and_resume_keeps_them(
-        tmp_path: Path, cluster: Cluster) -> None:
+        tmp_path: Path, shared_cluster: Cluster) -> None:
     modes = {("baseline", 1): "crash"}  # one episode with no report of its own
     local = settings(tmp_path, out=tmp_path / "local")
     remote = settings(tmp_path, out=tmp_path / "remote")
     with (tmp_path / "progress.log").open("w") as stream:
         local_rows, _ = evaluate(local, command=fake(modes), stream=stream)
-        with connect(cluster.address) as client:
+        with connect(shared_cluster.address) as client:
             remote_rows, _ = evaluate(remote, command=fake(modes), stream=stream, cluster=client)
             played = files_under(remote.out)
             again, _ = evaluate(replace(remote, resume=True), command=fake(modes),
@@ -322,6 +368,7 @@ def episode_files(out: Path, files: dict[str, Any] | None = None) -> dict[str, A
             if Path(path).parent != out}
 
 
+@pytest.mark.long
 def test_a_lost_scheduler_ends_the_evaluation_with_one_line_and_its_results(
         tmp_path: Path, cluster: Cluster) -> None:
     process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
@@ -342,20 +389,24 @@ def test_a_lost_scheduler_ends_the_evaluation_with_one_line_and_its_results(
         assert summary[executive]["not_run"] == 3 and summary[executive]["episodes"] == 0
 
 
+@pytest.mark.long
+@SHARED_CLUSTER
 def test_an_evaluation_killed_outright_leaves_no_episode_running_on_the_workers(
-        tmp_path: Path, cluster: Cluster) -> None:
+        tmp_path: Path, shared_cluster: Cluster) -> None:
     process = start_evaluation(tmp_path, "hang", "--episodes", "3", "--scenarios", "random",
-                               "--cluster", cluster.address)
-    played = episodes_on(cluster.processes[1:], process)
+                               "--cluster", shared_cluster.address)
+    played = episodes_on(shared_cluster.processes[1:], process)
     process.kill()  # SIGKILL: no clean-up of its own; its client just leaves the scheduler
     process.communicate(timeout=30)
     deadline = time.monotonic() + 60.0
     while still_running(played) and time.monotonic() < deadline:
         time.sleep(0.5)
     assert not still_running(played), "the workers stopped the episodes nobody would take"
-    assert all(worker.poll() is None for worker in cluster.processes), "the cluster lives on"
+    assert all(worker.poll() is None for worker in shared_cluster.processes), \
+        "the cluster lives on"
 
 
+@pytest.mark.long
 def test_an_episode_whose_workers_die_twice_is_failed_not_played_a_third_time(
         tmp_path: Path, cluster: Cluster) -> None:
     process = start_evaluation(tmp_path, "hang", "--episodes", "1", "--scenarios", "random",

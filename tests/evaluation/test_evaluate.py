@@ -34,7 +34,12 @@ from bt_servicesim.evaluation.episodes import (
     start_time,
 )
 from bt_servicesim.evaluation.report import PLOTS, markdown_report
-from bt_servicesim.evaluation.settings import INTERRUPTED, PENALTY_KEYS, EvaluationSettings
+from bt_servicesim.evaluation.settings import (
+    EPISODE_NAME,
+    INTERRUPTED,
+    PENALTY_KEYS,
+    EvaluationSettings,
+)
 from bt_servicesim.evaluation.summary import summarise, summary_of
 from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS, SERVICEBOT
 from tests.fakes.commands import run_module
@@ -160,6 +165,7 @@ def quietly(tmp_path: Path, chosen: EvaluationSettings,
     return rows
 
 
+@pytest.mark.long
 def test_summary_maps_each_executive_to_its_statistics_and_rows(tmp_path: Path) -> None:
     chosen = settings(tmp_path, seed=1)
     quietly(tmp_path, chosen, fake())
@@ -219,6 +225,7 @@ def test_episodes_running_at_once_have_distinct_ros_domains_as_their_reports_say
         assert a["ros_domain_id"] != b["ros_domain_id"]
 
 
+@pytest.mark.long
 def test_table_plots_and_docs_are_written(tmp_path: Path) -> None:
     chosen = settings(tmp_path, docs=tmp_path / "docs")
     quietly(tmp_path, chosen, fake())
@@ -496,6 +503,7 @@ def files_under(directory: Path) -> dict[str, tuple[int, int]]:
             for path in directory.rglob("*") if path.is_file()}
 
 
+@pytest.mark.long
 @pytest.mark.parametrize(("stop", "code"), [(signal.SIGTERM, 143), (signal.SIGHUP, 129),
                                             (signal.SIGINT, 130)])
 def test_a_stop_signal_stops_every_episode_and_nothing_writes_after_the_exit(
@@ -524,12 +532,14 @@ def test_a_stop_signal_stops_every_episode_and_nothing_writes_after_the_exit(
     assert f"(stopped by {stop.name})" in stderr
 
 
+@pytest.mark.long
 def test_a_million_episodes_start_at_once_and_ctrl_c_ends_them_cleanly(tmp_path: Path) -> None:
     process = start_evaluation(tmp_path, "report", "--episodes", "1000000", "--jobs", "2",
                                "--speed", "1")
     out = tmp_path / "evaluation"
-    wait_for([out / "bt" / "default" / "0" / "report.json"], process, 10.0)
-    time.sleep(1.0)
+    first = out / "bt" / "default" / "0"
+    wait_for([first / "report.json"], process, 10.0)
+    wait_for([first / EPISODE_NAME], process, 60.0)  # the first episode's row: it was played
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr

@@ -20,6 +20,7 @@ import pytest
 from bt_servicesim.evaluation.episodes import descendants, start_time
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("mode", ["warm", "cold"])
 def test_sigterm_stops_a_real_evaluation_and_its_episode_cleanly(tmp_path: Path,
                                                                  mode: str) -> None:

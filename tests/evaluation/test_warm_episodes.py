@@ -19,6 +19,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from bt_servicesim.evaluation.episodes import (
     WARM_PAIRS_DIRECTORY,
     descendants,
@@ -45,6 +47,7 @@ def replayed(row: dict[str, Any]) -> tuple[Any, ...]:
             row["penalties"], row["score"])
 
 
+@pytest.mark.long
 def test_two_seeds_on_one_warm_pair_report_as_each_seed_played_cold(tmp_path: Path) -> None:
     chosen = settings(tmp_path / "warm", seed=3)
     warm = run_episodes(chosen, plan_episodes(chosen), warm=True)
@@ -67,6 +70,7 @@ def test_two_seeds_on_one_warm_pair_report_as_each_seed_played_cold(tmp_path: Pa
     assert replayed(warm[0]) != replayed(warm[1]), "two seeds, two missions"
 
 
+@pytest.mark.long
 def test_the_hard_knobs_do_not_outlive_their_episode(tmp_path: Path) -> None:
     """The hard set's knobs, then the shipped task with none, on one pair: as each played cold."""
     chosen = settings(tmp_path / "warm", seed=7, episodes=1, scenarios=("hard", "default"))
@@ -82,6 +86,7 @@ def test_the_hard_knobs_do_not_outlive_their_episode(tmp_path: Path) -> None:
     assert pairs == ["pair-1"]
 
 
+@pytest.mark.long
 def test_a_worker_killed_mid_episode_fails_that_episode_and_is_replaced(tmp_path: Path) -> None:
     chosen = settings(tmp_path / "warm", seed=3)
     first = chosen.out / "bt" / "random" / "0"

@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from py_trees.common import Status
 
 from bt_servicesim.records.tree_log import LOG_NAME, TreeState, read_tree_log
@@ -51,6 +52,7 @@ def logged_statuses(out: Path) -> set[tuple[str, ...]]:
     return {tuple(shown(state, key) for key in history.shape.keys) for state in history.states}
 
 
+@pytest.mark.long
 def test_btview_snapshot_shows_the_live_mission_and_the_server_stops_with_the_run(
         tmp_path: Path) -> None:
     port = free_port()

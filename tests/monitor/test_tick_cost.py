@@ -59,6 +59,7 @@ def polled() -> tuple[Groot2Server, py_trees.trees.BehaviourTree, subprocess.Pop
             client.wait()
 
 
+@pytest.mark.long
 def test_a_client_polling_at_50_hz_costs_the_tick_nothing_measurable(
         polled: tuple[Groot2Server, py_trees.trees.BehaviourTree, subprocess.Popen[bytes]]
 ) -> None:

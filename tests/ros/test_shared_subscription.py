@@ -4,12 +4,12 @@ decoded, and gone with the last reader."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 from typing import TypeVar
 
 import pytest
 from rclpy.context import Context
+from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import (
@@ -60,7 +60,7 @@ def burst_then_one_wake_up(writer: Node, executor: SingleThreadedExecutor, *,
     wait_for_subscription(publisher)
     for value in range(count):
         publisher.publish(Int32(data=value))
-    time.sleep(0.3)  # all of them delivered to the reader's queue
+    assert publisher.wait_for_all_acked(Duration(seconds=30)), "the reader's queue took them all"
     executor.spin_once(timeout_sec=5.0)
 
 

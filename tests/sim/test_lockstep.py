@@ -47,6 +47,7 @@ def wait_for_line(path: Path, text: str, limit_s: float) -> str | None:
     return None
 
 
+@pytest.mark.long
 def test_a_killed_lockstep_client_is_dropped_and_the_simulator_goes_on(
         tmp_path: Path, ros_context: Any) -> None:
     sim_log, client_log = tmp_path / "sim.log", tmp_path / "client.log"

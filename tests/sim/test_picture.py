@@ -98,6 +98,7 @@ def test_seeded_picture_shows_the_simulator_scenario_and_its_people(world: World
         f"start in {task.start_area}")
 
 
+@pytest.mark.long
 def test_command_writes_the_picture(tmp_path: Path) -> None:
     out = tmp_path / "office.png"
     assert picture.main(["--world", str(DEFAULT_WORLD), "--out", str(out)]) == 0
