@@ -8,8 +8,10 @@ A few dozen seeds are a small sample, so the figures carry how far chance alone 
 them: the success rate a 95 % Wilson score interval (sound at rates near 0 and 1, where the
 normal approximation is not), and each paired comparison an exact two-sided binomial test --
 a sign test on which executive did better, episode by episode, and McNemar's exact test on the
-episodes only one of the two completed. scipy computes them (``scipy.stats.binomtest``);
-importing it takes seconds, so only a report does.
+episodes only one of the two completed. Both are closed forms the standard library computes
+exactly (``statistics.NormalDist`` for the interval's quantile, ``math.comb`` for the binomial
+tail); the tests check them against ``scipy.stats.binomtest``, whose import alone costs more CPU
+than an evaluation's whole report.
 
 Those figures count *missions*, not episodes: episodes that play the same task (the same set
 and seed, as every episode of the ``default`` set plays the shipped task) are one mission,
@@ -19,6 +21,7 @@ replays of one task are one observation, not sixteen.
 
 from __future__ import annotations
 
+import math
 import statistics
 from collections.abc import Callable
 from typing import Any
@@ -77,22 +80,25 @@ def success_interval(successes: int, episodes: int) -> tuple[float, float] | Non
     episodes."""
     if episodes <= 0:
         return None
-    from scipy.stats import binomtest
-
-    interval = binomtest(successes, episodes).proportion_ci(confidence_level=CONFIDENCE,
-                                                             method="wilson")
-    return float(interval.low), float(interval.high)
+    z = statistics.NormalDist().inv_cdf(1.0 - (1.0 - CONFIDENCE) / 2.0)
+    rate = successes / episodes
+    spread = z * z / episodes
+    centre = (rate + spread / 2.0) / (1.0 + spread)
+    half = z / (1.0 + spread) * math.sqrt(rate * (1.0 - rate) / episodes
+                                          + spread / (4.0 * episodes))
+    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def exact_binomial_p(wins: int, losses: int) -> float | None:
     """Two-sided p-value of ``wins`` against ``losses`` if either were equally likely (the exact
     binomial test at 1/2): the sign test of paired values, McNemar's exact test of paired
     outcomes. None when there is nothing to compare."""
-    if wins + losses == 0:
+    trials = wins + losses
+    if trials == 0:
         return None
-    from scipy.stats import binomtest
-
-    return float(binomtest(wins, wins + losses, 0.5).pvalue)
+    fewer = min(wins, losses)
+    tail = sum(math.comb(trials, k) for k in range(fewer + 1))
+    return min(1.0, 2.0 * tail / (1 << trials))
 
 
 def sign_test(first: list[float], second: list[float]) -> float | None:

@@ -3,6 +3,7 @@ line on stderr and exit status 2, before any process starts."""
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -53,3 +54,33 @@ def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list
 def test_the_service_burst_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                                        named: str) -> None:
     refused_in_one_line(SIM_RTF.with_name("service_burst.py"), arguments, named)
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--runs", "0"], "--runs 0: give at least one run"),
+    (["--hogs", "-1"], "--hogs -1: give zero or more hogs"),
+    (["--jobs", "two"], "--jobs two: give a number of workers or 'auto'"),
+])
+def test_the_suite_under_load_benchmark_refuses_bad_arguments_in_one_line(
+        arguments: list[str], named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("suite_under_load.py"), arguments, named)
+
+
+def test_the_suite_under_load_benchmark_names_each_failing_test_and_the_counts() -> None:
+    spec = importlib.util.spec_from_file_location(
+        "suite_under_load", SIM_RTF.with_name("suite_under_load.py"))
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # a dataclass looks its module up there
+    spec.loader.exec_module(module)
+    output = "\n".join([
+        "........F.", "=========================== short test summary info ============",
+        "FAILED tests/sim/test_x.py::test_y[1] - AssertionError: 998 of 1000",
+        "ERROR tests/commands/test_z.py::test_w - TimeoutError",
+        "============ 1 failed, 2074 passed, 1 error in 361.27s (0:06:01) ============",
+    ])
+    run = module.parse_output(number=3, wall_s=370.0, exit_code=1, output=output)
+    assert run.failing == ["tests/sim/test_x.py::test_y[1]", "tests/commands/test_z.py::test_w"]
+    assert run.counts == {"failed": 1, "passed": 2074, "error": 1}
+    assert run.pytest_s == 361.27
+    assert "failing: tests/sim/test_x.py::test_y[1]; tests/commands/test_z.py::test_w" in run.line()

@@ -1,6 +1,6 @@
 """The evaluation's uncertainty figures: the success rate's Wilson interval and the exact
 binomial tests of paired comparisons (sign test, McNemar's), checked against values worked
-out by hand."""
+out by hand and against scipy's ``binomtest`` over every sample of up to 40 episodes."""
 
 from __future__ import annotations
 
@@ -97,3 +97,16 @@ def test_distinct_missions_keeps_the_first_played_row_of_each_seed() -> None:
     rows = [row("bt", 0, False, not_run=True), row("bt", 1, True), row("bt", 2, False),
             {**row("bt", 3, True), "episode_seed": 1}, row("baseline", 1, False)]
     assert distinct_missions(rows) == [rows[1], rows[2], rows[4]]
+
+
+def test_both_agree_with_scipys_binomial_test_over_every_small_sample() -> None:
+    from scipy.stats import binomtest
+
+    for episodes in range(1, 41):
+        for successes in range(episodes + 1):
+            low, high = binomtest(successes, episodes).proportion_ci(confidence_level=0.95,
+                                                                     method="wilson")
+            assert success_interval(successes, episodes) == (
+                pytest.approx(float(low), abs=1e-12), pytest.approx(float(high), abs=1e-12))
+            assert exact_binomial_p(successes, episodes - successes) == pytest.approx(
+                float(binomtest(successes, episodes, 0.5).pvalue), rel=1e-12)
