@@ -16,6 +16,8 @@ import pytest
 
 from bt_servicesim.records.drawing import tree_text
 from bt_servicesim.records.tree_log import (
+    LINES_PER_WRITE,
+    TickLine,
     TickRecord,
     TreeLog,
     TreeLogError,
@@ -187,3 +189,34 @@ def test_the_last_line_counts_every_tick_start_and_outcome_of_every_node(
         assert ticks >= starts >= 1 and success + failure <= ticks, key
     assert counts[root.name][1:] == [1, 1, 0]  # started once, succeeded once
 
+
+
+def test_each_tick_line_is_what_json_writes_of_its_record(tmp_path: Path) -> None:
+    """The log writes its tick lines without building the record's dict; the text is the same
+    (keys with quotes and non-ASCII, a tip that went, a blackboard key that went)."""
+    run = RecordedRun(tmp_path)
+    lines = run.path.read_text(encoding="utf-8").splitlines(keepends=True)[1:-1]
+    assert lines and all(line == json.dumps(json.loads(line), ensure_ascii=False) + "\n"
+                         for line in lines)
+    odd = TickRecord(tick=7, sim_time_s=1 / 3, root=Status.FAILURE, tip=None,
+                     nodes={'Main."Quoted"': (Status.RUNNING, "zwei Schritte → Ziel\n\t\\"),
+                            "Main.Other": (Status.INVALID, "")},
+                     blackboard={"/größe": "Pose2D(x=1.0)", "/went": None})
+    assert TickLine().of(odd) == json.dumps(odd.to_json(), ensure_ascii=False) + "\n"
+
+
+def test_lines_are_written_whole_in_batches_and_all_of_them_on_close(tmp_path: Path) -> None:
+    tree = errand_tree(tmp_path)
+    path = tmp_path / "tree_log.jsonl"
+    store: dict[str, object] = {}
+    log = TreeLog(tree=tree, path=path, sim_time_s=lambda: 0.0, blackboard=lambda: store)
+    assert json.loads(path.read_text())["kind"] == "tree"  # the header at once
+    for tick in range(1, LINES_PER_WRITE + 3):
+        store["/count"] = tick  # a change every tick: a line every tick
+        log.log(tick=tick)
+        written = path.read_text().splitlines()
+        assert len(written) == 1 + (LINES_PER_WRITE if tick >= LINES_PER_WRITE else 0), tick
+    log.close()
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    assert [line["tick"] for line in lines[1:-1]] == list(range(1, LINES_PER_WRITE + 3))
+    assert lines[-1]["kind"] == "counts"
