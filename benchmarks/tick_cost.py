@@ -282,7 +282,7 @@ def missions(seeds: Sequence[int], rounds: int, reference: Path | None) -> None:
         figure = figures[label]
         wall, cpu = ([us / 1e6 for us in figure.wall_us], [us / 1e6 for us in figure.cpu_us])
         print(f"  {label} ({commit_of(code)}):\n    wall {microseconds(wall)}\n"
-              f"    CPU  {microseconds(cpu)}")
+              f"    CPU of the ticking thread {microseconds(cpu)}")
         for seed, values in figure.ms_per_sim_s.items():
             print(f"    seed {seed}: the executive's CPU {statistics.median(values):5.1f} ms "
                   f"per sim s (median of {len(values)})")
