@@ -87,8 +87,8 @@ def timed_after_done(times: TickTimes, method: Callable[..., Any]) -> Callable[.
 
 def main(argv: list[str]) -> int:
     if len(argv) < 2:
-        print("usage: python benchmarks/timed_run.py FIGURES.json RUN_ARGUMENTS...",
-              file=sys.stderr)
+        print("benchmarks/timed_run.py: error: usage: python benchmarks/timed_run.py "
+              "FIGURES.json RUN_ARGUMENTS...", file=sys.stderr)
         return 2
     figures = Path(argv[0])
     from bt_servicesim import run
