@@ -240,11 +240,21 @@ def idle(tree_file: Path, ticks: int) -> None:
 
 @dataclass
 class MissionFigures:
-    """One checkout's missions: every tick's wall and CPU time, the CPU per sim second of each."""
+    """One checkout's missions: every tick's wall and CPU time; per mission, its seed and the
+    CPU per sim second of the executive, of its ticking thread and of each part of the period."""
 
     wall_us: list[float] = field(default_factory=list)
     cpu_us: list[float] = field(default_factory=list)
-    ms_per_sim_s: dict[int, list[float]] = field(default_factory=dict)
+    per_sim_s: list[tuple[int, dict[str, float]]] = field(default_factory=list)
+
+    def add(self, seed: int, result: dict[str, Any]) -> None:
+        self.wall_us += result["wall_us"]
+        self.cpu_us += result["cpu_us"]
+        sim_s = result["ticks"] * 0.1
+        shares = {"the executive (every thread)": result["process_cpu_s"],
+                  "its ticking thread": result["thread_cpu_s"], **result["parts_cpu_s"]}
+        self.per_sim_s.append((seed, {what: cpu_s * 1e3 / sim_s
+                                      for what, cpu_s in shares.items()}))
 
 
 def timed_mission(code: Path, seed: int, out: Path) -> dict[str, Any]:
@@ -270,22 +280,22 @@ def missions(seeds: Sequence[int], rounds: int, reference: Path | None) -> None:
             for seed in seeds:
                 for label, code in codes.items():
                     out = Path(scratch) / f"{label}-{seed}-{round_number}"
-                    result = timed_mission(code, seed, out)
-                    figure = figures[label]
-                    figure.wall_us += result["wall_us"]
-                    figure.cpu_us += result["cpu_us"]
-                    figure.ms_per_sim_s.setdefault(seed, []).append(
-                        result["process_cpu_s"] * 1e3 / (result["ticks"] * 0.1))
+                    figures[label].add(seed, timed_mission(code, seed, out))
     print(f"missions (seeds {', '.join(map(str, seeds))}, {rounds} round(s), interleaved), "
           "each tick with its records:")
     for label, code in codes.items():
         figure = figures[label]
         wall, cpu = ([us / 1e6 for us in figure.wall_us], [us / 1e6 for us in figure.cpu_us])
         print(f"  {label} ({commit_of(code)}):\n    wall {microseconds(wall)}\n"
-              f"    CPU of the ticking thread {microseconds(cpu)}")
-        for seed, values in figure.ms_per_sim_s.items():
-            print(f"    seed {seed}: the executive's CPU {statistics.median(values):5.1f} ms "
-                  f"per sim s (median of {len(values)})")
+              f"    CPU of the ticking thread {microseconds(cpu)}\n"
+              "    CPU per sim second, median of the missions:")
+        for what in figure.per_sim_s[0][1]:
+            values = [shares[what] for _, shares in figure.per_sim_s]
+            print(f"      {what:34} {statistics.median(values):6.2f} ms")
+        for seed in seeds:
+            values = [shares["the executive (every thread)"]
+                      for played, shares in figure.per_sim_s if played == seed]
+            print(f"      the executive, seed {seed:<20} {statistics.median(values):6.2f} ms")
 
 
 def commit_of(code: Path) -> str:
