@@ -24,6 +24,7 @@ from bt_servicesim.records.tree_log import (
     TreeState,
     read_tree_log,
     stable_key,
+    state_reader,
 )
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
 from tests.fakes.recorded_run import RecordedRun, errand_tree
@@ -220,3 +221,41 @@ def test_lines_are_written_whole_in_batches_and_all_of_them_on_close(tmp_path: P
     lines = [json.loads(line) for line in path.read_text().splitlines()]
     assert [line["tick"] for line in lines[1:-1]] == list(range(1, LINES_PER_WRITE + 3))
     assert lines[-1]["kind"] == "counts"
+
+
+class Counting(py_trees.behaviour.Behaviour):
+    """A leaf whose feedback is worked out when read (a property): not kept in its dict."""
+
+    def __init__(self, name: str) -> None:
+        self.count = 0
+        super().__init__(name=name)
+
+    @property
+    def feedback_message(self) -> str:  # type: ignore[override]
+        return f"ticked {self.count} times"
+
+    @feedback_message.setter
+    def feedback_message(self, _text: str) -> None:
+        """py_trees sets it; the count says it."""
+
+    def update(self) -> Status:
+        self.count += 1
+        return Status.RUNNING
+
+
+def test_states_are_read_as_attribute_access_gives_them_from_dicts_or_not(
+        tmp_path: Path) -> None:
+    tree = errand_tree(tmp_path)
+    reader = state_reader(walk(tree.root))
+    for _ in range(4):
+        tree.tick()
+        assert reader() == [(node.status, node.feedback_message) for node in walk(tree.root)]
+    counting = py_trees.trees.BehaviourTree(py_trees.composites.Sequence(
+        "Main", memory=False, children=[Counting("Count")]))
+    log = TreeLog(tree=counting, path=tmp_path / "counting.jsonl", sim_time_s=lambda: 0.0,
+                  blackboard=dict)
+    counting.add_post_tick_handler(log)
+    for _ in range(3):
+        counting.tick()
+    assert log.latest[0]["Count"] == (Status.RUNNING, "ticked 3 times")
+    log.close()
