@@ -12,7 +12,16 @@
 * Groot2 monitor: the scripted mission ticked ``--monitor-rounds`` times each without a monitor,
   with ``run --groot``'s server watching and no client, and with ``btview echo`` polling it at
   50 Hz (rounds interleaved, so load on the machine falls on all three alike); wall time and the
-  ticking thread's CPU time per tick, and the requests the server answered.
+  ticking thread's CPU time per tick, and the requests the server answered;
+* missions: ``python -m bt_servicesim.run --headless --speed 0`` on each of ``--seeds``,
+  ``--rounds`` times, through ``benchmarks/timed_run.py``: every tick of the real mission timed
+  with what it records (the tree log and the tree topic, written after the lockstep done),
+  wall and the process's CPU time, and the executive's CPU (every thread) per sim second from
+  its first tick to its last; with ``--reference-code DIR`` the same missions are played on
+  another checkout too (``git worktree add DIR COMMIT``), interleaved seed by seed, so that
+  both meet the same load.
+
+``--parts`` picks the parts to run (default all four).
 
 Figures are wall-clock on this machine and vary with its load; nothing here is asserted. Bad
 arguments or a broken tree file give one line and exit status 2.
@@ -20,10 +29,13 @@ arguments or a broken tree file give one line and exit status 2.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
+import statistics
 import subprocess
 import sys
+import tempfile
 import time
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Callable, Sequence
@@ -61,7 +73,18 @@ def build_parser() -> OneLineArgumentParser:
                         help="ticks of the idle real tree (default 3000)")
     parser.add_argument("--monitor-rounds", type=int, default=5,
                         help="scripted missions per Groot2 monitor setting (default 5; 0: none)")
+    parser.add_argument("--seeds", default="5,8,13",
+                        help="comma list of task seeds for the missions (default 5,8,13)")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="missions per seed and checkout (default 1)")
+    parser.add_argument("--reference-code", type=Path, metavar="DIR",
+                        help="a checkout whose missions are played interleaved with these")
+    parser.add_argument("--parts", default=",".join(PARTS),
+                        help=f"comma list of {', '.join(PARTS)} (default all)")
     return parser
+
+
+PARTS = ("scripted", "idle", "monitor", "missions")
 
 
 def microseconds(seconds: Sequence[float]) -> str:
@@ -215,11 +238,87 @@ def idle(tree_file: Path, ticks: int) -> None:
         rclpy.try_shutdown()
 
 
+@dataclass
+class MissionFigures:
+    """One checkout's missions: every tick's wall and CPU time; per mission, its seed and the
+    CPU per sim second of the executive, of its ticking thread and of each part of the period."""
+
+    wall_us: list[float] = field(default_factory=list)
+    cpu_us: list[float] = field(default_factory=list)
+    per_sim_s: list[tuple[int, dict[str, float]]] = field(default_factory=list)
+
+    def add(self, seed: int, result: dict[str, Any]) -> None:
+        self.wall_us += result["wall_us"]
+        self.cpu_us += result["cpu_us"]
+        sim_s = result["ticks"] * 0.1
+        shares = {"the executive (every thread)": result["process_cpu_s"],
+                  "its ticking thread": result["thread_cpu_s"], **result["parts_cpu_s"]}
+        self.per_sim_s.append((seed, {what: cpu_s * 1e3 / sim_s
+                                      for what, cpu_s in shares.items()}))
+
+
+def timed_mission(code: Path, seed: int, out: Path) -> dict[str, Any]:
+    """One mission of ``code`` (a checkout) through ``timed_run.py``: its figures."""
+    figures = out.with_suffix(".json")
+    environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(code), str(code / "sim")])}
+    command = [sys.executable, str(Path(__file__).with_name("timed_run.py")), str(figures),
+               "--seed", str(seed), "--speed", "0", "--headless", "--out", str(out),
+               "--trajectory", "failed"]
+    done = subprocess.run(command, env=environment, cwd=code, capture_output=True, text=True)
+    if not figures.exists():
+        sys.exit(f"benchmarks/tick_cost.py: error: seed {seed} on {code} wrote no figures "
+                 f"(exit {done.returncode}): {done.stderr.strip().splitlines()[-1:]}")
+    result: dict[str, Any] = json.loads(figures.read_text())
+    return result
+
+
+def missions(seeds: Sequence[int], rounds: int, reference: Path | None) -> None:
+    codes = {"this checkout": REPO} | ({} if reference is None else {"reference": reference})
+    figures = {label: MissionFigures() for label in codes}
+    with tempfile.TemporaryDirectory(prefix="tick_cost-") as scratch:
+        for round_number in range(rounds):
+            for seed in seeds:
+                for label, code in codes.items():
+                    out = Path(scratch) / f"{label}-{seed}-{round_number}"
+                    figures[label].add(seed, timed_mission(code, seed, out))
+    print(f"missions (seeds {', '.join(map(str, seeds))}, {rounds} round(s), interleaved), "
+          "each tick with its records:")
+    for label, code in codes.items():
+        figure = figures[label]
+        wall, cpu = ([us / 1e6 for us in figure.wall_us], [us / 1e6 for us in figure.cpu_us])
+        print(f"  {label} ({commit_of(code)}):\n    wall {microseconds(wall)}\n"
+              f"    CPU of the ticking thread {microseconds(cpu)}\n"
+              "    CPU per sim second, median of the missions:")
+        for what in figure.per_sim_s[0][1]:
+            values = [shares[what] for _, shares in figure.per_sim_s]
+            print(f"      {what:34} {statistics.median(values):6.2f} ms")
+        for seed in seeds:
+            values = [shares["the executive (every thread)"]
+                      for played, shares in figure.per_sim_s if played == seed]
+            print(f"      the executive, seed {seed:<20} {statistics.median(values):6.2f} ms")
+
+
+def commit_of(code: Path) -> str:
+    done = subprocess.run(["git", "-C", str(code), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True)
+    return done.stdout.strip() or "not a git checkout"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    if args.drive_ticks < 0 or args.idle_ticks < 1 or args.monitor_rounds < 0:
+    if args.drive_ticks < 0 or args.idle_ticks < 1 or args.monitor_rounds < 0 or args.rounds < 1:
         build_parser().error("--drive-ticks and --monitor-rounds must be 0 or more and "
-                             "--idle-ticks 1 or more")
+                             "--idle-ticks and --rounds 1 or more")
+    parts = [part for part in args.parts.split(",") if part]
+    if unknown := [part for part in parts if part not in PARTS]:
+        build_parser().error(f"--parts: unknown part {unknown[0]} (choose from {', '.join(PARTS)})")
+    try:
+        seeds = [int(seed) for seed in args.seeds.split(",")]
+    except ValueError:
+        build_parser().error(f"--seeds {args.seeds}: not a comma list of integers")
+    if args.reference_code is not None and not (args.reference_code / "bt_servicesim").is_dir():
+        build_parser().error(f"--reference-code {args.reference_code}: not a checkout of this "
+                             "repository")
     domain = isolate()
     from bt_servicesim.tree.loading import MissionTreeError, load_mission_tree
 
@@ -229,10 +328,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         build_parser().error(str(error))
     print(f"py_trees {version('py_trees')}, ROS domain {domain}, "
           f"discovery {os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}")
-    scripted(args.tree, args.drive_ticks)
-    idle(args.tree, args.idle_ticks)
-    if args.monitor_rounds:
+    if "scripted" in parts:
+        scripted(args.tree, args.drive_ticks)
+    if "idle" in parts:
+        idle(args.tree, args.idle_ticks)
+    if "monitor" in parts and args.monitor_rounds:
         monitored(args.tree, args.drive_ticks, args.monitor_rounds)
+    if "missions" in parts:
+        missions(seeds, args.rounds, args.reference_code)
     return 0
 
 

@@ -17,12 +17,19 @@ Both leaf bases declare no ports, so py_trees' ports registry treats them as abs
 registers them as XML tags; every concrete subclass that declares ``INPUT_PORTS`` and
 ``OUTPUT_PORTS`` is registered under its class name when its module is imported
 (:mod:`bt_servicesim.behaviours` imports them all).
+
+Their ports find their blackboard entries once (:mod:`bt_servicesim.behaviours.port_keys`), and
+they run py_trees' leaf lifecycle without its unread debug messages
+(:mod:`bt_servicesim.behaviours.lifecycle`).
 """
 
 from __future__ import annotations
 
 import py_trees
 from py_trees.ports import BehaviourWithPorts, PortInformation
+
+from bt_servicesim.behaviours.lifecycle import LeafLifecycle
+from bt_servicesim.behaviours.port_keys import PortKeys
 
 __all__ = ["ActionNode", "ConditionNode", "Ports", "Status", "kind_of"]
 
@@ -31,7 +38,7 @@ Ports = dict[str, PortInformation]
 """A port declaration: port name to its information."""
 
 
-class ActionNode(BehaviourWithPorts):
+class ActionNode(LeafLifecycle, PortKeys, BehaviourWithPorts):
     """A leaf that acts or waits: any status, with the py_trees lifecycle.
 
     Configuration in ``__init__``, ROS handles in ``setup``, requests sent in ``initialise``, a
@@ -39,7 +46,7 @@ class ActionNode(BehaviourWithPorts):
     """
 
 
-class ConditionNode(BehaviourWithPorts):
+class ConditionNode(LeafLifecycle, PortKeys, BehaviourWithPorts):
     """A leaf that checks: SUCCESS when :meth:`check` says yes, FAILURE otherwise, never RUNNING.
 
     Subclasses implement :meth:`check` and set ``feedback_message`` to say why.

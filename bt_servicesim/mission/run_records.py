@@ -36,7 +36,7 @@ from bt_servicesim.records.trajectory import (
     trace_from_recording,
 )
 from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
-from bt_servicesim.ros.lockstep import after_this_period
+from bt_servicesim.ros.lockstep import LockstepHost
 from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
 from bt_servicesim.tree.shape import ShadowTree
@@ -61,6 +61,9 @@ class RunRecords:
         # positions as they come would cost the executive a tenth of its time
         self.phases: list[tuple[float, str]] = []
         self._node = node
+        self._host = node if isinstance(node, LockstepHost) else None
+        """The node as lockstep's host, looked up once: a runtime protocol check costs tens of
+        microseconds, too much for every tick."""
         self._profile = profile
         self.profile: dict[str, Any] | None = None
         """The run's profile once written (:meth:`finish`); None before, or without one."""
@@ -76,10 +79,14 @@ class RunRecords:
             self.tree.add_post_tick_handler(self._log_tick)
 
     def _log_tick(self, tree: py_trees.trees.BehaviourTree) -> None:
-        """Log the tick, after its lockstep done when there is one."""
+        """Log the tick, after its lockstep done when there is one (free running: now)."""
         assert self.tree_log is not None
         log, tick = self.tree_log.log, tree.count + 1  # py_trees counts after the handlers
-        after_this_period(self._node, lambda: log(tick=tick))
+        client = None if self._host is None else self._host.lockstep
+        if client is None:
+            log(tick=tick)
+        else:
+            client.after_done(lambda: log(tick=tick))
 
     def note_phase(self, phase: str) -> None:
         """The mission's phase now (the executive's ``phase()``), kept for the picture."""

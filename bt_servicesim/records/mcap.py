@@ -56,6 +56,7 @@ from bt_servicesim.records.tree_log import TickRecord, TreeState
 from bt_servicesim.ros.messages import pose_from_msg
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 from bt_servicesim.ros.sim_clock import clock_now_ns
+from bt_servicesim.tree.shape import NodeState
 
 MCAP_NAME = "run.mcap"
 TASK_TOPIC = "/bt_servicesim/task"
@@ -365,12 +366,14 @@ class TreeTopic:
         self.recorder = recorder
         self.period_s = period_s
         self._state = TreeState()  # the latest, advanced in place by each record
+        self._nodes = SnapshotNodes()  # its nodes as JSON, node by node
         self._sent_at: float | None = None  # the sim time of the last snapshot sent
         self._unsent = False  # whether the latest state is not sent yet
 
     def publish(self, record: TickRecord) -> None:
         moved = (record.tip, record.root) != (self._state.tip, self._state.root)
         self._state.advance(record)
+        self._nodes.update(record.nodes)
         self._unsent = True
         if (self._sent_at is None or moved
                 or record.sim_time_s >= self._sent_at + self.period_s):
@@ -381,10 +384,8 @@ class TreeTopic:
             self._send()
 
     def _send(self) -> None:
-        snapshot = snapshot_json(self._state)
-        if self.phase is not None:
-            snapshot["phase"] = self.phase()
-        message = String(data=json.dumps(snapshot))
+        message = String(data=snapshot_text(
+            self._state, self._nodes, phase=None if self.phase is None else self.phase()))
         self.publisher.publish(message)
         if self.recorder is not None and self.recorder.records_own(TREE_TOPIC):
             self.recorder.record(TREE_TOPIC, message)
@@ -400,3 +401,35 @@ def snapshot_json(state: TreeState) -> dict[str, Any]:
                   for key, (status, feedback) in state.nodes.items()
                   if status != Status.INVALID},
     }
+
+
+class SnapshotNodes:
+    """The ``nodes`` of :func:`snapshot_json` as JSON text, kept up to date node by node.
+
+    A tick changes a few of the tree's nodes, and a snapshot holds all of them: each node's
+    text is encoded when its state changes, and a snapshot joins the texts of the nodes that
+    are not INVALID, in the order the nodes were first seen (the order of the state's dict).
+    """
+
+    def __init__(self) -> None:
+        self._texts: dict[str, str | None] = {}
+        """Per node, in first-seen order: its ``"key": {...}`` text, None while INVALID."""
+
+    def update(self, nodes: dict[str, NodeState]) -> None:
+        texts, dumps = self._texts, json.dumps
+        for key, (status, feedback) in nodes.items():
+            texts[key] = None if status is Status.INVALID else (
+                f'{dumps(key)}: {{"status": {dumps(status.name)}, "feedback": {dumps(feedback)}}}')
+
+    def text(self) -> str:
+        return "{" + ", ".join(text for text in self._texts.values() if text is not None) + "}"
+
+
+def snapshot_text(state: TreeState, nodes: SnapshotNodes, *, phase: str | None = None) -> str:
+    """``json.dumps`` of :func:`snapshot_json` of ``state`` (with ``phase`` when given), from
+    ``nodes`` kept up to date with ``state``: the same text, without a dict of every node."""
+    dumps = json.dumps
+    text = (f'{{"tick": {dumps(state.tick)}, "sim_time_s": {dumps(round(state.sim_time_s, 3))}, '
+            f'"root": {dumps(state.root.name)}, "tip": {dumps(state.tip)}, '
+            f'"nodes": {nodes.text()}')
+    return text + ("}" if phase is None else f', "phase": {dumps(phase)}}}')

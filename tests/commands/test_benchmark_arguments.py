@@ -1,5 +1,6 @@
-"""``benchmarks/sim_rtf.py``, ``startup.py`` and ``service_burst.py``: bad arguments are one
-line on stderr and exit status 2, before any process starts."""
+"""``benchmarks/sim_rtf.py``, ``startup.py``, ``service_burst.py``, ``tick_cost.py`` and
+``timed_run.py``: bad arguments are one line on stderr and exit status 2, before any process
+starts."""
 
 from __future__ import annotations
 
@@ -54,6 +55,21 @@ def test_the_startup_benchmark_refuses_bad_arguments_in_one_line(arguments: list
 def test_the_service_burst_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
                                                                        named: str) -> None:
     refused_in_one_line(SIM_RTF.with_name("service_burst.py"), arguments, named)
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--parts", "scripted,nothing"], "--parts: unknown part nothing"),
+    (["--seeds", "5,x"], "--seeds 5,x: not a comma list of integers"),
+    (["--rounds", "0"], "--idle-ticks and --rounds 1 or more"),
+    (["--reference-code", "/nowhere"], "--reference-code /nowhere: not a checkout"),
+])
+def test_the_tick_cost_benchmark_refuses_bad_arguments_in_one_line(arguments: list[str],
+                                                                   named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("tick_cost.py"), arguments, named)
+
+
+def test_the_timed_run_harness_without_its_arguments_is_one_line_and_status_2() -> None:
+    refused_in_one_line(SIM_RTF.with_name("timed_run.py"), [], "FIGURES.json RUN_ARGUMENTS")
 
 
 @pytest.mark.parametrize(("arguments", "named"), [

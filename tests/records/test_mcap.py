@@ -38,12 +38,15 @@ from bt_servicesim.records.mcap import (
     TASK_TOPIC,
     TREE_TOPIC,
     McapRecorder,
+    SnapshotNodes,
     TaskTopic,
     TreeTopic,
     complete_definition,
     field_types,
+    snapshot_json,
+    snapshot_text,
 )
-from bt_servicesim.records.tree_log import TickRecord
+from bt_servicesim.records.tree_log import TickRecord, TreeState
 from bt_servicesim.ros.node import ExecutiveNode
 from bt_servicesim.ros.shared_subscription import shared_subscription
 from tests.fakes.graphs import SimTimeGraph
@@ -404,3 +407,27 @@ def test_snapshots_carry_the_executives_phase(
     snapshots = [json.loads(decoded.data) for topic, _, _, decoded in read_back(graph.path)
                  if topic == TREE_TOPIC]
     assert [snapshot["phase"] for snapshot in snapshots] == ["BeginTask", "Pickup"]
+
+
+def test_a_snapshot_kept_node_by_node_is_the_text_json_writes_of_the_whole_state() -> None:
+    """The tree topic joins per-node texts; each snapshot is what json writes of the state."""
+    state, nodes = TreeState(), SnapshotNodes()
+    records = [
+        TickRecord(tick=1, sim_time_s=0.1, root=Status.RUNNING, tip="Main.Go",
+                   nodes={"Main": (Status.RUNNING, ""), "Main.Go": (Status.RUNNING, "3 m → go"),
+                          'Main."Then"': (Status.INVALID, "")}, blackboard={}),
+        TickRecord(tick=2, sim_time_s=0.2 + 1e-9, root=Status.RUNNING, tip='Main."Then"',
+                   nodes={"Main.Go": (Status.SUCCESS, "arrived"),
+                          'Main."Then"': (Status.RUNNING, "waiting\n")}, blackboard={}),
+        TickRecord(tick=3, sim_time_s=0.3, root=Status.FAILURE, tip=None,
+                   nodes={"Main.Go": (Status.INVALID, "arrived"),
+                          'Main."Then"': (Status.FAILURE, "gave up")}, blackboard={}),
+    ]
+    for record, phase in zip(records, ("BeginTask", None, "Pickup"), strict=True):
+        state.advance(record)
+        nodes.update(record.nodes)
+        whole = snapshot_json(state)
+        assert snapshot_text(state, nodes) == json.dumps(whole)
+        if phase is not None:
+            assert snapshot_text(state, nodes, phase=phase) == json.dumps(
+                {**whole, "phase": phase})

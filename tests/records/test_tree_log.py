@@ -16,12 +16,15 @@ import pytest
 
 from bt_servicesim.records.drawing import tree_text
 from bt_servicesim.records.tree_log import (
+    LINES_PER_WRITE,
+    TickLine,
     TickRecord,
     TreeLog,
     TreeLogError,
     TreeState,
     read_tree_log,
     stable_key,
+    state_reader,
 )
 from bt_servicesim.tree.shape import ShadowTree, TreeShape, walk
 from tests.fakes.recorded_run import RecordedRun, errand_tree
@@ -187,3 +190,72 @@ def test_the_last_line_counts_every_tick_start_and_outcome_of_every_node(
         assert ticks >= starts >= 1 and success + failure <= ticks, key
     assert counts[root.name][1:] == [1, 1, 0]  # started once, succeeded once
 
+
+
+def test_each_tick_line_is_what_json_writes_of_its_record(tmp_path: Path) -> None:
+    """The log writes its tick lines without building the record's dict; the text is the same
+    (keys with quotes and non-ASCII, a tip that went, a blackboard key that went)."""
+    run = RecordedRun(tmp_path)
+    lines = run.path.read_text(encoding="utf-8").splitlines(keepends=True)[1:-1]
+    assert lines and all(line == json.dumps(json.loads(line), ensure_ascii=False) + "\n"
+                         for line in lines)
+    odd = TickRecord(tick=7, sim_time_s=1 / 3, root=Status.FAILURE, tip=None,
+                     nodes={'Main."Quoted"': (Status.RUNNING, "zwei Schritte → Ziel\n\t\\"),
+                            "Main.Other": (Status.INVALID, "")},
+                     blackboard={"/größe": "Pose2D(x=1.0)", "/went": None})
+    assert TickLine().of(odd) == json.dumps(odd.to_json(), ensure_ascii=False) + "\n"
+
+
+def test_lines_are_written_whole_in_batches_and_all_of_them_on_close(tmp_path: Path) -> None:
+    tree = errand_tree(tmp_path)
+    path = tmp_path / "tree_log.jsonl"
+    store: dict[str, object] = {}
+    log = TreeLog(tree=tree, path=path, sim_time_s=lambda: 0.0, blackboard=lambda: store)
+    assert json.loads(path.read_text())["kind"] == "tree"  # the header at once
+    for tick in range(1, LINES_PER_WRITE + 3):
+        store["/count"] = tick  # a change every tick: a line every tick
+        log.log(tick=tick)
+        written = path.read_text().splitlines()
+        assert len(written) == 1 + (LINES_PER_WRITE if tick >= LINES_PER_WRITE else 0), tick
+    log.close()
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    assert [line["tick"] for line in lines[1:-1]] == list(range(1, LINES_PER_WRITE + 3))
+    assert lines[-1]["kind"] == "counts"
+
+
+class Counting(py_trees.behaviour.Behaviour):
+    """A leaf whose feedback is worked out when read (a property): not kept in its dict."""
+
+    def __init__(self, name: str) -> None:
+        self.count = 0
+        super().__init__(name=name)
+
+    @property
+    def feedback_message(self) -> str:  # type: ignore[override]
+        return f"ticked {self.count} times"
+
+    @feedback_message.setter
+    def feedback_message(self, _text: str) -> None:
+        """py_trees sets it; the count says it."""
+
+    def update(self) -> Status:
+        self.count += 1
+        return Status.RUNNING
+
+
+def test_states_are_read_as_attribute_access_gives_them_from_dicts_or_not(
+        tmp_path: Path) -> None:
+    tree = errand_tree(tmp_path)
+    reader = state_reader(walk(tree.root))
+    for _ in range(4):
+        tree.tick()
+        assert reader() == [(node.status, node.feedback_message) for node in walk(tree.root)]
+    counting = py_trees.trees.BehaviourTree(py_trees.composites.Sequence(
+        "Main", memory=False, children=[Counting("Count")]))
+    log = TreeLog(tree=counting, path=tmp_path / "counting.jsonl", sim_time_s=lambda: 0.0,
+                  blackboard=dict)
+    counting.add_post_tick_handler(log)
+    for _ in range(3):
+        counting.tick()
+    assert log.latest[0]["Count"] == (Status.RUNNING, "ticked 3 times")
+    log.close()
