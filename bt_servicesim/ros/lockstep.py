@@ -183,8 +183,8 @@ class LockstepClient:
         self._tickers: list[LockstepTicker] = []
         self._late: dict[int, tuple[str, int]] = {}
         """Subscriptions made after the join, by reader key: (topic, first period counted)."""
-        self._not_counted: set[int] = set()
-        """Readers made after the join the simulator does not publish to (or best effort)."""
+        self._keys_seen = 0
+        """Reader keys below this were made before the join or have been looked at since."""
         self._after_done: list[Callable[[], None]] | None = None
         """Work left for after this period's done (:meth:`after_done`); None between periods."""
         self._idle_periods: int | None = None
@@ -234,6 +234,7 @@ class LockstepClient:
             self.node.destroy_client(client)
             self._joining = None
         self._synchronise(answer.joined_at)
+        self._keys_seen = len(self.traffic.received)
         self._ticked = int(answer.joined_at.period)
         self.client_id = int(answer.client)
         self.traffic.hold(set(self._reader_offsets), set(answer.joined_at.endpoints))
@@ -515,34 +516,40 @@ class LockstepClient:
                 self.host.note_error(error, where="recording a tick")
 
     def _count_late_readers(self, period: LockstepPeriod) -> None:
-        """Name the subscriptions made since the last done, count from their first period
-        those whose first period comes next, forget the destroyed."""
+        """Name the subscriptions made since the last done, forget the destroyed, and count
+        from the next period those named to be counted from it."""
+        received = self.traffic.received
+        if not self._late and len(received) == self._keys_seen:
+            return  # most periods: no subscription made, none to count
         readers = self.traffic.readers
         for key in [key for key in self._late if key not in readers]:
             del self._late[key]
             self._reader_offsets.pop(key, None)
-        named = {topic for topic, _ in self._late.values()}
         announced = dict(zip(period.topics, period.messages, strict=False))
-        for key, subscription in readers.items():
-            if key in self._reader_offsets or key in self._late or key in self._not_counted:
-                continue
-            topic = subscription.topic_name
-            if (topic not in announced
-                    or subscription.qos_profile.reliability != Reliability.RELIABLE):
-                self._not_counted.add(key)
-                continue
-            if topic in named:
-                self.stalls += 1
-                self.node.get_logger().warning(
-                    f"lockstep: a second subscription to {topic} while the simulator still "
-                    "publishes it for the first: how many messages reach the new one depends "
-                    "on DDS; this run may not replay")
-            self._late[key] = (topic, self._ticked + PIPELINE_REACH)
-            self.traffic.hold_reader(key)
+        for key in range(self._keys_seen, len(received)):  # keys are given in order
+            if key in readers:
+                self._name_late_reader(key, readers[key].topic_name,
+                                       readers[key].qos_profile, announced)
+        self._keys_seen = len(received)
         for key, (topic, first) in self._late.items():
             if first == self._ticked + 1:  # its messages come from the next period on
                 self._reader_offsets[key] = (topic, int(announced.get(topic, 0)))
                 self._head_targets, self._ready_no_sooner = (None, {}, {}), 0
+
+    def _name_late_reader(self, key: int, topic: str, qos: QoSProfile,
+                          announced: dict[str, int]) -> None:
+        """Count reader ``key`` from two periods on, if the simulator counts its topic and
+        it receives every message (reliable); hold what arrives for it from now on."""
+        if topic not in announced or qos.reliability != Reliability.RELIABLE:
+            return
+        if topic in {named for named, _ in self._done_late.values()}:
+            self.stalls += 1
+            self.node.get_logger().warning(
+                f"lockstep: a new subscription to {topic} while the simulator still publishes "
+                "it for the last done's: how many of those messages reach the new one depends "
+                "on DDS; this run may not replay")
+        self._late[key] = (topic, self._ticked + PIPELINE_REACH)
+        self.traffic.hold_reader(key)
 
     def _release(self, period: LockstepPeriod) -> None:
         """Hand on what ``period`` counts; what a callback raises is kept, not raised."""

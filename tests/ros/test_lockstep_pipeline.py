@@ -220,3 +220,21 @@ def test_a_subscription_made_after_the_join_is_named_and_counted_from_two_period
         announce_with_camera(fake, 5, 2)
         fake.spin_until(lambda: 5 in fake.seen_at_done, "done 5")
         assert fake.readings_at_done[4] == [(CAMERA, 4)] and fake.readings_at_done[5] == []
+
+
+def test_a_new_subscription_while_the_last_done_named_the_topic_is_said_not_to_replay(
+        ros_context: Any) -> None:
+    """Destroyed and made again between two ticks, the camera's subscription is named anew
+    from two periods on; but the simulator still renders the next period for the last done's
+    subscription, and how much of it reaches the new one is DDS's business: a stall."""
+    with joined(ros_context) as fake:
+        node = fake.client.node
+        first = node.create_subscription(String, CAMERA, lambda _m: None, RELIABLE)
+        announce_with_camera(fake, 1, 0)
+        fake.spin_until(lambda: 1 in fake.seen_at_done, "done 1")
+        assert fake.readings_at_done[1] == [(CAMERA, 3)] and fake.client.stalls == 0
+        node.destroy_subscription(first)
+        node.create_subscription(String, CAMERA, lambda _m: None, RELIABLE)
+        announce_with_camera(fake, 2, 0)
+        fake.spin_until(lambda: 2 in fake.seen_at_done, "done 2")
+        assert fake.readings_at_done[2] == [(CAMERA, 4)] and fake.client.stalls == 1
