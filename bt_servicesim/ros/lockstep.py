@@ -19,7 +19,13 @@ Invariants the client keeps:
   the newest announcement and reports that the run will not replay
   (:attr:`LockstepClient.dropped_at`);
 * answers are totals per endpoint: every answer on an endpoint this node has a client for is
-  taken as its own (one executive per simulator).
+  taken as its own (one executive per simulator);
+* a subscription made after the join to a topic the simulator announces (the camera's, made
+  for a look) is named in the next done with the period it is counted from, two periods on
+  (:data:`PIPELINE_REACH`): the simulator publishes a topic it renders only for readers from
+  exactly that period, so from then on the subscription is counted and held like the others,
+  and its first message reaches the same tick in every run. A subscription destroyed is no
+  longer named.
 
 :func:`offered` finds out, within a bounded wall time, whether the backend offers lockstep; a
 backend without it (Gazebo, a real robot) is run free on
@@ -46,8 +52,7 @@ from bt_servicesim.ros.node_features import ErrorKeeper
 from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.ros.traffic import Traffic
 
-__all__ = ["Expectation", "LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of",
-           "offered"]
+__all__ = ["LockstepClient", "LockstepHost", "LockstepTicker", "lockstep_of", "offered"]
 
 JOIN_SERVICE = "/servicesim/lockstep/join"
 PERIOD_TOPIC = "/servicesim/lockstep/period"
@@ -70,7 +75,9 @@ STALL_WARNING_S = 10.0
 """Wall seconds a period may wait for its messages before the client ticks anyway and says so."""
 PIPELINE_REACH = 2
 """Periods a simulator that waits for this client announces at most past the client's last done:
-the one it steps while the client ticks, and the one that done lets it step."""
+the one it steps while the client ticks, and the one that done lets it step. A subscription
+named in the done for period *k* is counted from period *k* + this: one the simulator cannot
+have stepped yet, whatever its pipeline."""
 DUE_TOLERANCE_NS = 10_000_000
 """A period's sim time within this of a tick's due time counts as reaching it."""
 
@@ -148,21 +155,6 @@ class LockstepTicker:
             self.client.host.note_error(error, where="a tick")
 
 
-class Expectation:
-    """A message the client's ticks wait for (:meth:`LockstepClient.expect`)."""
-
-    def __init__(self, client: LockstepClient, *, due_ns: int, arrived: Callable[[], bool],
-                 what: str) -> None:
-        self.client = client
-        self.due_ns = due_ns
-        self.arrived = arrived
-        self.what = what
-
-    def cancel(self) -> None:
-        """Withdraw it: the ticks no longer wait for it."""
-        self.client.withdraw(self)
-
-
 class LockstepClient:
     """One node's lockstep with the simulator; see the module docstring."""
 
@@ -189,7 +181,10 @@ class LockstepClient:
         """The first period the simulator announced without waiting for this client (it dropped
         it); from then on the client runs free on the announcements. None while in step."""
         self._tickers: list[LockstepTicker] = []
-        self._expectations: list[Expectation] = []
+        self._late: dict[int, tuple[str, int]] = {}
+        """Subscriptions made after the join, by reader key: (topic, first period counted)."""
+        self._keys_seen = 0
+        """Reader keys below this were made before the join or have been looked at since."""
         self._after_done: list[Callable[[], None]] | None = None
         """Work left for after this period's done (:meth:`after_done`); None between periods."""
         self._idle_periods: int | None = None
@@ -211,6 +206,7 @@ class LockstepClient:
         self._sent_at_join: dict[str, int] = {}
         self._done_message: LockstepDone | None = None
         self._done_counts: dict[str, int] = {}
+        self._done_late: dict[int, tuple[str, int]] = {}
         self._done = node.create_publisher(LockstepDone, DONE_TOPIC, PROTOCOL_QOS)
         node.create_subscription(LockstepPeriod, PERIOD_TOPIC, self._on_period, PROTOCOL_QOS)
         self._joining: Client[Any, Any] | None = node.create_client(LockstepJoin, JOIN_SERVICE)
@@ -238,6 +234,7 @@ class LockstepClient:
             self.node.destroy_client(client)
             self._joining = None
         self._synchronise(answer.joined_at)
+        self._keys_seen = len(self.traffic.received)
         self._ticked = int(answer.joined_at.period)
         self.client_id = int(answer.client)
         self.traffic.hold(set(self._reader_offsets), set(answer.joined_at.endpoints))
@@ -364,27 +361,6 @@ class LockstepClient:
         else:
             self._after_done.append(work)
 
-    def expect(self, *, due_s: float, arrived: Callable[[], bool], what: str) -> Expectation:
-        """Tick no period whose sim time reaches ``due_s`` until ``arrived()`` says so.
-
-        For a message the announcements' counts do not cover: one on a subscription made after
-        the join (the camera's, made for a look), which is neither counted nor held. A
-        behaviour that judges such a message at a fixed sim time says so here, once the
-        message is sure to come (its writer is sending), so that the judgement falls on the
-        same tick in every run however late the message comes. Looked at again on every
-        arrival; a client out of step ignores it. What lacks is named as ``what``.
-        """
-        expectation = Expectation(self, due_ns=round(due_s * 1e9), arrived=arrived, what=what)
-        self._expectations.append(expectation)
-        self._ready_no_sooner = 0  # look again at the next arrival
-        return expectation
-
-    def withdraw(self, expectation: Expectation) -> None:
-        if expectation in self._expectations:
-            self._expectations.remove(expectation)
-            self._ready_no_sooner = 0
-            self._check()
-
     @property
     def holding(self) -> bool:
         """Whether the client holds the simulator still (its executive has finished)."""
@@ -442,22 +418,12 @@ class LockstepClient:
                    if self.traffic.received[key] < count]
         lacking.extend(endpoint for endpoint, count in answers.items()
                        if self.traffic.answered.get(endpoint, 0) < count)
-        awaited = self._awaited(head)
-        lacking.extend(awaited)
         shortfall = (sum(max(0, count - self.traffic.received[key])
                          for key, count in messages.items())
                      + sum(max(0, count - self.traffic.answered.get(endpoint, 0))
-                           for endpoint, count in answers.items()) + len(awaited))
+                           for endpoint, count in answers.items()))
         self._ready_no_sooner = self.traffic.arrivals + shortfall
         return lacking
-
-    def _awaited(self, period: LockstepPeriod) -> list[str]:
-        """The expectations due by ``period`` that have not arrived (:meth:`expect`)."""
-        if not self._expectations:
-            return []
-        now_ns = period.sim_time.sec * 1_000_000_000 + period.sim_time.nanosec
-        return [expectation.what for expectation in self._expectations
-                if now_ns + DUE_TOLERANCE_NS >= expectation.due_ns and not expectation.arrived()]
 
     def _targets(self, period: LockstepPeriod) -> tuple[dict[int, int], dict[str, int]]:
         """What ``period`` counts, in this node's own terms: messages per reader (by topic
@@ -535,6 +501,7 @@ class LockstepClient:
             self.periods += 1
             self._ticked = int(period.period)
             if in_step and self.in_step:  # a tick may have learned of the drop
+                self._count_late_readers(period)
                 self._publish_done(self._ticked)
         finally:
             self._run_after_done()
@@ -547,6 +514,42 @@ class LockstepClient:
                 step()
             except Exception as error:  # escaping an executor's callback kills the process
                 self.host.note_error(error, where="recording a tick")
+
+    def _count_late_readers(self, period: LockstepPeriod) -> None:
+        """Name the subscriptions made since the last done, forget the destroyed, and count
+        from the next period those named to be counted from it."""
+        received = self.traffic.received
+        if not self._late and len(received) == self._keys_seen:
+            return  # most periods: no subscription made, none to count
+        readers = self.traffic.readers
+        for key in [key for key in self._late if key not in readers]:
+            del self._late[key]
+            self._reader_offsets.pop(key, None)
+        announced = dict(zip(period.topics, period.messages, strict=False))
+        for key in range(self._keys_seen, len(received)):  # keys are given in order
+            if key in readers:
+                self._name_late_reader(key, readers[key].topic_name,
+                                       readers[key].qos_profile, announced)
+        self._keys_seen = len(received)
+        for key, (topic, first) in self._late.items():
+            if first == self._ticked + 1:  # its messages come from the next period on
+                self._reader_offsets[key] = (topic, int(announced.get(topic, 0)))
+                self._head_targets, self._ready_no_sooner = (None, {}, {}), 0
+
+    def _name_late_reader(self, key: int, topic: str, qos: QoSProfile,
+                          announced: dict[str, int]) -> None:
+        """Count reader ``key`` from two periods on, if the simulator counts its topic and
+        it receives every message (reliable); hold what arrives for it from now on."""
+        if topic not in announced or qos.reliability != Reliability.RELIABLE:
+            return
+        if topic in {named for named, _ in self._done_late.values()}:
+            self.stalls += 1
+            self.node.get_logger().warning(
+                f"lockstep: a new subscription to {topic} while the simulator still publishes "
+                "it for the last done's: how many of those messages reach the new one depends "
+                "on DDS; this run may not replay")
+        self._late[key] = (topic, self._ticked + PIPELINE_REACH)
+        self.traffic.hold_reader(key)
 
     def _release(self, period: LockstepPeriod) -> None:
         """Hand on what ``period`` counts; what a callback raises is kept, not raised."""
@@ -562,14 +565,18 @@ class LockstepClient:
         Most ticks send nothing: the message of the last tick then goes again with the new
         period alone, rather than its endpoint names and counts being built and checked anew.
         """
-        sent = self.traffic.sent
-        if self._done_message is None or self._done_counts != sent:
+        sent, late = self.traffic.sent, self._late
+        if (self._done_message is None or self._done_counts != sent
+                or self._done_late != late):
             counts = {endpoint: count - self._sent_at_join.get(endpoint, 0)
                       for endpoint, count in sent.items()}
             endpoints = sorted(counts)
+            readings = sorted(late.values())
             self._done_message = LockstepDone(
                 client=self.client_id or 0, endpoints=endpoints,
-                requests=[counts[e] for e in endpoints])
-            self._done_counts = dict(sent)
+                requests=[counts[e] for e in endpoints],
+                reading_topics=[topic for topic, _ in readings],
+                reading_from=[first for _, first in readings])
+            self._done_counts, self._done_late = dict(sent), dict(late)
         self._done_message.period = period
         self._done.publish(self._done_message)

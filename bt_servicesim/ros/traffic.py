@@ -114,6 +114,13 @@ class Traffic:
                                     if key in self.readers}
         self.holding = True
 
+    def hold_reader(self, key: int) -> None:
+        """Hold what arrives for reader ``key`` too, from now on (a subscription the lockstep
+        client counts from a later period than the join)."""
+        self._held_readers.add(key)
+        if key in self.readers:
+            self._held_subscriptions.add(id(self.readers[key]))
+
     def stop_holding(self) -> None:
         """Hand on everything held, and hold nothing more."""
         self.holding = False
@@ -168,10 +175,13 @@ class Traffic:
             self.readers[key] = subscription
 
     def forget(self, subscription: Subscription[Any]) -> None:
-        """A destroyed subscription: nothing more is expected of it."""
+        """A destroyed subscription: nothing more is expected of it, nor handed on."""
         for key, reader in list(self.readers.items()):
             if reader is subscription:
                 del self.readers[key]
+                self._held_readers.discard(key)
+                self._held_subscriptions.discard(id(subscription))
+                self._held_messages.pop(key, None)
 
     def took_more(self, subscription: Subscription[Any], count: int) -> None:
         """``count`` more messages taken by a callback from its own subscription's queue."""

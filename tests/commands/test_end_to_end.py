@@ -125,6 +125,29 @@ def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
 
 
 @pytest.mark.long
+def test_a_hard_mission_whose_guest_the_camera_finds_replays_in_lockstep(
+        tmp_path: Path) -> None:
+    """Hard seed 22: the guest drifts twice while led, stops a few metres back in sight, and
+    the camera finds them each time (a blue shirt over red trousers). The look subscribes to
+    the camera in a tick; its frames come from the period the lockstep client names, three of
+    0.9 MB a period, and nothing of lockstep's guarantee is lost under them: played twice,
+    the tree logs are the same, tick for tick."""
+    logs = []
+    for run in ("a", "b"):
+        out = tmp_path / run
+        code, report = mission(out, "--seed", "22", "--sim-arg=--difficulty",
+                               "--sim-arg=hard", "--trajectory", "failed")
+        assert code == 0, report.get("failure")
+        assert report["completed"] is True
+        assert (report["lockstep_dropped"], report["lockstep_stalls"]) == (None, 0)
+        seen = sorted({message for message in tree_log_feedback(
+            out, "LookForLostGuest.LookForGuest") if message.startswith("guest seen at")})
+        assert len(seen) >= 2, seen
+        logs.append((out / "tree_log.jsonl").read_text())
+    assert logs[0] == logs[1]
+
+
+@pytest.mark.long
 def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobody_near(
         tmp_path: Path) -> None:
     """Random seed 10: leading its guest west along the office's 1.65 m top corridor, the robot

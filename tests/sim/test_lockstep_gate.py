@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import random
 
-from servicesim_sim.lockstep.gate import Admission, LockstepGate
+from servicesim_sim.lockstep.gate import Admission, LockstepGate, Reading
 
 ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
 
@@ -182,3 +182,47 @@ def test_the_gate_is_open_exactly_when_nothing_is_missing() -> None:
                 elif action == 3:
                     gate.leave(rng.choice(clients))
                 assert gate.is_open() == (not gate.missing())
+
+
+CAMERA = "/servicebot/camera_front/image_raw"
+
+
+def test_a_topic_read_after_the_join_is_read_from_the_period_the_client_named() -> None:
+    """Tick 2 subscribed to the camera, counting it from period 4; tick 5 unsubscribed."""
+    gate, client = pipelined_gate_with_client()
+    gate.done(client, 1, {})
+    gate.announced(2)
+    gate.done(client, 2, {}, (Reading(CAMERA, 4),))
+    assert gate.readers_next() == {}  # period 3 is stepped on done 1
+    gate.announced(3)
+    assert gate.readers_next() == {CAMERA: 1}  # period 4, on done 2
+    for period in (3, 4):
+        gate.done(client, period, {}, (Reading(CAMERA, 4),))
+        gate.announced(period + 1)
+        assert gate.readers_next() == {CAMERA: 1}
+    gate.done(client, 5, {})  # period 6 was stepped on done 4, read
+    gate.announced(6)
+    assert gate.readers_next() == {}  # period 7 is stepped on done 5: not read
+
+
+def test_a_reading_in_a_done_that_came_early_does_not_count_yet() -> None:
+    """A client a period ahead: its done 3 names the camera from period 5; period 4 is still
+    stepped on done 2, and so is the decision whether to render it."""
+    gate, client = pipelined_gate_with_client()
+    gate.done(client, 1, {})
+    gate.announced(2)
+    gate.done(client, 2, {})
+    gate.announced(3)
+    gate.done(client, 3, {}, (Reading(CAMERA, 5),))  # early: the gate waits on done 2
+    assert gate.readers_next() == {}
+    gate.announced(4)
+    assert gate.readers_next() == {CAMERA: 1}
+
+
+def test_each_subscription_of_each_client_counts_as_a_reader() -> None:
+    gate = LockstepGate(drop_after_s=10.0)
+    first, second = gate.join("executive"), gate.join("viewer")
+    gate.announced(1)
+    gate.done(first, 1, {}, (Reading(CAMERA, 1), Reading(CAMERA, 2)))
+    gate.done(second, 1, {}, (Reading(CAMERA, 2), Reading("/servicebot/scan", 3)))
+    assert gate.readers_next() == {CAMERA: 3}

@@ -10,6 +10,7 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from servicesim_competition.msg import LockstepDone, LockstepPeriod
 
+from servicesim_sim.lockstep.gate import Reading
 from servicesim_sim.lockstep.message import (
     AnnouncementBytes,
     Done,
@@ -78,15 +79,20 @@ def test_new_names_lay_the_announcement_out_again() -> None:
 @pytest.mark.parametrize("endpoints", [[], ["/a"], ["/ab", "/abc"], ["/abcd"], NAMES])
 @pytest.mark.parametrize("leaving", [False, True])
 @pytest.mark.parametrize(("client", "period"), [(0, 0), (1, 5), (2**32 - 1, 2**64 - 1)])
+@pytest.mark.parametrize("reading", [[], ["/servicebot/camera_front/image_raw"], ["/a", "/bc"]])
 def test_a_done_reads_as_rclpy_reads_it(endpoints: list[str], leaving: bool, client: int,
-                                        period: int) -> None:
+                                        period: int, reading: list[str]) -> None:
     requests = [3 * index + 2**33 * (index % 2) for index in range(len(endpoints))]
+    starts = [period // 2 + index for index in range(len(reading))]
     message = LockstepDone(client=client, period=period, endpoints=endpoints,
-                           requests=requests, leaving=leaving)
+                           requests=requests, leaving=leaving, reading_topics=reading,
+                           reading_from=starts)
     data = serialize_message(message)
     assert read_done(data) == done_of(message) == Done(
         client=client, period=period, leaving=leaving,
-        requests=dict(zip(endpoints, requests, strict=True)))
+        requests=dict(zip(endpoints, requests, strict=True)),
+        readings=tuple(Reading(topic=topic, start=start)
+                       for topic, start in zip(reading, starts, strict=True)))
 
 
 def test_a_done_in_big_endian_cdr_is_read_by_rclpy() -> None:
@@ -95,6 +101,7 @@ def test_a_done_in_big_endian_cdr_is_read_by_rclpy() -> None:
     assert read_done(bytes(data)) == done_of(message)
     big = b"\x00\x00\x00\x00" + struct.pack(">I4xQI", 7, 9, 1) + struct.pack(">I", 3) + b"/a\x00"
     big += b"\x00" + struct.pack(">I", 1) + struct.pack(">Q", 1) + b"\x00"
+    big += b"\x00" * 3 + struct.pack(">II", 0, 0)  # no readings
     assert read_done(big) == done_of(message) == done_of(deserialize_message(big, LockstepDone))
 
 

@@ -315,10 +315,13 @@ def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None
         "WatchGuestFollows": [(Status.FAILURE, 20)],
         "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
         "GuestCaughtUp": [Status.FAILURE],
+        "LookForGuest": [(Status.FAILURE, 100)],  # round a corner: not in sight
         "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
+    assert script.count("LookForGuest") == 1
+    assert script.count("NavigateToSeenGuest") == 0
     assert script.count("PlanGuestSearch") == 1
     assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
     assert script.count("ComputeDropOffGoal") == 2
@@ -332,6 +335,7 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
         "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)] * 1000,
         "GuestCaughtUp": [Status.FAILURE] * 1000,
         "PlanGuestSearch": [Status.FAILURE] * 1000,
+        "LookForGuest": [Status.FAILURE] * 1000,
     })
     status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
@@ -339,7 +343,47 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
     # re-acquisition is not followed by another guiding under the same GuideRetry
     assert script.count("ComputeDropOffGoal") == 6 * 8
     assert script.count("PlanGuestSearch") == 6 * 8
+    assert script.count("LookForGuest") == 6 * 8
     assert script.count("CallDropOffGuest") == 0
+
+
+def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+        "GuestCaughtUp": [Status.FAILURE],
+        "LookForGuest": [(Status.SUCCESS, 60)],
+        "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+        "SeenGuestInRange": [Status.FAILURE] * 10,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    order = [call.rsplit(".", 1)[-1] for call in script.calls if any(
+        matches(call, key) for key in ("GuestCaughtUp", "LookForGuest", "NavigateToSeenGuest",
+                                       "PlanGuestSearch", "PickUpGuestAgain.CallPickUpGuest"))]
+    assert order == ["GuestCaughtUp", "LookForGuest", "NavigateToSeenGuest", "CallPickUpGuest"]
+    # RFID hearing the guest ends the approach before navigation does
+    navigation = next(c for c in script.calls if matches(c, "NavigateToSeenGuest"))
+    assert Status.INVALID in script.terminated[navigation]
+    assert script.count("ComputeDropOffGoal") == 2
+
+
+def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
+    script = Script({
+        "WatchGuestFollows": [(Status.FAILURE, 20)],
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+        "GuestCaughtUp": [Status.FAILURE],
+        "LookForGuest": [(Status.SUCCESS, 60)],
+        "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+        "SeenGuestInRange": [Status.FAILURE] * 200,
+        "SeenGuestReached": [Status.FAILURE],
+        "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateToSeenGuest") == 1
+    assert script.count("PlanGuestSearch") == 1
+    assert script.count("PickUpGuestAgain.CallPickUpGuest") == 1
 
 
 def test_a_guest_who_only_fell_behind_is_waited_for_not_picked_up_again() -> None:

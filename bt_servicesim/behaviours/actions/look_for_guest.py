@@ -15,15 +15,12 @@ destroyed in ``terminate``, and nobody reads the camera otherwise.
 Seeds replay: everything is judged in sim time. Each step's schedule is fixed when the step
 starts (turn for angle / speed, stop, settle), so the picture judged is the first whose stamp
 is at or after the settled time, whenever it arrives; it is judged at a tick a fixed
-``frame_lag`` later, so that the answer comes at the same tick in every run as long as the
-frame arrives within that lag (it waits on, RUNNING, if it has not). In lockstep it does: the
-subscription, made after the run joined, is not among those the lockstep client counts, so once
-a frame of the step has come (the simulator is sending them) the behaviour asks the client to
-tick no period from the judging time on until the picture is in
-(:meth:`~bt_servicesim.ros.lockstep.LockstepClient.expect`); a 0.9 MB frame otherwise often
-came a tick after the small messages of its period, and two runs of a seed parted there. The
-first picture also waits for the subscription to be matched, which takes wall time: the first
-look comes no sooner than ``warm_up`` sim seconds after the start.
+``frame_lag`` later, or, if it has not come by then, at the tick it comes (RUNNING meanwhile).
+The behaviour knows nothing of lockstep: with a simulator in lockstep the run's node counts the
+new subscription from a period it names (:mod:`bt_servicesim.ros.lockstep`), so every frame
+reaches the tick of its own period, and a camera that just streams (a robot's) works the same.
+A new subscription takes a moment to be matched, so the first look comes no sooner than
+``warm_up`` sim seconds after the start.
 
 The turn is sent on ``cmd_vel`` every tick while turning (a navigation goal that ends meanwhile
 sends its own stop), and a stop is sent when the turn is over and in ``terminate``.
@@ -55,7 +52,6 @@ from bt_servicesim.planning.guest_camera import (
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
-from bt_servicesim.ros.lockstep import Expectation, lockstep_of
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
 
@@ -125,7 +121,6 @@ class LookForGuest(ActionNode):
         self.node: Node | None = None
         self.publisher: Publisher[Twist] | None = None
         self.reader: Reader | None = None
-        self._expectation: Expectation | None = None
         self._turns: list[float] = []
         self._step: _Step | None = None
         self._frame: Image | None = None
@@ -181,14 +176,12 @@ class LookForGuest(ActionNode):
         if self._moving:
             self._command(turn=0.0)
         self._drop_camera()
-        self._withdraw_expectation()
         if new_status == Status.INVALID and self._step is not None:
             self.feedback_message = "look interrupted"
         self._step = None
 
     # ---------------------------------------------------------------- steps
     def _begin_step(self, *, earliest_look: float = 0.0) -> None:
-        self._withdraw_expectation()
         turn = self._turns[self._looks]
         turn_until = self._now() + abs(turn) / self.turn_speed
         self._frame = None
@@ -237,28 +230,10 @@ class LookForGuest(ActionNode):
     # ---------------------------------------------------------------- ROS
     def _on_image(self, message: Image) -> None:
         step = self._step
-        if step is None:
-            return
-        if self._expectation is None:
-            self._expect_picture(step)
-        if self._frame is not None:
+        if step is None or self._frame is not None:
             return
         if message.header.stamp.sec + message.header.stamp.nanosec * 1e-9 >= step.look_at - 1e-6:
             self._frame = message
-
-    def _expect_picture(self, step: _Step) -> None:
-        """In lockstep, hold the ticks from the judging time on until the step's picture is in."""
-        client = lockstep_of(self.node)
-        if client is None or not client.in_step:
-            return
-        self._expectation = client.expect(
-            due_s=step.look_at + self.frame_lag, arrived=lambda: self._frame is not None,
-            what=f"a picture on {self.camera_topic} stamped {step.look_at:.2f} s or later")
-
-    def _withdraw_expectation(self) -> None:
-        if self._expectation is not None:
-            self._expectation.cancel()
-            self._expectation = None
 
     def _command(self, *, turn: float) -> None:
         if self.publisher is None:

@@ -78,4 +78,4 @@ class DoneInbox:
             if name is not None:
                 self.node.get_logger().info(f"lockstep: client {name!r} left")
             return
-        self.gate.done(done.client, done.period, done.requests)
+        self.gate.done(done.client, done.period, done.requests, done.readings)

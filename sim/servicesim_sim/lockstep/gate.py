@@ -25,6 +25,12 @@ order, which DDS keeps). Requests beyond what the clients announced wait for the
 done announces them, so a request sent from a callback between two ticks is served with the
 tick whose done counted it, never earlier by luck.
 
+A done also says which topics the client subscribed to after its join and from which period
+it counts each (:class:`Reading`). Those readings decide a period as the requests do: what the
+done the gate waits on says (:meth:`LockstepGate.readers_next`), never a later done that
+happened to come early, so the simulator publishes a topic it renders only for readers (the
+camera) from exactly the period the client named.
+
 A client that goes silent -- the gate waiting on it for :data:`DROP_AFTER_S` of wall time --
 is dropped, so a dead client never hangs the simulator; the caller says so. Counts are totals
 per endpoint: with several lockstep clients on one endpoint the gate still waits for all of
@@ -37,12 +43,21 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["DROP_AFTER_S", "PIPELINE_LAG", "Admission", "LockstepGate"]
+__all__ = ["DROP_AFTER_S", "PIPELINE_LAG", "Admission", "LockstepGate", "Reading"]
 
 DROP_AFTER_S = 10.0
 """Wall seconds the gate waits on a client before it drops the client."""
 PIPELINE_LAG = 1
 """Periods the simulator may run ahead of its clients' done messages (see the docstring)."""
+
+
+@dataclass(frozen=True)
+class Reading:
+    """A subscription a client made after its join, counted by the client from ``start``."""
+
+    topic: str
+    start: int
+    """The first period whose messages on ``topic`` the client counts."""
 
 
 @dataclass
@@ -55,11 +70,23 @@ class _Client:
     done_period: int = -1
     requests: dict[int, dict[str, int]] = field(default_factory=dict)
     """The requests each done counted, by period (those no longer needed are forgotten)."""
+    readings: dict[int, tuple[Reading, ...]] = field(default_factory=dict)
+    """What each done said the client reads (none: nothing), by period, kept as requests."""
+
+    def latest_by(self, period: int) -> int | None:
+        """The period of the latest done for ``period`` or before (None: none yet)."""
+        counted = [done for done in self.requests if done <= period]
+        return max(counted) if counted else None
 
     def requests_by(self, period: int) -> dict[str, int]:
         """The counts of the latest done for ``period`` or before (none: nothing yet)."""
-        counted = [done for done in self.requests if done <= period]
-        return self.requests[max(counted)] if counted else {}
+        latest = self.latest_by(period)
+        return {} if latest is None else self.requests[latest]
+
+    def readings_by(self, period: int) -> tuple[Reading, ...]:
+        """What the latest done for ``period`` or before said the client reads."""
+        latest = self.latest_by(period)
+        return () if latest is None else self.readings.get(latest, ())
 
 
 @dataclass(order=True)
@@ -112,8 +139,10 @@ class LockstepGate:
         """The period whose done the gate waits for from ``client`` now."""
         return max(self.period - self.lag, client.joined_period)
 
-    def done(self, client_id: int, period: int, requests: dict[str, int]) -> bool:
-        """A client finished its tick for ``period``; False if nobody by that id is joined."""
+    def done(self, client_id: int, period: int, requests: dict[str, int],
+             readings: tuple[Reading, ...] = ()) -> bool:
+        """A client finished its tick for ``period``, having sent ``requests`` and reading
+        ``readings``; False if nobody by that id is joined."""
         client = self._clients.get(client_id)
         if client is None:
             return False
@@ -121,6 +150,8 @@ class LockstepGate:
             client.done_period = period
             client.requests[period] = {endpoint: count for endpoint, count in requests.items()
                                        if endpoint in self.endpoints}
+            if readings:
+                client.readings[period] = readings
             self._forget_old(client)
         return True
 
@@ -129,6 +160,19 @@ class LockstepGate:
         needed = [done for done in client.requests if done <= self.waits_for(client)]
         for old in [done for done in client.requests if needed and done < max(needed)]:
             del client.requests[old]
+            client.readings.pop(old, None)
+
+    def readers_next(self) -> dict[str, int]:
+        """The topics the joined clients read in the period stepped next, each with the
+        number of subscriptions that read it: as the done the gate waits on (or the latest
+        before it) says, for readings counted from that period or before."""
+        step = self.period + 1
+        readers: dict[str, int] = {}
+        for client in self._clients.values():
+            for reading in client.readings_by(self.waits_for(client)):
+                if reading.start <= step:
+                    readers[reading.topic] = readers.get(reading.topic, 0) + 1
+        return readers
 
     def leave(self, client_id: int) -> str | None:
         """A client leaves: the gate no longer waits for it; its name, None if unknown."""

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from rclpy.serialization import deserialize_message
 from servicesim_competition.msg import LockstepDone
 
+from servicesim_sim.lockstep.gate import Reading
 from servicesim_sim.wire.cdr import ENCAPSULATION, CdrTemplate
 
 __all__ = ["AnnouncementBytes", "Done", "DoneReader", "read_done"]
@@ -96,6 +97,8 @@ class Done:
     requests: dict[str, int]
     """The requests sent on each endpoint since the client joined."""
     leaving: bool
+    readings: tuple[Reading, ...] = ()
+    """The topics the client subscribed to since it joined, each counted from a period."""
 
 
 class DoneReader:
@@ -136,8 +139,10 @@ class DoneReader:
             at += -at % 8
         requests = struct.unpack_from(f"<{count}Q", body, at)
         at += 8 * count
-        return Done(client=client, period=period, leaving=body[at] != 0,
-                    requests=dict(zip(endpoints, requests, strict=False)))
+        leaving = body[at] != 0
+        return Done(client=client, period=period, leaving=leaving,
+                    requests=dict(zip(endpoints, requests, strict=False)),
+                    readings=_read_readings(body, at + 1))
 
 
 def _read_names(body: memoryview, at: int, count: int) -> tuple[list[str], int]:
@@ -153,6 +158,24 @@ def _read_names(body: memoryview, at: int, count: int) -> tuple[list[str], int]:
     return names, at
 
 
+def _read_readings(body: memoryview, at: int) -> tuple[Reading, ...]:
+    """The readings from ``at`` (just past ``leaving``) on: topics, then their periods."""
+    at += -at % 4
+    (count,) = _COUNT.unpack_from(body, at)
+    if not count:
+        return ()
+    topics, at = _read_names(body, at + 4, count)
+    at += -at % 4
+    (starts,) = _COUNT.unpack_from(body, at)
+    at += 4
+    at += -at % 8
+    periods = struct.unpack_from(f"<{starts}Q", body, at)
+    if starts != count:
+        raise IndexError("readings: as many topics as periods")
+    return tuple(Reading(topic=topic, start=start)
+                 for topic, start in zip(topics, periods, strict=True))
+
+
 def read_done(data: bytes) -> Done:
     """One ``LockstepDone`` message's serialised bytes, read (see :class:`DoneReader`)."""
     return DoneReader().read(data)
@@ -163,4 +186,6 @@ def done_of(message: LockstepDone) -> Done:
     return Done(client=int(message.client), period=int(message.period),
                 leaving=bool(message.leaving),
                 requests=dict(zip(message.endpoints, (int(n) for n in message.requests),
-                                  strict=False)))
+                                  strict=False)),
+                readings=tuple(Reading(topic=topic, start=int(start)) for topic, start in zip(
+                    message.reading_topics, message.reading_from, strict=False)))

@@ -10,6 +10,16 @@ never joins (a ``ros2`` command, an executive that runs free) sees no difference
 through :class:`~servicesim_sim.lockstep.joining.JoinService` and say they are done through
 :class:`~servicesim_sim.lockstep.dones.DoneInbox`.
 
+A topic the node publishes only while someone reads it (the camera) is *offered*
+(:meth:`LockstepServer.offer`): announced from the start, with 0 messages, so that a client
+that subscribes to it later knows the simulator counts it. While a client is joined, whether
+such a topic is published in a period is the clients' word, not DDS's: their done messages
+name the topics they subscribed to after the join and the period each counts from
+(:meth:`~servicesim_sim.lockstep.gate.LockstepGate.readers_next`), and :meth:`LockstepServer.hold`
+holds that period until the topic's writer has matched as many readers as the clients name
+(:meth:`LockstepServer.reads`). How long DDS took to match a new subscription then costs wall
+time only, never a different first message.
+
 The protocol (join, period announcements, done messages) is described in
 ``docs/reference/simulator.md#lockstep``.
 """
@@ -49,6 +59,9 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
 GATE_WAIT_S = 0.05
 """Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
 LOOK_EVERY_PERIODS = 10
+MATCH_WAIT_S = 10.0
+"""Wall seconds :meth:`LockstepServer.hold` waits at most for a writer to match the readers
+the clients name (then it steps on, with a warning, and the client stalls on what it lacks)."""
 """In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
 request; at least this often it looks for other work (a join, a request from outside)."""
 
@@ -93,10 +106,29 @@ class LockstepServer:
         self.dones = DoneInbox(node, gate=self.gate, topic=DONE_TOPIC, qos=PROTOCOL_QOS,
                                callback_group=self.callback_group)
         self._periods_unlooked = 0
+        self._writers: dict[str, Any] = {}
+        """Offered topics' publishers, and others the clients read, found once by topic."""
+        self._readers: dict[str, int] | None = None
+        """The topics the clients read in the period stepped next, with their subscriptions;
+        None while nobody is joined."""
 
     @property
     def active(self) -> bool:
         return self.gate.active
+
+    # ------------------------------------------------------------- readings
+    def offer(self, publisher: Any) -> None:
+        """``publisher``'s topic is published only while someone reads it: announce it from
+        the start (0 messages) and let the clients' readings decide it in lockstep."""
+        topic = publisher.topic_name
+        self._writers[topic] = publisher
+        self.messages.setdefault(topic, 0)
+
+    def reads(self, topic: str) -> bool | None:
+        """Whether a joined client reads ``topic`` in the period being stepped; None while
+        nobody is joined (then whoever subscribes decides)."""
+        readers = self._readers
+        return None if readers is None else topic in readers
 
     # ------------------------------------------------------------- counting
     def published(self, topic: str) -> None:
@@ -201,6 +233,36 @@ class LockstepServer:
             self._periods_unlooked = 0
             executor.run_ready()
         self.admit(executor)
+        self._readers = self.gate.readers_next() if self.gate.active else None
+        if self._readers:
+            self._await_readers(executor, self._readers)
+
+    def _await_readers(self, executor: DrainingExecutor, readers: dict[str, int]) -> None:
+        """Until each topic's writer has matched the subscriptions the clients read it with:
+        a message published before would not reach a reader its writer has not matched."""
+        deadline = time.monotonic() + MATCH_WAIT_S
+        for topic, count in sorted(readers.items()):
+            writer = self._writer(topic)
+            if writer is None:
+                continue
+            while writer.get_subscription_count() < count:
+                if time.monotonic() > deadline:
+                    self.node.get_logger().warning(
+                        f"lockstep: {topic} has matched {writer.get_subscription_count()} of "
+                        f"the {count} reader(s) the clients named after {MATCH_WAIT_S:.0f} s "
+                        f"of wall time; stepping period {self.gate.period + 1} all the same")
+                    break
+                executor.wait_and_run(timeout_sec=GATE_WAIT_S / 10.0)
+
+    def _writer(self, topic: str) -> Any:
+        """The node's publisher on ``topic``, or None if it publishes none."""
+        writer = self._writers.get(topic)
+        if writer is None:
+            writer = next((publisher for publisher in self.node.publishers
+                           if publisher.topic_name == topic), None)
+            if writer is not None:
+                self._writers[topic] = writer
+        return writer
 
     def _drop_silent(self) -> None:
         missing = self.gate.missing()

@@ -72,7 +72,7 @@ class SimulatorNode:
         self.publishing = publishing = Publishing(node=node, lockstep=lockstep)
         self.robot_topics = RobotTopics(engine=engine, publishing=publishing)
         self.camera = CameraTopic(engine=engine, rate_hz=settings.camera_rate_hz,
-                                  publishing=publishing)
+                                  publishing=publishing, lockstep=lockstep)
         self.world_topics = WorldTopics(engine=engine, world=settings.world,
                                         publishing=publishing)
         self.robot_topics.send_static_transforms()
