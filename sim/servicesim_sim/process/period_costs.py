@@ -3,9 +3,9 @@
 Design intent: the simulator's CPU per sim second is what sets how many episodes an hour two
 cores play, and the part of it spent in the model (the physics steps) against the part spent
 turning it into messages is the first thing to know about a change. The loop reads its own
-thread's CPU clock (``time.thread_time``, three reads a period, a microsecond) around its
-stages and logs the means once the episode ends, so a benchmark has the figure from any
-whole mission without a profiler (``benchmarks/cpu_per_sim_second.py`` reads the line).
+thread's CPU clock (``time.thread_time``, three reads a period, about a microsecond each)
+between its stages and logs the means once the episode ends, so a benchmark has the figure
+from any whole mission without a profiler (``benchmarks/cpu_per_sim_second.py`` reads it).
 Only periods of a running task count: before it the loop waits for the executive, after it
 the records' end. Nothing here feeds back into the simulation.
 """

@@ -96,8 +96,9 @@ class SimulatorNode:
         pacer = Pacer()
         period = 0
         costs, now = self.costs, self.costs.now
+        ended = now()  # each period starts where the last one ended: three clock reads a period
         while rclpy.ok(context=self.node.context):
-            started = now()
+            started = ended
             self._check_reset()
             scores = self._step()
             stepped = now()
@@ -108,8 +109,9 @@ class SimulatorNode:
             self._end_period(period, executor)
             self._wait_for_wall_clock(pacer, executor)
             self.lockstep.hold(executor)
+            ended = now()
             if scores:  # a task ran in this period
-                costs.add(started=started, stepped=stepped, published=published, ended=now())
+                costs.add(started=started, stepped=stepped, published=published, ended=ended)
             self._had_client = self._had_client or self.lockstep.active
             if self._had_client and not self.lockstep.active and self._resets_used():
                 self._idle(executor)
