@@ -12,6 +12,8 @@ simulated second of the mission costs the pair, executive and simulator together
 for each seed and checkout:
 
 * CPU ms per sim second, and ``THIS / OTHER``;
+* the simulator's process alone, the same way (its CPU from ``/proc`` every 0.1 s of wall
+  time while it runs: the executive's share is the rest);
 * the simulator's own figures, where its checkout logs them
   (:mod:`servicesim_sim.process.period_costs`): CPU of its loop thread per 0.1 s period of the
   task, in the physics steps, in publishing, and over the whole period;
@@ -22,7 +24,8 @@ for each seed and checkout:
   depends on when DDS matched it, and after the leaving the simulator runs on while the run
   closes the recording. Two checkouts that differ in what they compute may rightly differ.
 
-Then the medians over the seeds. Wall-clock-free as far as a busy machine allows: CPU time
+Then, for the pair and for the simulator, the medians over the seeds of each seed's median
+over the rounds. Wall-clock-free as far as a busy machine allows: CPU time
 moves little with the load, but say how loaded the machine was (the load averages are
 printed at the start and the end). Nothing is asserted. Bad arguments give one line and exit
 status 2.
@@ -38,11 +41,12 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sim_rtf import checkout, commit_of, seed_list
+from sim_rtf import ProcessCpu, checkout, commit_of, seed_list
 
 from bt_servicesim.cli import OneLineArgumentParser
 
@@ -52,6 +56,7 @@ WALL_CLOCK_KEYS = frozenset({"run_id", "ros_domain_id", "wall_time_s", "task_tim
 JOIN_NS = 100_000_000  # the first period's sim time, where the executive joins the lockstep
 PERIOD_COSTS = re.compile(r"step ([0-9.]+) ms, publishing ([0-9.]+) ms, whole period ([0-9.]+) ms")
 RUN_WALL_LIMIT_S = 1800.0
+SAMPLE_S = 0.1  # wall seconds between looks at the simulator's CPU
 
 
 def build_parser() -> OneLineArgumentParser:
@@ -77,6 +82,7 @@ class Run:
     """One run's figures."""
 
     cpu_s: float
+    simulator_cpu_s: float
     sim_s: float
     period_costs: tuple[float, float, float] | None  # step, publishing, whole period (ms)
     records: Path
@@ -89,11 +95,13 @@ class Seed:
     full: list[Run] = field(default_factory=list)
     cut: list[Run] = field(default_factory=list)
 
-    def ms_per_sim_s(self) -> float:
-        """The median over rounds of (full - cut CPU) / (full - cut sim seconds)."""
+    def ms_per_sim_s(self, *, simulator: bool = False, rounds: slice = slice(None)) -> float:
+        """The median over ``rounds`` of (full - cut CPU) / (full - cut sim seconds): of the
+        run and its simulator, or of the simulator alone."""
         return statistics.median(
-            1e3 * (full.cpu_s - cut.cpu_s) / max(full.sim_s - cut.sim_s, 1e-9)
-            for full, cut in zip(self.full, self.cut, strict=True))
+            1e3 * ((full.simulator_cpu_s - cut.simulator_cpu_s) if simulator
+                   else (full.cpu_s - cut.cpu_s)) / max(full.sim_s - cut.sim_s, 1e-9)
+            for full, cut in zip(self.full[rounds], self.cut[rounds], strict=True))
 
 
 def play(code: Path, seed: int, *, hard: bool, cut: bool, out: Path) -> Run:
@@ -108,8 +116,9 @@ def play(code: Path, seed: int, *, hard: bool, cut: bool, out: Path) -> Run:
     environment["PYTHONPATH"] = os.pathsep.join([str(code), str(code / "sim")])
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with (out.parent / f"{out.name}.stderr").open("w") as errors:
-        subprocess.run(command, stdout=subprocess.DEVNULL, stderr=errors, env=environment,
-                       cwd=code, check=False, timeout=RUN_WALL_LIMIT_S)  # -m looks in cwd
+        run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,
+                               env=environment, cwd=code)  # -m looks in cwd first
+    simulator = simulator_cpu(run)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     try:
@@ -117,8 +126,28 @@ def play(code: Path, seed: int, *, hard: bool, cut: bool, out: Path) -> Run:
     except (OSError, ValueError):
         raise SystemExit(f"{code}: seed {seed}: the run wrote no report "
                          f"(see {out.parent / out.name}.stderr)") from None
-    return Run(cpu_s=cpu, sim_s=float(report.get("sim_time_s") or 0.0),
+    return Run(cpu_s=cpu, simulator_cpu_s=simulator,
+               sim_s=float(report.get("sim_time_s") or 0.0),
                period_costs=period_costs(out / "sim.log"), records=out)
+
+
+def simulator_cpu(run: subprocess.Popen[bytes]) -> float:
+    """Wait for ``run``; the CPU seconds its children (the simulator) had spent at the last
+    look, every :data:`SAMPLE_S` (what a simulator spends in its last moments is lost, in a
+    full run and in a cut one alike)."""
+    processes = ProcessCpu(run.pid)
+    deadline = time.monotonic() + RUN_WALL_LIMIT_S
+    while True:
+        processes.sample()
+        try:
+            run.wait(timeout=SAMPLE_S)
+        except subprocess.TimeoutExpired:
+            if time.monotonic() > deadline:
+                run.kill()
+                run.wait()
+                raise SystemExit(f"a run took over {RUN_WALL_LIMIT_S:.0f} s") from None
+            continue
+        return sum(processes.latest[pid] for pid in processes.children())
 
 
 def period_costs(sim_log: Path) -> tuple[float, float, float] | None:
@@ -204,25 +233,30 @@ def measure_seed(seed: int, hard: bool, codes: tuple[Path, Path], seeds: tuple[S
                 play(code, seed, hard=hard, cut=cut, out=out))
     fulls = [results.full[-1] for results in seeds]
     differences = record_differences(fulls[0], fulls[1], codes)
-    this, other = (results.ms_per_sim_s() for results in seeds)
+    last = slice(-1, None)  # this round's figures
+    this, other = (results.ms_per_sim_s(rounds=last) for results in seeds)
     print(f"{name}: {fulls[0].sim_s:.1f} / {fulls[1].sim_s:.1f} sim s; CPU per sim s THIS "
           f"{this:.1f} ms, OTHER {other:.1f} ms, THIS/OTHER {this / other:.2f}; records "
           + ("identical" if not differences else "differ: " + ", ".join(differences)),
           flush=True)
-    for label, run in zip(("THIS", "OTHER"), fulls, strict=True):
-        print(f"  {label}: {figures(run)}", flush=True)
+    for label, run, results in zip(("THIS", "OTHER"), fulls, seeds, strict=True):
+        simulator = results.ms_per_sim_s(simulator=True, rounds=last)
+        print(f"  {label}: the simulator {simulator:.1f} ms per sim s; {figures(run)}",
+              flush=True)
     return not differences
 
 
 def summary(results: dict[tuple[int, bool], tuple[Seed, Seed]], *, identical: int,
             rounds: int) -> None:
-    this = [seeds[0].ms_per_sim_s() for seeds in results.values()]
-    other = [seeds[1].ms_per_sim_s() for seeds in results.values()]
-    print(f"median CPU per sim s over {len(results)} seeds: THIS {statistics.median(this):.1f} "
-          f"ms ({min(this):.1f}-{max(this):.1f}), OTHER {statistics.median(other):.1f} ms "
-          f"({min(other):.1f}-{max(other):.1f}), THIS/OTHER "
-          f"{statistics.median(this) / statistics.median(other):.2f}; records identical in "
-          f"{identical} of {len(results) * rounds} pairs; load average {load()}")
+    for what, simulator in (("the pair", False), ("the simulator", True)):
+        this = [seeds[0].ms_per_sim_s(simulator=simulator) for seeds in results.values()]
+        other = [seeds[1].ms_per_sim_s(simulator=simulator) for seeds in results.values()]
+        print(f"median CPU per sim s of {what} over {len(results)} seeds: THIS "
+              f"{statistics.median(this):.1f} ms ({min(this):.1f}-{max(this):.1f}), OTHER "
+              f"{statistics.median(other):.1f} ms ({min(other):.1f}-{max(other):.1f}), "
+              f"THIS/OTHER {statistics.median(this) / statistics.median(other):.2f}")
+    print(f"records identical in {identical} of {len(results) * rounds} pairs; load average "
+          f"{load()}")
 
 
 def load() -> str:
