@@ -61,7 +61,7 @@ SAMPLE_S = 0.1  # wall seconds between looks at the simulator's CPU
 
 def build_parser() -> OneLineArgumentParser:
     parser = OneLineArgumentParser(
-        prog="python benchmarks/cpu_per_sim_second.py",
+        prog="benchmarks/cpu_per_sim_second.py",
         description="CPU per simulated second of whole missions, two checkouts interleaved.")
     parser.add_argument("this", type=checkout, metavar="THIS",
                         help="a checkout of this repository (e.g. .)")
@@ -70,7 +70,7 @@ def build_parser() -> OneLineArgumentParser:
                              "older commit)")
     parser.add_argument("--seeds", type=seed_list, default=[5, 8, 13],
                         help="random task seeds (default 5,8,13)")
-    parser.add_argument("--hard-seeds", type=seed_list, default=[],
+    parser.add_argument("--hard-seeds", type=seed_list, default=[], metavar="SEEDS",
                         help="seeds played with --difficulty hard too (default none)")
     parser.add_argument("--rounds", type=int, default=1,
                         help="times each seed is played with each checkout (default 1)")
@@ -203,8 +203,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.rounds < 1:
         build_parser().error(f"--rounds {args.rounds}: must be 1 or more")
-    if not args.seeds and not args.hard_seeds:
-        build_parser().error("no seeds: give --seeds or --hard-seeds")
     codes: tuple[Path, Path] = (args.this, args.other)
     print(f"THIS {codes[0]} ({commit_of(codes[0])}), OTHER {codes[1]} ({commit_of(codes[1])}); "
           f"load average {load()} on {os.cpu_count()} CPUs", flush=True)
