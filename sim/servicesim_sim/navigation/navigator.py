@@ -65,6 +65,9 @@ STOP: Twist = (0.0, 0.0)
 OBSTRUCTION_RECHECK_M = 0.1
 """Metres along the path after which a path obstruction is looked for again (sooner if the
 costmap changed)."""
+GAP_BOUND_SLACK = 1e-6
+"""Metres past the body margin a bound of the gap to the people must be to be taken for the
+gap: less the body's width it is still past the margin, however the sums round."""
 
 
 class FollowPathError(IntEnum):
@@ -379,7 +382,8 @@ class Navigator:
         margin, person_body = self.tuning.body_margin, self.tuning.person_body
         walls = self.body.clearance(pose, beyond=margin)
         marks = [(mark.x, mark.y) for mark in self.costmap.marks]
-        people = self.body.nearest_gap(pose, marks, beyond=margin + person_body) - person_body
+        beyond = margin + person_body + GAP_BOUND_SLACK
+        people = self.body.nearest_gap(pose, marks, beyond=beyond) - person_body
         return walls, people
 
     def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
