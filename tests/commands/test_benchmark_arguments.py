@@ -58,6 +58,21 @@ def test_the_service_burst_benchmark_refuses_bad_arguments_in_one_line(arguments
 
 
 @pytest.mark.parametrize(("arguments", "named"), [
+    ([".", "/nowhere"], "argument OTHER: /nowhere: not a checkout of this repository"),
+    (["/nowhere", "."], "argument THIS: /nowhere: not a checkout of this repository"),
+    ([".", ".", "--rounds", "0"], "--rounds 0: must be 1 or more"),
+    ([".", ".", "--seeds", "5,x"], "'5,x': not seeds like 0,1,2 or 0-4"),
+    ([".", ".", "--hard-seeds", "-3"], "'-3': not seeds like 0,1,2 or 0-4"),
+    (["."], "the following arguments are required: OTHER"),
+])
+def test_the_cpu_per_sim_second_benchmark_refuses_bad_arguments_in_one_line(
+        arguments: list[str], named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("cpu_per_sim_second.py"),
+                        [str(SIM_RTF.parents[1]) if argument == "." else argument
+                         for argument in arguments], named)
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
     (["--parts", "scripted,nothing"], "--parts: unknown part nothing"),
     (["--seeds", "5,x"], "--seeds 5,x: not a comma list of integers"),
     (["--rounds", "0"], "--idle-ticks and --rounds 1 or more"),

@@ -150,3 +150,32 @@ def test_navigation_turns_to_the_goal_yaw_clear_of_a_person_beside_it() -> None:
     person_beside(sim, across=0.56)
     assert navigate(sim, (WALL_X, 2.0, math.pi), seconds=40.0) == "succeeded"
     assert sim.referee.penalties.contact == 0.0
+
+
+def test_the_nearest_gap_is_the_least_gap_or_a_bound_beyond_the_threshold() -> None:
+    """Within ``beyond`` the answer is the least of the gaps, bit for bit; past it, it may be
+    any gap past it, so whoever compares it with a threshold up to ``beyond`` decides alike."""
+    body = Footprint(office().map)
+    rng = np.random.default_rng(8)
+    bounded = exact = 0
+    for _ in range(3000):
+        pose = (float(rng.uniform(-5, 5)), float(rng.uniform(-5, 5)),
+                float(rng.uniform(-math.pi, math.pi)))
+        points = [(float(x), float(y))
+                  for x, y in rng.uniform(-6, 6, size=(int(rng.integers(1, 12)), 2))]
+        if rng.uniform() < 0.5:  # one point right at the reach of the corners and the margin
+            angle = float(rng.uniform(-math.pi, math.pi))
+            reach = CIRCUMSCRIBED_RADIUS + 0.26 + float(rng.choice([-1e-12, 0.0, 1e-12]))
+            points.append((pose[0] + reach * math.cos(angle), pose[1] + reach * math.sin(angle)))
+        beyond = float(rng.choice([0.0, 0.26, 0.5]))
+        least = float(Footprint.gaps_to(pose, np.array([p[0] for p in points]),
+                                        np.array([p[1] for p in points])).min())
+        answer = body.nearest_gap(pose, points, beyond=beyond)
+        if answer <= beyond:
+            assert answer == least
+            exact += 1
+        else:
+            assert least > beyond
+            bounded += 1
+    assert exact > 300 and bounded > 300
+    assert body.nearest_gap((0.0, 0.0, 0.0), []) == math.inf

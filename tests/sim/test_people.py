@@ -19,13 +19,15 @@ from scipy import ndimage
 from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import (
     IDLER,
+    ROBOT_BELOW_WALKER,
     WALKER,
     WALKER_STOP_DISTANCE,
     Crowd,
     CrowdError,
-    NearPoints,
     Person,
     Walker,
+    in_stop_lane,
+    lane_blocks,
 )
 from servicesim_sim.model.scenario import make_scenario
 from servicesim_sim.world.files import (
@@ -512,22 +514,68 @@ def test_walkers_stand_where_their_route_puts_them_bit_for_bit() -> None:
             assert (walker._cos, walker._sin) == (math.cos(yaw), math.sin(yaw))
 
 
-def test_the_near_points_kept_between_draws_hold_everyone_within_the_stop_distance() -> None:
+def test_the_lane_table_answers_as_the_lane_test_of_each_pair_bit_for_bit() -> None:
     rng = np.random.default_rng(6)
-    for _ in range(40):
-        count, walkers = int(rng.integers(2, 14)), int(rng.integers(1, 10))
-        points = rng.uniform(0.0, 6.0, size=(count + walkers, 2))
-        near = NearPoints()
-        for _ in range(200):
-            # small steps mostly (walkers, the robot), now and then a jump
-            points += rng.normal(0.0, float(rng.choice([0.01, 0.05, 0.3])), size=points.shape)
-            kept = near.within([tuple(point) for point in points.tolist()], walkers=walkers)
-            for walker, indices in enumerate(kept):
-                here = points[count + walker]
-                gaps = np.hypot(*(points - here).T)
-                wanted = {int(i) for i in np.flatnonzero(gaps < WALKER_STOP_DISTANCE)}
-                assert wanted - {count + walker} <= set(indices)
-                assert count + walker not in indices
+    for _ in range(200):
+        walkers = rng.uniform(0.0, 4.0, size=(int(rng.integers(1, 12)), 2))
+        yaws = rng.uniform(-math.pi, math.pi, size=len(walkers))
+        facings = np.column_stack([np.cos(yaws), np.sin(yaws)])
+        points = rng.uniform(0.0, 4.0, size=(int(rng.integers(1, 50)), 2))
+        # some points right at the edge of the reach and of the lane, where rounding decides
+        edge = rng.integers(len(walkers), size=len(points) // 2)
+        bearing = yaws[edge] + rng.uniform(-0.5, 0.5, size=edge.size)
+        reach = WALKER_STOP_DISTANCE * (1.0 + rng.choice([-1e-15, 0.0, 1e-15], size=edge.size))
+        points[:edge.size] = walkers[edge] + reach[:, None] * np.column_stack(
+            [np.cos(bearing), np.sin(bearing)])
+        points = np.vstack([points, walkers])  # their own places too
+        below = rng.choice([0.0, ROBOT_BELOW_WALKER], size=len(points))
+        table = lane_blocks(walkers, facings, points, below=below)
+        for i, ((x, y), (cos, sin)) in enumerate(zip(walkers.tolist(), facings.tolist(),
+                                                     strict=True)):
+            for j, (px, py) in enumerate(points.tolist()):
+                assert table[i, j] == in_stop_lane(px - x, py - y, cos, sin,
+                                                   below=float(below[j]))
+            assert not table[i, len(points) - len(walkers) + i]  # never ahead of itself
+
+
+def step_one_by_one(people: Crowd, dt: float, *, robot: tuple[float, float, float],
+                    others: list[tuple[float, float]]) -> None:
+    """The crowd's step as the rule says it, walker by walker, point by point."""
+    standing = [(p.x, p.y) for p in idlers_of(people)]
+    moving = [(w.person.x, w.person.y) for w in people.walkers]
+    for index, walker in enumerate(people.walkers):
+        by_people = (walker.blocked([robot[:2]], below=ROBOT_BELOW_WALKER)
+                     or walker.blocked(others + standing))
+        by_walkers = walker.blocked(moving[:index] + moving[index + 1:])
+        if not (by_people or by_walkers):
+            walker.waited = 0.0
+            walker.advance(walker.direction * walker.speed * dt)
+            continue
+        walker.waited += dt
+        if walker.waited >= (people.walker_patience_s if by_people else people.standoff_s):
+            walker.turn_back()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_crowd_steps_as_the_rule_walker_by_walker_bit_for_bit(seed: int) -> None:
+    arrays, reference = office_engine(seed).crowd, office_engine(seed).crowd
+    rng = np.random.default_rng(seed)
+    stopped = 0
+    for step in range(3000):
+        # the robot and the guest often just ahead of a walker, else somewhere about
+        walker = arrays.walkers[int(rng.integers(len(arrays.walkers)))].person
+        ahead = float(rng.uniform(0.5, 1.6))
+        robot = (walker.x + ahead * math.cos(walker.yaw), walker.y + ahead * math.sin(walker.yaw),
+                 0.0) if step % 3 else (float(rng.uniform(-20, 20)), 10.0, 0.0)
+        guest = [(robot[0] + float(rng.normal(0, 1.0)), robot[1] + float(rng.normal(0, 1.0)))]
+        arrays.step(0.04, robot=robot, others=guest)
+        step_one_by_one(reference, 0.04, robot=robot, others=guest)
+        for mine, theirs in zip(arrays.walkers, reference.walkers, strict=True):
+            assert (mine.person.x, mine.person.y, mine.person.yaw, mine.waited,
+                    mine.direction) == (theirs.person.x, theirs.person.y, theirs.person.yaw,
+                                        theirs.waited, theirs.direction)
+            stopped += mine.waited > 0.0
+    assert stopped > 300  # the robot and the guest stopped walkers often
 
 
 # ----------------------------------------------------------------- the world's walker routes

@@ -38,6 +38,7 @@ class PenaltyChecker:
     def __init__(self, *, robot: Robot, guest: Guest, crowd: Crowd, referee: Referee) -> None:
         self.robot, self.guest, self.crowd, self.referee = robot, guest, crowd, referee
         self._nobody_near_until = -math.inf
+        self._causes: list[str] = []
 
     def book(self, dt: float, *, now: float) -> None:
         """The step of ``dt`` sim seconds ending at sim time ``now``."""
@@ -66,9 +67,12 @@ class PenaltyChecker:
 
     def _person_causes(self) -> list[str]:
         """Each person's cause key for the referee's books by cause (``ROLE/NAME``), in
-        :meth:`_person_positions`' order."""
-        return [*(f"{person.role}/{person.name}" for person in self.crowd.people),
-                f"guest/{self.guest.name}"]
+        :meth:`_person_positions`' order; worked out again only when the number of people
+        changed (names and roles never do)."""
+        if len(self._causes) != len(self.crowd.people) + 1:
+            self._causes = [*(f"{person.role}/{person.name}" for person in self.crowd.people),
+                            f"guest/{self.guest.name}"]
+        return self._causes
 
     def _anyone_may_be_near(self, now: float) -> bool:
         """Whether someone's body may be within the people's ghost cylinder.

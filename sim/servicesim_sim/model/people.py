@@ -73,8 +73,6 @@ FIRST_WAYPOINT_DRAW = 21  # the original draws a walker's first waypoint as rand
 ROUTE_CELL = 0.25  # metres per route-grid cell
 ROUTE_WAYPOINTS = (3, 4)  # a route loops through this many random waypoints (inclusive)
 ROUTE_MIN_LEG = 4.0  # consecutive waypoints at least this far apart when the space allows
-NEAR_POINTS_SLACK = 0.5  # metres: who may stop a walker is drawn up this far beyond the stop
-# distance, and drawn up again once the points may have closed that gap (NearPoints)
 LINES_AT_ONCE = 16  # a route's corners checked for a clear straight line together
 IDLER_SPACING = 1.0
 IDLER_YAW_SPREAD = 0.5  # radians either side of an idling area's yaw
@@ -466,16 +464,30 @@ def in_stop_lane(dx: float, dy: float, cos: float, sin: float, *,
                  below: float = 0.0) -> bool: ...
 @overload
 def in_stop_lane(dx: NDArray[np.float64], dy: NDArray[np.float64], cos: NDArray[np.float64],
-                 sin: NDArray[np.float64], *, below: float = 0.0) -> NDArray[np.bool_]: ...
-def in_stop_lane(dx: Any, dy: Any, cos: Any, sin: Any, *, below: float = 0.0) -> Any:
+                 sin: NDArray[np.float64], *,
+                 below: float | NDArray[np.float64] = 0.0) -> NDArray[np.bool_]: ...
+def in_stop_lane(dx: Any, dy: Any, cos: Any, sin: Any, *, below: Any = 0.0) -> Any:
     """Whether a point (dx, dy) from a walker facing (cos, sin) stops it: nearer than
     :data:`WALKER_STOP_DISTANCE` in 3-D (the point's origin ``below`` metres under the
     walker's), ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
-    walker's own position is never ahead of it). Floats or arrays, element by element: the
-    walking step and the playability check (:meth:`Walker.stops_for_good`) share the rule."""
+    walker's own position is never ahead of it). Floats or arrays, element by element (each
+    product, sum and difference rounded alike by Python and numpy, so the same answers bit for
+    bit): the walking step (:func:`lane_blocks`) and the playability check
+    (:meth:`Walker.stops_for_good`) share the rule."""
     reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
     return ((dx * dx + dy * dy < reach) & (dx * cos + dy * sin > 0.0)
             & (abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH))
+
+
+def lane_blocks(walkers: NDArray[np.float64], facings: NDArray[np.float64],
+                points: NDArray[np.float64], *, below: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which of ``points`` (n, 2) stop each walker (``walkers`` (m, 2) where they stand,
+    ``facings`` (m, 2) the (cos, sin) of the way they face): an (m, n) table of
+    :func:`in_stop_lane`, point ``j``'s origin ``below[j]`` metres under the walkers'. A walker's
+    own place among the points never stops it (it is not ahead of itself)."""
+    dx = points[None, :, 0] - walkers[:, 0, None]
+    dy = points[None, :, 1] - walkers[:, 1, None]
+    return in_stop_lane(dx, dy, facings[:, 0, None], facings[:, 1, None], below=below[None, :])
 
 
 def facing(heading: float, *, forwards: bool) -> tuple[float, float, float]:
@@ -534,6 +546,11 @@ class Walker:
         self.person.y = ys[leg] + t * (ys[leg + 1] - ys[leg])
         self.person.yaw, self._cos, self._sin = self._facings[self.direction > 0][leg]
 
+    @property
+    def facing_unit(self) -> tuple[float, float]:
+        """(cos, sin) of the way it faces (its yaw's)."""
+        return self._cos, self._sin
+
     def turn_back(self) -> None:
         """Walk the route the other way from here (blocked for longer than its patience)."""
         self.direction = -self.direction
@@ -574,71 +591,6 @@ class Walker:
 
 
 # ------------------------------------------------------------------------------------ crowd
-def _within_stop_distance(walkers: list[tuple[float, float]], *,
-                          points: list[tuple[float, float]],
-                          reach: float = WALKER_STOP_DISTANCE) -> list[list[int]]:
-    """For each walker, the indices of the points nearer than ``reach`` (in the plane; a
-    walker's own place left out): with :data:`WALKER_STOP_DISTANCE`, the only points that can
-    block it. ``walkers`` are the last points, in the same order.
-
-    The squared distances are the ones :meth:`Walker.blocked` compares (the same subtractions,
-    products and sum, each rounded alike by numpy and by Python), with the largest reach it
-    uses, so no point that blocks a walker is left out. Checking every walker against every
-    point in Python took a twentieth of the simulator's time; here it is a few array
-    operations, and the exact lane test runs only on the rare near points.
-    """
-    if not walkers:
-        return []
-    spots = np.array(points, dtype=np.float64).reshape(-1, 2)
-    first = len(points) - len(walkers)  # the walkers are the last points
-    heres = spots[first:]
-    squared = spots[:, 0] - heres[:, 0, None]
-    across = spots[:, 1] - heres[:, 1, None]
-    squared *= squared
-    across *= across
-    squared += across
-    rows, cols = (squared < reach * reach).nonzero()
-    within: list[list[int]] = [[] for _ in walkers]
-    for walker, point in zip(rows.tolist(), cols.tolist(), strict=True):
-        if point != first + walker:  # a walker is never ahead of itself
-            within[walker].append(point)
-    return within
-
-
-class NearPoints:
-    """Who may be within the stop distance of each walker, worked out now and then.
-
-    The lists hold every point within :data:`WALKER_STOP_DISTANCE` plus
-    :data:`NEAR_POINTS_SLACK` of a walker where everyone stood when they were drawn up, so
-    they still hold every point within the stop distance until two points have moved that
-    slack between them (less a micrometre for rounding). They may hold more: the lane test
-    (:meth:`Walker.blocked`) looks at each point itself and ignores the farther ones.
-    """
-
-    def __init__(self) -> None:
-        self._drawn_at: list[tuple[float, float]] = []
-        self._walkers = 0
-        self._within: list[list[int]] = []
-
-    def within(self, points: list[tuple[float, float]], *, walkers: int) -> list[list[int]]:
-        """For each walker (the last ``walkers`` points), indices of points that may be
-        within the stop distance of it, a walker's own place left out."""
-        if walkers != self._walkers or not self._still_hold(points):
-            self._drawn_at, self._walkers = points, walkers
-            self._within = _within_stop_distance(
-                points[len(points) - walkers:], points=points,
-                reach=WALKER_STOP_DISTANCE + NEAR_POINTS_SLACK)
-        return self._within
-
-    def _still_hold(self, points: list[tuple[float, float]]) -> bool:
-        if len(points) != len(self._drawn_at):
-            return False
-        moved = [math.hypot(x - x0, y - y0)
-                 for (x, y), (x0, y0) in zip(points, self._drawn_at, strict=True)]
-        walkers_moved = max(moved[len(moved) - self._walkers:], default=0.0)
-        return walkers_moved + max(moved) <= NEAR_POINTS_SLACK - 1e-6
-
-
 def walkers_on_routes(names: list[str], routes: tuple[WalkerRoute, ...],
                       rng: np.random.Generator, *, placed: tuple[PlacedWalker, ...] = (),
                       occupied: Sequence[KeepClear] = ()) -> list[Walker]:
@@ -740,7 +692,8 @@ class Crowd:
             self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
                              for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
-        self._near = NearPoints()
+        self._points = np.zeros((0, 2))  # where everyone who may stop a walker stands
+        self._below = np.zeros(0)  # how far under a walker's origin each point's origin lies
 
     @staticmethod
     def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
@@ -765,39 +718,50 @@ class Crowd:
         """Move every walker ``dt`` seconds on, except those with someone in their lane (as
         everyone stood at the step's start): the robot, ``others`` (the guest), an idler or
         another walker. A walker waits for the first three for :attr:`walker_patience_s`, and
-        for walkers alone :attr:`standoff_s`; then it turns back."""
+        for walkers alone :attr:`standoff_s`; then it turns back.
+
+        Every walker's lane is tested against everyone at once (:func:`lane_blocks`)."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
-        # idlers count only on the world's routes: random ones keep them out of every lane
-        floor = [(robot[0], robot[1])]
-        others = list(others) + self._standing
-        moving = [(w.person.x, w.person.y) for w in self._walkers]
-        within = self._near.within(floor + others + moving, walkers=len(moving))
-        for walker, near in zip(self._walkers, within, strict=True):
-            by_people, by_walkers = (self._stops(walker, near, floor=floor, others=others,
-                                                 moving=moving) if near else (False, False))
-            if not (by_people or by_walkers):
+        walkers = self._walkers
+        if not walkers:
+            return
+        points = self._stand_points(robot, others)
+        first_walker = len(points) - len(walkers)
+        blocks = lane_blocks(points[first_walker:],
+                             np.array([walker.facing_unit for walker in walkers]),
+                             points, below=self._below)
+        by_people = np.logical_or.reduce(blocks[:, :first_walker], axis=1).tolist()
+        by_walkers = np.logical_or.reduce(blocks[:, first_walker:], axis=1).tolist()
+        for walker, people, others_walking in zip(walkers, by_people, by_walkers, strict=True):
+            if not (people or others_walking):
                 walker.waited = 0.0
                 walker.advance(walker.direction * walker.speed * dt)
                 continue
             walker.waited += dt
-            patience = self.walker_patience_s if by_people else self.standoff_s
+            patience = self.walker_patience_s if people else self.standoff_s
             if walker.waited >= patience:
                 walker.turn_back()
 
-    @staticmethod
-    def _stops(walker: Walker, within: list[int], *, floor: list[tuple[float, float]],
-               others: list[tuple[float, float]],
-               moving: list[tuple[float, float]]) -> tuple[bool, bool]:
-        """Whether the robot or ``others`` (first) and another walker (second) stop
-        ``walker``, as everyone stood at the step's start; ``within`` indexes the points of
-        ``floor + others + moving`` nearer than the stop distance, the only ones that can."""
-        first_walker = len(floor) + len(others)
-        by_people = ((0 in within and walker.blocked(floor, below=ROBOT_BELOW_WALKER))
-                     or walker.blocked([others[i - 1] for i in within if 0 < i < first_walker]))
-        by_walkers = walker.blocked([moving[i - first_walker] for i in within
-                                     if i >= first_walker])
-        return by_people, by_walkers
+    def _stand_points(self, robot: tuple[float, float, float],
+                      others: Sequence[tuple[float, float]]) -> NDArray[np.float64]:
+        """Everyone who may stop a walker, as an (n, 2) array: the robot (on the floor),
+        ``others``, the idlers that stand in lanes (on the world's routes; random ones keep
+        them out) and the walkers, last, as they stand now."""
+        count = 1 + len(others) + len(self._standing) + len(self._walkers)
+        points = self._points
+        if len(points) != count:
+            points = self._points = np.zeros((count, 2))
+            points[1 + len(others):count - len(self._walkers)] = np.reshape(
+                self._standing, (-1, 2))
+            self._below = np.zeros(count)
+            self._below[0] = ROBOT_BELOW_WALKER
+        points[0] = robot[0], robot[1]
+        if others:
+            points[1:1 + len(others)] = others
+        points[count - len(self._walkers):] = [(walker.person.x, walker.person.y)
+                                               for walker in self._walkers]
+        return points
 
     def held_for_good(self, *, others: Sequence[tuple[float, float]] = ()
                       ) -> list[tuple[float, float]]:

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Literal, Protocol
@@ -64,6 +65,9 @@ STOP: Twist = (0.0, 0.0)
 OBSTRUCTION_RECHECK_M = 0.1
 """Metres along the path after which a path obstruction is looked for again (sooner if the
 costmap changed)."""
+GAP_BOUND_SLACK = 1e-6
+"""Metres past the body margin a bound of the gap to the people must be to be taken for the
+gap: less the body's width it is still past the margin, however the sums round."""
 
 
 class FollowPathError(IntEnum):
@@ -235,8 +239,9 @@ class Body(Protocol):
         """Metres between the body at ``pose`` and the nearest wall (see Footprint)."""
         ...
 
-    def gaps_to(self, pose: Pose, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
-        """Signed metres between the body at ``pose`` and each point (see Footprint)."""
+    def nearest_gap(self, pose: Pose, points: Sequence[tuple[float, float]], *,
+                    beyond: float = 0.0) -> float:
+        """Metres between the body at ``pose`` and the nearest point (see Footprint)."""
         ...
 
 
@@ -371,16 +376,14 @@ class Navigator:
 
     def _clearances(self, pose: Pose) -> Clearances:
         """Metres from the body at ``pose`` to the nearest wall and to the nearest marked
-        person's body (gaps wider than the margin may be any gap wider than it)."""
+        person's body (gaps wider than the margin may be any gap wider than it: only whether
+        a gap is within the margin, and then how it compares with a gap now, decides)."""
         assert self.body is not None
-        tuning = self.tuning
-        walls = self.body.clearance(pose, beyond=tuning.body_margin)
-        marks = self.costmap.marks
-        if not marks:
-            return walls, math.inf
-        xs = np.fromiter((mark.x for mark in marks), dtype=np.float64, count=len(marks))
-        ys = np.fromiter((mark.y for mark in marks), dtype=np.float64, count=len(marks))
-        people = float(self.body.gaps_to(pose, xs, ys).min()) - tuning.person_body
+        margin, person_body = self.tuning.body_margin, self.tuning.person_body
+        walls = self.body.clearance(pose, beyond=margin)
+        marks = [(mark.x, mark.y) for mark in self.costmap.marks]
+        beyond = margin + person_body + GAP_BOUND_SLACK
+        people = self.body.nearest_gap(pose, marks, beyond=beyond) - person_body
         return walls, people
 
     def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:

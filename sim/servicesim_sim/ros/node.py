@@ -37,6 +37,7 @@ from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.playable import playable_engine
 from servicesim_sim.process.executor import DrainingExecutor
 from servicesim_sim.process.pacing import Pacer
+from servicesim_sim.process.period_costs import PeriodCosts
 from servicesim_sim.ros.camera_topic import CameraTopic
 from servicesim_sim.ros.episodes import EpisodeResets
 from servicesim_sim.ros.navigation_action import NavigationAction
@@ -68,6 +69,7 @@ class SimulatorNode:
         self.steps_per_io = max(1, round(IO_PERIOD_S / engine.dt))
         self._io_count = 0
         self._had_client = False
+        self.costs = PeriodCosts()
         self.lockstep = lockstep = LockstepServer(node)
         self.publishing = publishing = Publishing(node=node, lockstep=lockstep)
         self.robot_topics = RobotTopics(engine=engine, publishing=publishing)
@@ -93,15 +95,23 @@ class SimulatorNode:
         """Step, publish and serve until the context shuts down, paced by the speed factor."""
         pacer = Pacer()
         period = 0
+        costs, now = self.costs, self.costs.now
+        ended = now()  # each period starts where the last one ended: three clock reads a period
         while rclpy.ok(context=self.node.context):
+            started = ended
             self._check_reset()
             scores = self._step()
+            stepped = now()
             period += 1
             self.world_topics.publish_scores(scores)
             self._publish_io()
+            published = now()
             self._end_period(period, executor)
             self._wait_for_wall_clock(pacer, executor)
             self.lockstep.hold(executor)
+            ended = now()
+            if scores:  # a task ran in this period
+                costs.add(started=started, stepped=stepped, published=published, ended=ended)
             self._had_client = self._had_client or self.lockstep.active
             if self._had_client and not self.lockstep.active and self._resets_used():
                 self._idle(executor)
@@ -165,7 +175,9 @@ class SimulatorNode:
     def close(self, executor: DrainingExecutor) -> None:
         """Drop what the node's destruction leaves alive: the coroutines waiting on sim time,
         navigation or the gate, which no loop will resume now, and the navigation action
-        server (a waitable)."""
+        server (a waitable). Logs what the task's periods cost
+        (:mod:`servicesim_sim.process.period_costs`)."""
+        self.node.get_logger().info(self.costs.summary())
         executor.drop_tasks_of(self.node)
         self.sleepers.clear()
         self.navigation.close()

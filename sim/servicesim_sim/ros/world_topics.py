@@ -5,14 +5,14 @@ Design intent: each goes out at its own rate, counted in I/O periods: the map on
 the referee's state and the people every 0.5 sim s (the referee's state also as soon as it
 changes), the costmap every sim second as Nav2 publishes it, the score once per physics step
 but sent with the period's ``/clock``. What nobody subscribes to (the score, the costmap) is
-not built.
+not built. The referee's state and the people are serialised by hand
+(:mod:`servicesim_sim.wire.world_messages`).
 """
 
 from __future__ import annotations
 
 import array
 
-from geometry_msgs.msg import Point
 from nav_msgs.msg import OccupancyGrid
 from servicesim_competition.msg import ActorStates, RefereeState, Score
 
@@ -21,6 +21,7 @@ from servicesim_sim.ros.marker_topics import MarkerTopics
 from servicesim_sim.ros.penalty_causes import PenaltyCausesTopic
 from servicesim_sim.ros.publishing import LATCHED, Publishing, stamp
 from servicesim_sim.wire.costmap_message import OccupancyValues, serialised_occupancy_grid
+from servicesim_sim.wire.world_messages import ActorStatesBytes, RefereeStateBytes
 from servicesim_sim.world.files import World
 
 PUBLIC_PERIOD_STEPS = 5  # referee state and people every 0.5 s sim
@@ -47,6 +48,8 @@ class WorldTopics:
                                                   send=send, latched=LATCHED)
         self._score_message = Score()  # refilled: publish serialises at the call
         self._costmap_values: OccupancyValues | None = None  # made at the first costmap sent
+        self._actors_bytes: tuple[tuple[str, ...], ActorStatesBytes] | None = None
+        self._referee_bytes: RefereeStateBytes | None = None
 
     def send_map(self) -> None:
         self._send(self._map, self._map_message())
@@ -105,32 +108,31 @@ class WorldTopics:
         message.data = array.array("b", occupancy.grid.astype("int8").ravel().tobytes())
         return message
 
-    def _referee_state(self) -> RefereeState:
+    def _referee_state(self) -> bytes:
         report = self.engine.referee_report()
-        state = RefereeState()
-        state.stamp = stamp(self.engine.sim_time)
-        state.task_running = bool(report["running"])
-        state.completed = bool(report["completed"])
-        state.score = float(report["score"])
-        state.task_sim_time = float(report["task_sim_time"])
-        state.checkpoint_names = [c["name"] for c in report["checkpoints"]]
-        state.checkpoint_done = [bool(c["done"]) for c in report["checkpoints"]]
-        state.checkpoint_sim_time = [float(c["sim_time_s"]) for c in report["checkpoints"]]
+        checkpoints = report["checkpoints"]
+        if self._referee_bytes is None:  # the checkpoints' names never change
+            self._referee_bytes = RefereeStateBytes(names=[c["name"] for c in checkpoints])
+        now = stamp(self.engine.sim_time)
         penalties = report["penalties"]
-        state.failed_pickups = int(penalties["failed_pickup"])
-        state.failed_dropoffs = int(penalties["failed_dropoff"])
-        state.too_fast = int(penalties["too_fast"])
-        state.drifts = int(penalties["drifts"])
-        state.contact = float(penalties["contact"])
-        state.approximation = float(penalties["approximation"])
-        return state
+        return self._referee_bytes.encode(
+            stamp=(now.sec, now.nanosec), running=bool(report["running"]),
+            completed=bool(report["completed"]), score=float(report["score"]),
+            task_sim_time=float(report["task_sim_time"]),
+            done=[bool(c["done"]) for c in checkpoints],
+            times=[float(c["sim_time_s"]) for c in checkpoints],
+            counts=(int(penalties["failed_pickup"]), int(penalties["failed_dropoff"]),
+                    int(penalties["too_fast"]), int(penalties["drifts"])),
+            contact=float(penalties["contact"]), approximation=float(penalties["approximation"]))
 
-    def _actor_states(self) -> ActorStates:
+    def _actor_states(self) -> bytes:
         """Everyone's place."""
-        message = ActorStates(guest_state=self.engine.guest_state())
-        message.stamp = stamp(self.engine.sim_time)
-        for name, role, x, y in self.engine.people_states():
-            message.names.append(name)
-            message.roles.append(role)
-            message.positions.append(Point(x=float(x), y=float(y)))
-        return message
+        states = self.engine.people_states()
+        names = tuple(name for name, _, _, _ in states)
+        if self._actors_bytes is None or self._actors_bytes[0] != names:
+            self._actors_bytes = (names, ActorStatesBytes(
+                names=names, roles=[role for _, role, _, _ in states]))
+        now = stamp(self.engine.sim_time)
+        return self._actors_bytes[1].encode(
+            stamp=(now.sec, now.nanosec), positions=[(x, y) for _, _, x, y in states],
+            guest_state=self.engine.guest_state())

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -42,6 +43,7 @@ CIRCUMSCRIBED_RADIUS = math.hypot(HALF_LENGTH, HALF_WIDTH)  # 0.32 m: the corner
 INSCRIBED_RADIUS = min(HALF_LENGTH, HALF_WIDTH)  # 0.2 m
 CONTACT_SURFACE_LAYER = 0.01  # m: ODE's allowed penetration in the original world
 OUTLINE_SPACING = 0.025  # m between the outline's samples
+BOUND_SLACK = 1e-9  # m: a bound is trusted only this far beyond a threshold (rounding)
 
 
 class WallDistance:
@@ -133,6 +135,23 @@ class Footprint:
         if not occupancy.in_bounds(row, col):
             return 0.0
         return float(occupancy.wall_distance[row, col]) - 1.5 * occupancy.resolution
+
+    def nearest_gap(self, pose: Pose, points: Sequence[tuple[float, float]], *,
+                    beyond: float = 0.0) -> float:
+        """Metres between the box at ``pose`` and the nearest of ``points`` (infinite when
+        there are none): the least of :meth:`gaps_to`. Gaps wider than ``beyond`` are not
+        worked out: the answer is then some gap wider than that (the nearest point's distance
+        from the centre less the corners' reach), as :meth:`clearance` answers for walls."""
+        if not points:
+            return math.inf
+        x, y, _ = pose
+        nearest = min((px - x) * (px - x) + (py - y) * (py - y) for px, py in points)
+        near = math.sqrt(nearest) - CIRCUMSCRIBED_RADIUS - BOUND_SLACK
+        if near > beyond:
+            return near  # no point can be nearer the box than that
+        xs = np.fromiter((px for px, _ in points), dtype=np.float64, count=len(points))
+        ys = np.fromiter((py for _, py in points), dtype=np.float64, count=len(points))
+        return float(self.gaps_to(pose, xs, ys).min())
 
     @staticmethod
     def person_depths(pose: Pose, xs: np.ndarray, ys: np.ndarray, *,
