@@ -21,6 +21,7 @@ from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
+from bt_servicesim.planning.entrances import doorways_near
 from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.give_way import (
@@ -115,7 +116,8 @@ class PickupGoal(_Computation):
 
 
 class DropOffGoal(_Computation):
-    """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`)."""
+    """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`),
+    clear of the doorways near the box (:func:`doorways_near`)."""
 
     INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
     OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
@@ -124,7 +126,8 @@ class DropOffGoal(_Computation):
         super().__init__(name=name, **kwargs)
 
     def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
-        plan = drop_off_goal(box, occupancy, robot_pose)
+        doorways = doorways_near(occupancy, box)
+        plan = drop_off_goal(box, occupancy, robot_pose, doorways=doorways)
         return _report_plan(self, plan, "drop-off goal", "no reachable drop-off goal")
 
 
