@@ -57,8 +57,9 @@ from bt_servicesim.planning.rules import (
 )
 
 __all__ = [
-    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "Doorway", "doorway",
-    "give_way_spot", "passage_axis", "recent_trail", "travel_heading", "without_the_guest",
+    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "PERSON_BODY", "Doorway",
+    "doorway", "give_way_spot", "local_grid_around", "passage_axis", "recent_trail",
+    "travel_heading", "without_the_guest",
 ]
 
 GIVE_WAY_OFFSET = PEOPLE_LANE_HALF_WIDTH + max(ROBOT_FOOTPRINT) / 2.0 + 0.3
@@ -224,7 +225,7 @@ def give_way_spot(grid: OccupancyGrid2D, *, robot: Pose2D, trail: np.ndarray,
 def _give_way_spot(grid: OccupancyGrid2D, *, robot: Pose2D, trail: np.ndarray,
                    guest_follows: bool, max_route: float, people: np.ndarray,
                    use_lanes: bool) -> Pose2D | None:
-    local = _local_grid_around(grid, robot, max_route, people=people,
+    local = local_grid_around(grid, robot, max_route, people=people,
                                heading=None if people.size else travel_heading(trail, robot))
     routes = local.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
@@ -365,7 +366,7 @@ def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -
     return np.delete(people, guest, axis=0)
 
 
-def _local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,
+def local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,
                        people: np.ndarray, heading: float | None) -> OccupancyGrid2D:
     """The part of the grid within ``reach`` of the robot (no route of that length leaves it),
     with every person's body marked occupied and, given a ``heading``, a disc of

@@ -39,6 +39,7 @@ from bt_servicesim.planning.goals import (
     return_goal,
 )
 from bt_servicesim.planning.guest_localisation import RfidHistory
+from bt_servicesim.planning.near_spot import near_spot
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 
@@ -260,6 +261,34 @@ def _seen(people: np.ndarray | None) -> str:
         return "nobody near"
     shown = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in people[:4])
     return f"{len(people)} people near: {shown}" + (", ..." if len(people) > 4 else "")
+
+
+class NearestReachableSpot(_Computation):
+    """The spot nearest a waypoint navigation could not reach that the robot reaches now, with
+    the people the costmap shows standing as obstacles, clear of them (:func:`near_spot`);
+    within RFID range of the waypoint, so it hears most of what the waypoint would have."""
+
+    INPUT_PORTS: Ports = {
+        "target": PortInformation(data_type=Pose2D, description="the waypoint not reached"),
+        "robot_pose": ROBOT_POSE,
+        "occupancy": OCCUPANCY,
+        "costmap": PortInformation(data_type=Costmap2D, required=False,
+                                   description="navigation's costmap, where people stand"),
+    }
+    OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
+
+    def __init__(self, name: str = "NearestReachableSpot", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, target: Pose2D, robot_pose: Pose2D, occupancy: OccupancyGrid2D,
+                costmap: Costmap2D | None) -> Pose2D | None:
+        people = None if costmap is None else people_on_costmap(
+            costmap, occupancy, x=robot_pose.x, y=robot_pose.y, reach=PEOPLE_REACH)
+        spot = near_spot(occupancy, robot=robot_pose, target=(target.x, target.y), people=people)
+        self.feedback_message = (f"nearest reachable spot {describe(spot)}" if spot is not None
+                                 else f"nothing reachable near {describe(target)}"
+                                 ) + f" ({_seen(people)})"
+        return spot
 
 
 class ExplorationWaypoints(_Computation):
