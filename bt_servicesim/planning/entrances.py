@@ -31,6 +31,10 @@ MIN_HALF_WIDTH = 0.3
 middle (a door is at least 0.6 m wide for a person to walk through)."""
 SAME_DOORWAY = 0.6
 """Metres within which two doorway centres found are the same doorway."""
+MIDDLE_CLEARANCE = 0.8
+"""Share of half a doorway's width that its middle keeps from every wall: between two jambs
+the nearest walls are the jambs, while two walls meeting at a corner, which also face each
+other across a narrow gap, leave the middle of that gap near the corner."""
 
 
 def doorways_near(grid: OccupancyGrid2D, box: Box) -> list[Point]:
@@ -39,7 +43,8 @@ def doorways_near(grid: OccupancyGrid2D, box: Box) -> list[Point]:
     on both sides) within :data:`~bt_servicesim.planning.goals.DOORWAY_KEEP` of ``box``.
 
     Probed on a :data:`PROBE_SPACING` lattice over the box grown by that distance, at the
-    points whose clearance from walls is that of a doorway's middle.
+    points whose clearance from walls is that of a doorway's middle; an opening whose middle
+    lies nearer a wall than its jambs (:data:`MIDDLE_CLEARANCE`) is a corner, not a doorway.
     """
     xs = np.arange(box.min_x - DOORWAY_KEEP, box.max_x + DOORWAY_KEEP + 1e-9, PROBE_SPACING)
     ys = np.arange(box.min_y - DOORWAY_KEEP, box.max_y + DOORWAY_KEEP + 1e-9, PROBE_SPACING)
@@ -51,6 +56,8 @@ def doorways_near(grid: OccupancyGrid2D, box: Box) -> list[Point]:
         opening = doorway(grid, float(x), float(y))
         if opening is None or float(distance_to_box(box, opening.x, opening.y)) > DOORWAY_KEEP:
             continue
+        if grid.clearance(opening.x, opening.y) < MIDDLE_CLEARANCE * opening.width / 2.0:
+            continue  # a corner
         if all(math.dist((opening.x, opening.y), other) > SAME_DOORWAY for other in found):
             found.append((opening.x, opening.y))
     return found

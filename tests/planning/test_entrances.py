@@ -75,3 +75,17 @@ def test_a_box_with_no_spot_clear_of_the_door_still_gets_its_deepest() -> None:
     small = Box(8.2, 4.8, 9.7, 6.3)  # 1.5 x 1.5 m: every spot lies within reach of the door
     plan = drop_off_goal(small, grid, robot, doorways=doorways_near(grid, small))
     assert plan == drop_off_goal(small, grid, robot)
+
+
+
+def test_the_corners_of_thin_walls_are_no_doorways() -> None:
+    """Two walls meeting at a corner face each other across a narrow gap, as a door's jambs
+    do; the gap's middle lies near the corner, not a half-width from both walls. The office's
+    thin walls make such gaps beside a box: here a room's 0.1 m east wall meets its north wall
+    and, beyond it, the south wall of the room next door, as at the office's PrivateOfficeD."""
+    values = cells(16.0, 12.0)
+    fill(values, 11.0, 0.0, 11.1, 12.0)  # the room's east wall
+    fill(values, 0.0, 9.0, 11.0, 9.1)  # its north wall
+    fill(values, 11.1, 7.5, 16.0, 7.6)  # the south wall of the room next door
+    rooms = OccupancyGrid2D.from_message(grid_message(values))
+    assert doorways_near(rooms, Box(8.0, 6.0, 11.0, 9.0)) == []
