@@ -367,16 +367,17 @@ def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -
 
 
 def local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,
-                       people: np.ndarray, heading: float | None) -> OccupancyGrid2D:
+                       people: np.ndarray, heading: float | None,
+                       person_body: float = PERSON_BODY) -> OccupancyGrid2D:
     """The part of the grid within ``reach`` of the robot (no route of that length leaves it),
-    with every person's body marked occupied and, given a ``heading``, a disc of
-    :data:`AHEAD_RADIUS` ahead of the robot: the way it could not go on, when it cannot see who
-    stands there."""
+    with every person's body (``person_body`` round them) marked occupied and, given a
+    ``heading``, a disc of :data:`AHEAD_RADIUS` ahead of the robot: the way it could not go on,
+    when it cannot see who stands there."""
     around = grid.window(robot.x - reach, robot.y - reach, robot.x + reach, robot.y + reach)
     values = np.array(grid.values[around.rows, around.cols], dtype=np.int16, copy=True)
     origin_x = grid.origin_x + around.cols.start * grid.resolution
     origin_y = grid.origin_y + around.rows.start * grid.resolution
-    discs = [(px, py, PERSON_BODY) for px, py in people]
+    discs = [(px, py, person_body) for px, py in people]
     if heading is not None:
         discs.append((robot.x + AHEAD_DISTANCE * math.cos(heading),
                       robot.y + AHEAD_DISTANCE * math.sin(heading), AHEAD_RADIUS))

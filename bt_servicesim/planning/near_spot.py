@@ -6,8 +6,9 @@ good: two of the office's walkers who meet head-on in a doorway wait for each ot
 evaluation: the guest stood in that room, 1.8 m from the corridor behind its wall). RFID hears
 through walls, so most of what the waypoint covers can still be heard from the nearest spot the
 robot can reach now: :func:`near_spot` finds it, with the people the costmap shows standing as
-obstacles (they are why the waypoint failed) and keeping clear of them, since the robot never
-parks beside someone.
+obstacles (they are why the waypoint failed) and keeping clear of them, on the way too: the
+robot never parks beside someone, nor squeezes between two people who wait for each other (it
+would stand there, held by them and holding them, as long as they do).
 
 Pure: numpy and the occupancy grid, no ROS, no py_trees.
 """
@@ -35,12 +36,13 @@ MARGIN = 1.0
 
 def near_spot(grid: OccupancyGrid2D, *, robot: Pose2D, target: Point,
               people: np.ndarray | None = None, reach: float = RFID_RANGE) -> Pose2D | None:
-    """The spot nearest ``target`` (within ``reach`` of it) that the robot reaches now, with
-    every person in ``people`` (n, 2) an obstacle, :data:`NEAR_PEOPLE_KEEP` clear of each; it
-    faces the target. None if no such spot lies within ``reach``."""
+    """The spot nearest ``target`` (within ``reach`` of it) that the robot reaches now by a
+    route keeping its centre :data:`NEAR_PEOPLE_KEEP` from everyone in ``people`` (n, 2), and
+    as clear of them itself; it faces the target. None if no such spot lies within ``reach``."""
     people = np.zeros((0, 2)) if people is None else np.asarray(people, dtype=float).reshape(-1, 2)
     span = math.dist((robot.x, robot.y), target) + reach + MARGIN
-    local = local_grid_around(grid, robot, span, people=people, heading=None)
+    local = local_grid_around(grid, robot, span, people=people, heading=None,
+                              person_body=NEAR_PEOPLE_KEEP - ROBOT_CLEARANCE)
     reachable = local.reachable_from(robot.x, robot.y, ROBOT_CLEARANCE)
     window = local.window(target[0] - reach, target[1] - reach,
                           target[0] + reach, target[1] + reach)

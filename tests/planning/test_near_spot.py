@@ -51,3 +51,14 @@ def test_the_spot_keeps_clear_of_someone_standing_beside_the_waypoint() -> None:
     assert spot is not None
     assert math.dist((spot.x, spot.y), (12.0, 4.8)) >= NEAR_PEOPLE_KEEP
     assert math.dist((spot.x, spot.y), target) <= RFID_RANGE
+
+
+def test_no_route_to_the_spot_squeezes_between_two_people_who_wait_for_each_other() -> None:
+    """Two walkers 1.5 m apart across the corridor: the gap between them would let the robot's
+    centre pass 0.75 m from each, and there it would stand held up by them, as they by it."""
+    pair = np.array([[12.0, 4.05], [12.0, 5.55]])
+    beyond = (11.0, 4.8)  # just west of the pair, along the corridor
+    spot = near_spot(office(room=False), robot=ROBOT, target=beyond, people=pair)
+    assert spot is not None
+    assert spot.x > 12.0, "on the robot's side of the pair"
+    assert min(math.dist((spot.x, spot.y), tuple(person)) for person in pair) >= NEAR_PEOPLE_KEEP
