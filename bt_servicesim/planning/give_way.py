@@ -57,8 +57,9 @@ from bt_servicesim.planning.rules import (
 )
 
 __all__ = [
-    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "Doorway", "doorway",
-    "give_way_spot", "passage_axis", "recent_trail", "travel_heading", "without_the_guest",
+    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "PERSON_BODY", "Doorway",
+    "doorway", "give_way_spot", "local_grid_around", "passage_axis", "recent_trail",
+    "travel_heading", "without_the_guest",
 ]
 
 GIVE_WAY_OFFSET = PEOPLE_LANE_HALF_WIDTH + max(ROBOT_FOOTPRINT) / 2.0 + 0.3
@@ -224,7 +225,7 @@ def give_way_spot(grid: OccupancyGrid2D, *, robot: Pose2D, trail: np.ndarray,
 def _give_way_spot(grid: OccupancyGrid2D, *, robot: Pose2D, trail: np.ndarray,
                    guest_follows: bool, max_route: float, people: np.ndarray,
                    use_lanes: bool) -> Pose2D | None:
-    local = _local_grid_around(grid, robot, max_route, people=people,
+    local = local_grid_around(grid, robot, max_route, people=people,
                                heading=None if people.size else travel_heading(trail, robot))
     routes = local.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
@@ -365,17 +366,18 @@ def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -
     return np.delete(people, guest, axis=0)
 
 
-def _local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,
-                       people: np.ndarray, heading: float | None) -> OccupancyGrid2D:
+def local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,
+                       people: np.ndarray, heading: float | None,
+                       person_body: float = PERSON_BODY) -> OccupancyGrid2D:
     """The part of the grid within ``reach`` of the robot (no route of that length leaves it),
-    with every person's body marked occupied and, given a ``heading``, a disc of
-    :data:`AHEAD_RADIUS` ahead of the robot: the way it could not go on, when it cannot see who
-    stands there."""
+    with every person's body (``person_body`` round them) marked occupied and, given a
+    ``heading``, a disc of :data:`AHEAD_RADIUS` ahead of the robot: the way it could not go on,
+    when it cannot see who stands there."""
     around = grid.window(robot.x - reach, robot.y - reach, robot.x + reach, robot.y + reach)
     values = np.array(grid.values[around.rows, around.cols], dtype=np.int16, copy=True)
     origin_x = grid.origin_x + around.cols.start * grid.resolution
     origin_y = grid.origin_y + around.rows.start * grid.resolution
-    discs = [(px, py, PERSON_BODY) for px, py in people]
+    discs = [(px, py, person_body) for px, py in people]
     if heading is not None:
         discs.append((robot.x + AHEAD_DISTANCE * math.cos(heading),
                       robot.y + AHEAD_DISTANCE * math.sin(heading), AHEAD_RADIUS))

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -31,7 +31,9 @@ from bt_servicesim.planning.rules import (
     FOLLOW_GAP,
     GOAL_TOLERANCE,
     GUEST_SPAWN_PADDING,
+    PEOPLE_LANE_LENGTH,
     PICKUP_REACH,
+    ROBOT_FOOTPRINT,
 )
 
 __all__ = [
@@ -67,6 +69,12 @@ SIGHT_LOOKBACK = 20.0
 """How far back along the route the robot's last turn before a spot is looked for."""
 SIGHT_STRIDE = 3
 """Every how many route nodes (0.1 m apart) the last turn is looked for."""
+DOORWAY_KEEP = PEOPLE_LANE_LENGTH + 0.35 + max(ROBOT_FOOTPRINT)
+"""Metres a dropped-off guest keeps from the doorways near the box, where the box allows.
+The guest then stands for good, and a walker who meets them in its lane waits as long as they
+stand: one bound through the door stops :data:`~bt_servicesim.planning.rules.PEOPLE_LANE_LENGTH`
+short of them, and from this far off it stands a body (0.35 m) and the robot's length inside
+the door, not in it, so the robot can still leave the room."""
 
 
 # ============================================================================ plain geometry
@@ -191,7 +199,8 @@ class TrailingPlan(NamedTuple):
     """Route length from the robot to the goal."""
 
 
-def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPlan | None:
+def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
+                  doorways: Sequence[Point] = ()) -> TrailingPlan | None:
     """A robot goal that leaves the FOLLOWING GUEST inside the drop-off ``box``.
 
     Checkpoint 3 checks the guest's origin, not the robot's, and the guest walks along the
@@ -224,16 +233,34 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> TrailingPla
     clearly better margin. If no spot works (e.g. the box lies in a dead end), the goal falls
     back to the reachable point inside the box nearest its centre and the plan's margin says
     how far off the guest is.
+
+    ``doorways`` are the centres of the doorways near the box
+    (:func:`bt_servicesim.planning.entrances.doorways_near`): a guest spot keeps
+    :data:`DOORWAY_KEEP` from each where any spot of the box does, since the guest stays there
+    for good and a walker they hold up in a doorway shuts it.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
         return None
     stay = _staying_plan(box, robot)
-    plans = list(_trailing_plans(box, grid, routes, robot, keep=_clear_of(stay.guest_spot)))
-    if stay.margin >= STAY_MARGIN:
-        plans.append(stay)
-    plan = _best_plan(plans)
-    return plan if plan is not None else _inside_fallback(box, grid, robot, routes)
+    clear_of_guest = _clear_of(stay.guest_spot)
+    for keep_off_doors in ((True, False) if doorways else (False,)):
+        def keep(candidate: TrailingPlan, off_doors: bool = keep_off_doors) -> bool:
+            return clear_of_guest(candidate) and (
+                not off_doors or _off_doorways(candidate, doorways))
+
+        plans = list(_trailing_plans(box, grid, routes, robot, keep=keep))
+        if stay.margin >= STAY_MARGIN and (not keep_off_doors or _off_doorways(stay, doorways)):
+            plans.append(stay)
+        plan = _best_plan(plans)
+        if plan is not None:
+            return plan
+    return _inside_fallback(box, grid, robot, routes)
+
+
+def _off_doorways(plan: TrailingPlan, doorways: Sequence[Point]) -> bool:
+    """Whether the plan's guest spot keeps DOORWAY_KEEP from every doorway."""
+    return all(math.dist(plan.guest_spot, door) >= DOORWAY_KEEP for door in doorways)
 
 
 def _staying_plan(box: Box, robot: Pose2D) -> TrailingPlan:

@@ -193,7 +193,8 @@ def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps()
                          "ClearCostmaps", "NavigateToWaypoint"]
 
 
-def test_a_waypoint_that_fails_twice_is_skipped() -> None:
+def test_a_waypoint_that_fails_twice_is_heard_from_as_near_as_the_way_allows_then_skipped(
+) -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
         "Explore.GuestInRange": [Status.FAILURE] * 25,
@@ -204,9 +205,43 @@ def test_a_waypoint_that_fails_twice_is_skipped() -> None:
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     steps = [c.rsplit(".", 1)[-1] for c in script.calls
-             if c.endswith(("NextWaypoint", "NavigateToWaypoint"))]
-    assert steps[:4] == ["NextWaypoint", "NavigateToWaypoint", "NavigateToWaypoint",
-                         "NextWaypoint"]
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "FindSpotNearWaypoint",
+                            "NavigateNearWaypoint"))]
+    assert steps[:6] == ["NextWaypoint", "NavigateToWaypoint", "NavigateToWaypoint",
+                         "FindSpotNearWaypoint", "NavigateNearWaypoint", "NextWaypoint"]
+
+
+def test_a_waypoint_with_nothing_reachable_near_it_is_skipped() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "NavigateToWaypoint": [Status.FAILURE, Status.FAILURE, (Status.SUCCESS, 10),
+                               (Status.RUNNING, 0)],
+        "FindSpotNearWaypoint": [Status.FAILURE],
+        **NOT_BLOCKED,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateNearWaypoint") == 0
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "FindSpotNearWaypoint"))]
+    assert steps[:5] == ["NextWaypoint", "NavigateToWaypoint", "NavigateToWaypoint",
+                         "FindSpotNearWaypoint", "NextWaypoint"]
+
+
+def test_the_guest_heard_on_the_way_near_a_waypoint_ends_the_search() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 12 + [Status.SUCCESS],
+        "NavigateToWaypoint": [Status.FAILURE, Status.FAILURE],
+        "NavigateNearWaypoint": [Status.RUNNING] * 1000,
+        **NOT_BLOCKED,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("NavigateNearWaypoint") >= 1
+    assert script.count("NextWaypoint") == 1  # heard while coming near the first waypoint
+    assert script.count("CallPickUpGuest") == 1
 
 
 def test_a_waypoint_whose_costmaps_cannot_be_cleared_is_skipped() -> None:

@@ -21,6 +21,7 @@ from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
+from bt_servicesim.planning.entrances import doorways_near
 from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.give_way import (
@@ -38,6 +39,7 @@ from bt_servicesim.planning.goals import (
     return_goal,
 )
 from bt_servicesim.planning.guest_localisation import RfidHistory
+from bt_servicesim.planning.near_spot import near_spot
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 
@@ -115,7 +117,8 @@ class PickupGoal(_Computation):
 
 
 class DropOffGoal(_Computation):
-    """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`)."""
+    """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`),
+    clear of the doorways near the box (:func:`doorways_near`)."""
 
     INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
     OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
@@ -124,7 +127,8 @@ class DropOffGoal(_Computation):
         super().__init__(name=name, **kwargs)
 
     def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
-        plan = drop_off_goal(box, occupancy, robot_pose)
+        doorways = doorways_near(occupancy, box)
+        plan = drop_off_goal(box, occupancy, robot_pose, doorways=doorways)
         return _report_plan(self, plan, "drop-off goal", "no reachable drop-off goal")
 
 
@@ -257,6 +261,34 @@ def _seen(people: np.ndarray | None) -> str:
         return "nobody near"
     shown = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in people[:4])
     return f"{len(people)} people near: {shown}" + (", ..." if len(people) > 4 else "")
+
+
+class NearestReachableSpot(_Computation):
+    """The spot nearest a waypoint navigation could not reach that the robot reaches now, with
+    the people the costmap shows standing as obstacles, clear of them (:func:`near_spot`);
+    within RFID range of the waypoint, so it hears most of what the waypoint would have."""
+
+    INPUT_PORTS: Ports = {
+        "target": PortInformation(data_type=Pose2D, description="the waypoint not reached"),
+        "robot_pose": ROBOT_POSE,
+        "occupancy": OCCUPANCY,
+        "costmap": PortInformation(data_type=Costmap2D, required=False,
+                                   description="navigation's costmap, where people stand"),
+    }
+    OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
+
+    def __init__(self, name: str = "NearestReachableSpot", **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+
+    def compute(self, target: Pose2D, robot_pose: Pose2D, occupancy: OccupancyGrid2D,
+                costmap: Costmap2D | None) -> Pose2D | None:
+        people = None if costmap is None else people_on_costmap(
+            costmap, occupancy, x=robot_pose.x, y=robot_pose.y, reach=PEOPLE_REACH)
+        spot = near_spot(occupancy, robot=robot_pose, target=(target.x, target.y), people=people)
+        self.feedback_message = (f"nearest reachable spot {describe(spot)}" if spot is not None
+                                 else f"nothing reachable near {describe(target)}"
+                                 ) + f" ({_seen(people)})"
+        return spot
 
 
 class ExplorationWaypoints(_Computation):

@@ -27,6 +27,7 @@ from bt_servicesim.behaviours.actions.goals import (
     GiveWaySpot,
     GuestSearchWaypoints,
     JitterGoal,
+    NearestReachableSpot,
     PickupGoal,
     ReturnGoal,
 )
@@ -545,3 +546,24 @@ def test_give_way_spot_keeps_clear_of_the_people_on_the_costmap_but_not_of_the_g
                  guest_follows=True)
     assert unseen.status == Status.SUCCESS
     assert unseen.feedback_message.endswith("(no costmap)")
+
+
+# ------------------------------------------------------------------------------ coming near
+def test_nearest_reachable_spot_hears_a_room_shut_by_someone_in_its_door_from_the_corridor(
+) -> None:
+    """In the office of tests/planning/test_give_way.py: a walker stands in the room's door."""
+    grid, robot, waypoint = office(), Pose2D(14.0, 4.8, math.pi), Pose2D(11.0, 7.0)
+    behaviour = run(NearestReachableSpot(), target=waypoint, robot_pose=robot, occupancy=grid,
+                    costmap=costmap_of(grid, [(10.0, 5.7)]))
+    spot = output(behaviour)
+    assert behaviour.status == Status.SUCCESS, behaviour.feedback_message
+    assert spot.y < 5.6 and math.dist((spot.x, spot.y), (waypoint.x, waypoint.y)) <= 2.0
+    assert behaviour.feedback_message.endswith("(1 people near: (10.0, 5.7))")
+    Blackboard.clear()
+    unseen = run(NearestReachableSpot(), target=waypoint, robot_pose=robot, occupancy=grid)
+    assert math.dist((output(unseen).x, output(unseen).y), (waypoint.x, waypoint.y)) < 0.05
+    Blackboard.clear()
+    too_deep = run(NearestReachableSpot(), target=Pose2D(11.0, 8.5), robot_pose=robot,
+                   occupancy=grid, costmap=costmap_of(grid, [(10.0, 5.7)]))
+    assert too_deep.status == Status.FAILURE
+    assert too_deep.feedback_message.startswith("nothing reachable near (11.00, 8.50")
