@@ -153,6 +153,8 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         raise UsageError(f"--groot shows a behaviour tree; the {args.executive} executive has none")
     if args.executive != "bt" and args.tree != DEFAULT_TREE:
         raise UsageError(f"--tree {args.tree}: only the bt executive plays a tree")
+    if args.executive == "bt":
+        _check_tree_structure(args.tree)
     return RunSettings(
         world=args.world, seed=args.seed, speed=speed, tree=args.tree,
         out=_run_directory(args.out, overwrite=args.overwrite),
@@ -162,6 +164,17 @@ def settings_from(args: argparse.Namespace) -> RunSettings:
         trajectory=args.trajectory, clock=args.clock, profile=args.profile,
         nav_params=(None if args.attach else nav_params_for(args.executive, args.nav_params)),
     )
+
+
+def _check_tree_structure(tree: Path) -> None:
+    """The tree file's structure, which needs no behaviour imported (its nodes are checked
+    while the simulator comes up, :func:`main`)."""
+    from bt_servicesim.tree.structure import MissionTreeError, checked_tree_file
+
+    try:
+        checked_tree_file(tree)
+    except MissionTreeError as error:
+        raise UsageError(str(error)) from None
 
 
 def _live_address(argument: str | None) -> LiveAddress | None:
@@ -235,14 +248,14 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
 def main(argv: Sequence[str] | None = None) -> int:
     """Check the input, start the simulator, then load the tree while it comes up.
 
-    What needs only the arguments is checked first. The simulator then gets a head start
-    (:mod:`bt_servicesim.mission.head_start`): the tree needs every behaviour and its libraries
-    imported, about a second here, and the simulator as long to come up. A tree, a monitor
-    port or a Foxglove address refused after that takes the head start back, and so does a
-    world or ``--sim-arg`` the simulator refused (the run waits for its word on them before it
-    takes the directory), so bad input still leaves nothing but its one-line error. One
-    :class:`StopSignals` covers the whole start-up, up to the run's own: a stop signal at any
-    moment of it ends the run in one line.
+    What needs only the arguments is checked first, the tree file's structure too. The
+    simulator then gets a head start (:mod:`bt_servicesim.mission.head_start`): the tree's
+    nodes need every behaviour and its libraries imported, and the simulator takes longer to
+    come up. A tree, a monitor port or a Foxglove address refused after that takes the head
+    start back, and so does a world or ``--sim-arg`` the simulator refused (the run waits for
+    its word on them before it takes the directory), so bad input still leaves nothing but its
+    one-line error. One :class:`StopSignals` covers the whole start-up, up to the run's own: a
+    stop signal at any moment of it ends the run in one line.
     """
     args = build_parser().parse_args(argv)
     try:
@@ -275,7 +288,7 @@ def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Names
     live: LiveServer | None = None
     try:
         head_start.begin(users_domain=_users_domain())
-        from bt_servicesim.tree.loading import MissionTreeError  # behaviours: after the start
+        from bt_servicesim.tree.structure import MissionTreeError
 
         try:
             make_executive = executive_factory(settings)

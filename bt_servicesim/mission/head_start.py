@@ -3,10 +3,11 @@
 A run has two processes to bring up: the simulator (its imports, the world, the first
 episode: about 1.3 s here) and the executive (rclpy, the behaviours and their libraries, the
 tree: about 1.2 s). Started one after the other they cost the sum; the machine has a core for
-each. So the run command checks what it can check cheaply, starts the simulator, and only then
-imports the behaviours and loads the tree (:func:`bt_servicesim.run.main`).
+each. So the run command checks what it can check cheaply (the arguments, the tree file's
+structure), starts the simulator, and only then imports the behaviours and loads the tree
+(:func:`bt_servicesim.run.main`).
 
-The input is not all checked when the simulator starts: the tree file is checked while it
+The input is not all checked when the simulator starts: the tree's nodes are checked while it
 comes up, and the simulator checks its own (the world file, ``--sim-arg``) meanwhile, saying so
 down a pipe before it brings up ROS (:meth:`HeadStart.simulator_refusal`). The run hands the
 directory over only once both passed. A refused tree or world must still leave nothing behind,

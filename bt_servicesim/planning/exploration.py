@@ -11,7 +11,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-from scipy import ndimage
 
 from bt_servicesim.planning.geometry import Box, Point, Pose2D
 from bt_servicesim.planning.goals import PERSON_CLEARANCE, ROBOT_CLEARANCE, distance_to_box
@@ -102,6 +101,8 @@ class _Coverage:
                  open_space: np.ndarray) -> None:
         self.grid, self.window, self.reachable = grid, window, reachable
         self.xs, self.ys = np.meshgrid(window.xs, window.ys)
+        from scipy import ndimage  # when computing, as planning.occupancy says why
+
         cells, nearest = ndimage.distance_transform_edt(~reachable, return_indices=True)
         gap = cells * grid.resolution  # metres to the nearest reachable cell
         self.gap, (self.nearest_rows, self.nearest_cols) = gap, nearest

@@ -45,7 +45,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from bt_servicesim.planning.geometry import Point, Pose2D
 from bt_servicesim.planning.goals import PERSON_CLEARANCE, ROBOT_CLEARANCE
@@ -400,6 +399,8 @@ def _reachable_keeping(berth: float, estimate: GuestEstimate, grid: OccupancyGri
     rows, cols = _window_indices(grid, window, np.vstack([estimate.spots,
                                                           [[estimate.x, estimate.y]]]))
     spots[rows, cols] = True
+    from scipy import ndimage  # when computing, as planning.occupancy says why
+
     open_cells = grid.passable(ROBOT_CLEARANCE).copy()
     open_cells[window.rows, window.cols] &= (
         ndimage.distance_transform_edt(~spots) * grid.resolution >= berth)

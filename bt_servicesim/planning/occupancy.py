@@ -16,6 +16,10 @@ subscription callback) and then only read, so the expensive parts are done up fr
 Conventions follow nav_msgs/OccupancyGrid: row 0 lies at ``origin_y``, column 0 at
 ``origin_x``, ``data[row * width + col]``; a value in 0..49 is free, 50..100 occupied and -1
 unknown. Rotated map origins are refused.
+
+scipy is imported by the functions that compute with it, not with the module: the behaviours
+declare their ports with :class:`OccupancyGrid2D`, and a command that refuses a tree file
+imports every behaviour but computes nothing.
 """
 
 from __future__ import annotations
@@ -24,12 +28,13 @@ import hashlib
 import itertools
 import math
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import ndimage, sparse
-from scipy.sparse import csgraph
+
+if TYPE_CHECKING:
+    from scipy import sparse
 
 __all__ = ["Cell", "OccupancyGrid2D", "RouteTree", "Window"]
 
@@ -245,6 +250,8 @@ class OccupancyGrid2D:
         key = round(float(clearance), 4)
         labels = self._components.get(key)
         if labels is None:
+            from scipy import ndimage
+
             labels, _count = ndimage.label(self.passable(key), structure=_EIGHT_CONNECTED)
             labels.flags.writeable = False
             self._components[key] = labels
@@ -295,6 +302,8 @@ def _clearances(values: np.ndarray, resolution: float) -> np.ndarray:
 
 
 def _computed_clearances(values: np.ndarray, resolution: float) -> np.ndarray:
+    from scipy import ndimage
+
     blocked = (values < 0) | (values >= OCCUPIED_FROM)
     padded = np.pad(blocked, 1, constant_values=True)
     cells = ndimage.distance_transform_edt(~padded)[1:-1, 1:-1]
@@ -332,6 +341,8 @@ class RouteTree:
         node_of[lattice] = np.arange(len(node_cells))
         graph = _lattice_graph(node_of, stride * grid.resolution)
         start = _nearest_node(grid, node_cells, x, y)
+        from scipy.sparse import csgraph
+
         distances, predecessors = csgraph.dijkstra(  # a 0-d index: 1-d results
             graph, directed=False, indices=np.asarray(start), return_predecessors=True
         )
@@ -427,6 +438,8 @@ class RouteTree:
 
 def _lattice_graph(node_of: np.ndarray, spacing: float) -> sparse.csr_matrix:
     """Undirected 8-neighbour edges between lattice nodes, weighted by length in metres."""
+    from scipy import sparse
+
     rows, cols = node_of.shape
     sources, targets, weights = [], [], []
     for d_row, d_col in ((0, 1), (1, 0), (1, 1), (1, -1)):

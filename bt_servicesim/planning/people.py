@@ -19,7 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 
@@ -84,6 +83,8 @@ def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y
     centre_ys = costmap.origin_y + (np.arange(row0, row1) + 0.5) * res
     grid_x, grid_y = np.meshgrid(centre_xs, centre_ys)
     window &= walls.clearances_at(grid_x, grid_y) > WALL_MARGIN
+    from scipy import ndimage  # when computing, as planning.occupancy says why
+
     labels, count = ndimage.label(window)
     if count == 0:
         return np.zeros((0, 2))

@@ -3,7 +3,8 @@
 The tree file is the mission. This module hands the parser the registry of this project's nodes
 (:mod:`bt_servicesim.behaviours` registers them all on import), turns the run's settings into the
 top-level tree's port values (``time_limit``), and turns every way a tree file can be wrong into
-one :class:`MissionTreeError` line that names the file and the problem.
+one :class:`MissionTreeError` line that names the file and the problem (the file's structure is
+checked by :mod:`bt_servicesim.tree.structure`, its nodes by :mod:`bt_servicesim.tree.validation`).
 
 The Python reads no name that only the tree file defines. What the tools around the tree need
 to know of it is declared on the main ``<BehaviorTree>`` as an attribute, beside its ports:
@@ -16,7 +17,6 @@ refused when it loads, rather than showing no phases later.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ElementTree
-from itertools import chain
 from pathlib import Path
 
 import py_trees
@@ -25,7 +25,7 @@ from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 from bt_servicesim.behaviours import node_registry
 from bt_servicesim.tree.files import DEFAULT_TREE
 from bt_servicesim.tree.shape import short_label
-from bt_servicesim.tree.structure import main_tree_id, structure_problems
+from bt_servicesim.tree.structure import MissionTreeError, checked_tree_file, main_tree_id
 from bt_servicesim.tree.validation import tree_file_problems
 
 PHASES_ATTRIBUTE = "phases"
@@ -33,9 +33,8 @@ PHASES_ATTRIBUTE = "phases"
 DEFAULT_PHASES = "Mission"
 """The phases' composite when the tree does not say: the shipped tree's."""
 
-
-class MissionTreeError(ValueError):
-    """A tree file that cannot be loaded; the message is one line naming the file and problem."""
+__all__ = ["DEFAULT_PHASES", "DEFAULT_TREE", "PHASES_ATTRIBUTE", "MissionTreeError",
+           "load_mission_tree", "phases_of"]
 
 
 def load_mission_tree(
@@ -47,14 +46,9 @@ def load_mission_tree(
     """Parse ``path`` into a py_trees root; ``time_limit_s`` overrides the tree's own default,
     ``main_tree`` names the tree to play instead of the file's ``main_tree_to_execute``."""
     tree_file = Path(path)
-    if not tree_file.is_file():
-        what = "is a directory, not a tree file" if tree_file.is_dir() else "no such tree file"
-        raise MissionTreeError(f"{tree_file}: {what}")
-    top = _check_xml(tree_file)
     registry = node_registry()
-    problems = chain(structure_problems(top, registry, main_tree=main_tree),
-                     tree_file_problems(top, registry))
-    for problem in problems:
+    top = checked_tree_file(tree_file, registry, main_tree=main_tree)
+    for problem in tree_file_problems(top, registry):
         raise MissionTreeError(f"{tree_file}: {problem}")
     overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
     try:
@@ -90,19 +84,6 @@ def _check_phases(tree_file: Path, root: py_trees.behaviour.Behaviour,
         raise MissionTreeError(
             f'{tree_file}: {PHASES_ATTRIBUTE}="{phases}" names no composite of the main tree')
 
-
-
-def _check_xml(tree_file: Path) -> ElementTree.Element:
-    """The file's top element, if it is well-formed XML, a ``<root>`` with a tree in it."""
-    try:
-        root = ElementTree.parse(tree_file).getroot()
-    except ElementTree.ParseError as error:
-        raise MissionTreeError(f"{tree_file}: not well-formed XML ({error})") from error
-    if root.tag != "root":
-        raise MissionTreeError(f"{tree_file}: the top element is <{root.tag}>, expected <root>")
-    if root.find("BehaviorTree") is None:
-        raise MissionTreeError(f"{tree_file}: no <BehaviorTree> element")
-    return root
 
 
 def _one_line(error: BaseException) -> str:

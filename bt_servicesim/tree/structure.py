@@ -13,18 +13,51 @@ and the problem, as BehaviorTree.CPP's own loader refuses it:
 - no tree uses itself, through any chain of SubTrees;
 - a leaf (a registered node that is neither a decorator nor a control) has no child element,
   a decorator exactly one.
+
+Only the last needs to know the nodes, from the registry that importing every behaviour makes.
+:func:`checked_tree_file` runs the others with an empty registry, which imports nothing: a
+command checks them before it starts what the tree would need (the run, its simulator).
 """
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ElementTree
 from collections.abc import Iterator, Mapping
+from pathlib import Path
 
 import py_trees
 
-__all__ = ["SUBTREE_TAGS", "element_label", "main_tree_id", "structure_problems"]
+__all__ = [
+    "SUBTREE_TAGS", "MissionTreeError", "checked_tree_file", "element_label", "main_tree_id",
+    "structure_problems",
+]
 
 SUBTREE_TAGS = ("subtree", "subtreeplus")
+
+
+class MissionTreeError(ValueError):
+    """A tree file that cannot be loaded; the message is one line naming the file and problem."""
+
+
+def checked_tree_file(tree_file: Path, registry: Mapping[str, type] | None = None, *,
+                      main_tree: str | None = None) -> ElementTree.Element:
+    """The top element of ``tree_file``, a file of well-formed XML, a ``<root>`` with a tree in
+    it and none of the problems :func:`structure_problems` finds with ``registry`` (with none,
+    those that need no node's class); else :class:`MissionTreeError` naming the first."""
+    if not tree_file.is_file():
+        what = "is a directory, not a tree file" if tree_file.is_dir() else "no such tree file"
+        raise MissionTreeError(f"{tree_file}: {what}")
+    try:
+        root = ElementTree.parse(tree_file).getroot()
+    except ElementTree.ParseError as error:
+        raise MissionTreeError(f"{tree_file}: not well-formed XML ({error})") from error
+    if root.tag != "root":
+        raise MissionTreeError(f"{tree_file}: the top element is <{root.tag}>, expected <root>")
+    if root.find("BehaviorTree") is None:
+        raise MissionTreeError(f"{tree_file}: no <BehaviorTree> element")
+    for problem in structure_problems(root, registry or {}, main_tree=main_tree):
+        raise MissionTreeError(f"{tree_file}: {problem}")
+    return root
 
 
 def main_tree_id(root: ElementTree.Element, given: str | None = None) -> str | None:

@@ -97,16 +97,36 @@ def test_broken_tree_files_get_one_line_naming_the_file(tmp_path: Path, content:
     assert not (tmp_path / "runs").exists(), "the simulator's head start is taken back"
 
 
+def test_a_tree_files_structure_is_checked_before_anything_starts(tmp_path: Path) -> None:
+    """What needs no behaviour imported is refused with the arguments, before the simulator's
+    head start; a node the tree names is checked while the simulator comes up."""
+    from bt_servicesim.cli import UsageError
+    from bt_servicesim.run import build_parser, settings_from
+
+    def settings_for(content: str) -> object:
+        (tmp_path / "broken.xml").write_text(content)
+        arguments = ["--tree", str(tmp_path / "broken.xml"), "--out", str(tmp_path / "run")]
+        return settings_from(build_parser().parse_args(arguments))
+
+    for content, problem in [("<tree/>", "expected <root>"),
+                             (tree("<SubTree ID='W' name='S'/>", WAIT + WAIT),
+                              'two <BehaviorTree ID="W">')]:
+        with pytest.raises(UsageError, match="broken.xml: .*" + problem):
+            settings_for(content)
+    assert settings_for(tree("<Teleport name='T'/>")) is not None
+    assert not (tmp_path / "run").exists()
+
+
 def test_a_refused_tree_keeps_the_earlier_run_it_was_to_overwrite(tmp_path: Path) -> None:
-    """The simulator starts while the tree is checked; its log has a name of its own until
-    the tree passes, and goes with the simulator when it does not."""
+    """The simulator starts while the tree's nodes are checked; its log has a name of its own
+    until the tree passes, and goes with the simulator when it does not."""
     earlier = tmp_path / "earlier"
     earlier.mkdir()
     (earlier / "report.json").write_text('{"status": "completed"}')
     (earlier / "sim.log").write_text("the earlier run's simulator\n")
-    tree = tmp_path / "broken.xml"
-    tree.write_text("<tree/>")
-    result = run("--tree", str(tree), "--out", str(earlier), "--overwrite", cwd=tmp_path)
+    broken = tmp_path / "broken.xml"
+    broken.write_text(tree("<Teleport name='T'/>"))  # a node no behaviour plays
+    result = run("--tree", str(broken), "--out", str(earlier), "--overwrite", cwd=tmp_path)
     assert result.returncode == 2 and "broken.xml" in result.stderr
     assert sorted(path.name for path in earlier.iterdir()) == ["report.json", "sim.log"]
     assert (earlier / "sim.log").read_text() == "the earlier run's simulator\n"

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -22,6 +24,16 @@ def two_rooms(door_width: float) -> OccupancyGrid2D:
     fill(values, 5.0, 0.0, 5.2, 2.5)
     fill(values, 5.0, 2.5 + door_width, 5.2, 6.0)
     return OccupancyGrid2D.from_message(grid_message(values))
+
+
+def test_the_behaviours_import_the_grid_without_scipy() -> None:
+    """A command that refuses a tree file imports every behaviour, whose ports name the grid,
+    and computes nothing: scipy comes with the first computation, not with the import."""
+    program = ("import sys, bt_servicesim.tree.loading; "
+               "print(sorted(name for name in sys.modules if name.split('.')[0] == 'scipy'))")
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.strip() == "[]"
 
 
 def test_message_layout_row_zero_at_origin_y() -> None:
