@@ -118,6 +118,9 @@ class LockstepGate:
         self._next_id = 1
         self._waiting_since: float | None = None
         self._admissions: list[Admission] = []
+        self._allowed: dict[str, int] | None = None
+        """:meth:`allowed`, worked out once after each change of what it depends on (a join, a
+        leave, a done, an announcement, a drop): the loop asks for it on every look."""
 
     @property
     def active(self) -> bool:
@@ -131,6 +134,7 @@ class LockstepGate:
         """A new client, held to the period last announced; its id."""
         client_id = self._next_id
         self._next_id += 1
+        self._allowed = None
         self._clients[client_id] = _Client(name=name or f"client {client_id}",
                                            baseline=dict(self.taken), joined_period=self.period)
         return client_id
@@ -147,6 +151,7 @@ class LockstepGate:
         if client is None:
             return False
         if period > client.done_period:
+            self._allowed = None
             client.done_period = period
             client.requests[period] = {endpoint: count for endpoint, count in requests.items()
                                        if endpoint in self.endpoints}
@@ -169,6 +174,8 @@ class LockstepGate:
         step = self.period + 1
         readers: dict[str, int] = {}
         for client in self._clients.values():
+            if not client.readings:  # most periods: nobody subscribed since the join
+                continue
             for reading in client.readings_by(self.waits_for(client)):
                 if reading.start <= step:
                     readers[reading.topic] = readers.get(reading.topic, 0) + 1
@@ -177,6 +184,7 @@ class LockstepGate:
     def leave(self, client_id: int) -> str | None:
         """A client leaves: the gate no longer waits for it; its name, None if unknown."""
         client = self._clients.pop(client_id, None)
+        self._allowed = None
         return None if client is None else client.name
 
     def take(self, endpoint: str) -> int:
@@ -192,9 +200,16 @@ class LockstepGate:
         """Period ``period`` is over and announced; the gate waits on it from now."""
         self.period = period
         self._waiting_since = None
+        self._allowed = None
 
     def allowed(self) -> dict[str, int]:
-        """Per endpoint, the requests the joined clients' done messages account for."""
+        """Per endpoint, the requests the joined clients' done messages account for (the
+        caller must not change it)."""
+        if self._allowed is None:
+            self._allowed = self._work_out_allowed()
+        return self._allowed
+
+    def _work_out_allowed(self) -> dict[str, int]:
         allowed: dict[str, int] = {}
         for client in self._clients.values():
             requests = client.requests_by(self.waits_for(client))
@@ -215,9 +230,14 @@ class LockstepGate:
                 if self.taken.get(endpoint, 0) < count]
 
     def lacks_done(self) -> bool:
-        """Whether some client has not said it is done with the period the gate waits on."""
-        return any(client.done_period < self.waits_for(client)
-                   for client in self._clients.values())
+        """Whether some client has not said it is done with the period the gate waits on
+        (:meth:`waits_for`, written out: the loop asks on every look)."""
+        waited = self.period - self.lag
+        for client in self._clients.values():
+            done = client.done_period
+            if done < waited or done < client.joined_period:  # done < max(both)
+                return True
+        return False
 
     def is_open(self) -> bool:
         """Whether the simulator may step on: :meth:`missing` would be empty. Asked every
@@ -256,4 +276,12 @@ class LockstepGate:
                   if client.done_period < self.waits_for(client)] or list(self._clients)
         names = [self._clients.pop(client_id).name for client_id in silent]
         self._waiting_since = None
+        self._allowed = None
         return names
+
+    def overdue(self, now_s: float) -> bool:
+        """Whether :meth:`drop_silent` at wall ``now_s`` would drop a client: the gate has
+        been shut for :attr:`drop_after_s` (so the caller puts what it lacked into words only
+        then)."""
+        return (self._waiting_since is not None
+                and now_s - self._waiting_since >= self.drop_after_s and not self.is_open())

@@ -265,8 +265,9 @@ class LockstepServer:
         return writer
 
     def _drop_silent(self) -> None:
-        missing = self.gate.missing()
-        for name in self.gate.drop_silent(time.monotonic()):
+        now = time.monotonic()
+        missing = self.gate.missing() if self.gate.overdue(now) else []  # words only for a drop
+        for name in self.gate.drop_silent(now):
             self.node.get_logger().warning(
                 f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
                 f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
