@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import random
 
-from servicesim_sim.lockstep.gate import Admission, LockstepGate, Reading
+from servicesim_sim.lockstep.gate import Admission, LockstepGate, Reading, allowed_by
 
 ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
 
@@ -184,7 +184,9 @@ def test_the_gate_is_open_exactly_when_nothing_is_missing() -> None:
                 elif action == 3:
                     gate.leave(rng.choice(clients))
                 assert gate.is_open() == (not gate.missing())
-                assert gate.allowed() == gate._work_out_allowed()  # kept, never stale
+                assert gate.allowed() == allowed_by([  # kept from look to look, never stale
+                    (client.baseline, client.requests_by(gate.waits_for(client)))
+                    for client in gate._clients.values()])
 
 
 CAMERA = "/servicebot/camera_front/image_raw"
