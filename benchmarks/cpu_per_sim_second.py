@@ -46,7 +46,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sim_rtf import ProcessCpu, checkout, commit_of, seed_list
+from sim_rtf import ProcessCpu, checkout, code_path, commit_of, seed_list
 
 from bt_servicesim.cli import OneLineArgumentParser
 
@@ -113,7 +113,7 @@ def play(code: Path, seed: int, *, hard: bool, cut: bool, out: Path) -> Run:
     if cut:
         command += ["--time-limit", repr(CUT_SIM_S)]
     environment = os.environ.copy()
-    environment["PYTHONPATH"] = os.pathsep.join([str(code), str(code / "sim")])
+    environment["PYTHONPATH"] = code_path(code)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with (out.parent / f"{out.name}.stderr").open("w") as errors:
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,

@@ -116,6 +116,14 @@ def checkout(text: str) -> Path:
     return path
 
 
+def code_path(code: Path) -> str:
+    """``PYTHONPATH`` for a process on ``code``'s checkout: its executive and simulator first,
+    then whatever this environment's own ``PYTHONPATH`` adds (an interface package built
+    outside the virtual environment, say), so that ``code`` wins over any other checkout."""
+    inherited = [entry for entry in os.environ.get("PYTHONPATH", "").split(os.pathsep) if entry]
+    return os.pathsep.join([str(code), str(code / "sim"), *inherited])
+
+
 def seed_list(text: str) -> list[int]:
     """``0,1,2`` or a range ``0-4`` (both ends included) as seeds."""
     try:
@@ -249,7 +257,7 @@ def measure_mission(*, speed: float, executive: str, free_running: bool = False,
         errors = (Path(out) / "run.err").open("w")  # a pipe nobody reads would block the run
         environment = os.environ.copy()
         if code is not None:
-            environment["PYTHONPATH"] = os.pathsep.join([str(code), str(code / "sim")])
+            environment["PYTHONPATH"] = code_path(code)
         if taking_turns:  # the simulator (started by the run) waits for each tick
             environment[LAG_VARIABLE] = "0"
         run = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=errors,

@@ -46,6 +46,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from ros_harness import REPO, isolate
+from sim_rtf import code_path
 
 from bt_servicesim.cli import OneLineArgumentParser
 
@@ -260,7 +261,7 @@ class MissionFigures:
 def timed_mission(code: Path, seed: int, out: Path) -> dict[str, Any]:
     """One mission of ``code`` (a checkout) through ``timed_run.py``: its figures."""
     figures = out.with_suffix(".json")
-    environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(code), str(code / "sim")])}
+    environment = {**os.environ, "PYTHONPATH": code_path(code)}
     command = [sys.executable, str(Path(__file__).with_name("timed_run.py")), str(figures),
                "--seed", str(seed), "--speed", "0", "--headless", "--out", str(out),
                "--trajectory", "failed"]

@@ -1,10 +1,11 @@
-"""``benchmarks/sim_rtf.py``, ``startup.py``, ``service_burst.py``, ``tick_cost.py`` and
-``timed_run.py``: bad arguments are one line on stderr and exit status 2, before any process
-starts."""
+"""``benchmarks/sim_rtf.py``, ``startup.py``, ``service_burst.py``, ``tick_cost.py``,
+``lockstep_cost.py`` and ``timed_run.py``: bad arguments are one line on stderr and exit status
+2, before any process starts; ``lockstep_cost.py``, which starts no ROS, also runs briefly."""
 
 from __future__ import annotations
 
 import importlib.util
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -115,3 +116,23 @@ def test_the_suite_under_load_benchmark_names_each_failing_test_and_the_counts()
     assert run.counts == {"failed": 1, "passed": 2074, "error": 1}
     assert run.pytest_s == 361.27
     assert "failing: tests/sim/test_x.py::test_y[1]; tests/commands/test_z.py::test_w" in run.line()
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--periods", "0"], "--periods and --rounds: at least 1"),
+    (["--rounds", "-1"], "--periods and --rounds: at least 1"),
+    (["--reference-code", "/nowhere"], "/nowhere: not a checkout of this repository"),
+])
+def test_the_lockstep_cost_benchmark_refuses_bad_arguments_in_one_line(
+        arguments: list[str], named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("lockstep_cost.py"), arguments, named)
+
+
+def test_the_lockstep_cost_benchmark_prints_each_checkouts_cpu_a_period() -> None:
+    checkout = str(SIM_RTF.parents[1])
+    out = subprocess.run([sys.executable, str(SIM_RTF.with_name("lockstep_cost.py")),
+                          "--periods", "200", "--rounds", "1", "--reference-code", checkout],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    figures = re.findall(r"\((.+)\): median ([0-9.]+) µs of CPU a period", out)
+    assert [where for where, _ in figures] == [checkout, checkout]
+    assert all(float(figure) > 0.0 for _, figure in figures)

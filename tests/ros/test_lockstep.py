@@ -6,9 +6,11 @@ from typing import Any
 
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.task import Future
+from servicesim_competition.msg import LockstepDone
 
-from bt_servicesim.ros.lockstep import offered
+from bt_servicesim.ros.lockstep import _write_period, offered
 from bt_servicesim.ros.node import ExecutiveNode, reliable
 from bt_servicesim.ros.traffic import Traffic
 
@@ -199,3 +201,13 @@ def test_the_join_waits_until_every_announced_topics_reader_has_matched_a_writer
     assert unmatched() == ["/odom"]
     readers[0].publishers = 1
     assert unmatched() == []
+
+
+def test_a_done_kept_serialised_says_each_new_period_and_the_rest_unchanged() -> None:
+    done = LockstepDone(client=7, endpoints=["/servicesim/room_info", "/x:goal"],
+                        requests=[3, 1], reading_topics=["/camera"], reading_from=[12])
+    kept = bytearray(serialize_message(done))
+    for period in (1, 2, 255, 2**32 + 5, 2**64 - 1):
+        _write_period(kept, period)
+        done.period = period
+        assert deserialize_message(bytes(kept), LockstepDone) == done

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import random
 
-from servicesim_sim.lockstep.gate import Admission, LockstepGate, Reading
+from servicesim_sim.lockstep.gate import Admission, LockstepGate, Reading, allowed_by
 
 ROOM, PICKUP, CMD_VEL = "/servicesim/room_info", "/servicesim/pickup_guest", "/servicebot/cmd_vel"
 
@@ -91,7 +91,9 @@ def test_a_silent_client_is_dropped_after_the_bound_and_the_gate_opens() -> None
     gate, client = gate_with_client()
     assert gate.drop_silent(100.0) == []  # starts the wait
     assert gate.drop_silent(109.9) == []
+    assert not gate.overdue(109.9) and gate.overdue(110.0)
     assert gate.drop_silent(110.0) == ["executive"]
+    assert not gate.overdue(200.0)
     assert not gate.active and gate.is_open()
     assert gate.done(client, 1, {}) is False  # a dropped client's late word is ignored
 
@@ -182,6 +184,9 @@ def test_the_gate_is_open_exactly_when_nothing_is_missing() -> None:
                 elif action == 3:
                     gate.leave(rng.choice(clients))
                 assert gate.is_open() == (not gate.missing())
+                assert gate.allowed() == allowed_by([  # kept from look to look, never stale
+                    (client.baseline, client.requests_by(gate.waits_for(client)))
+                    for client in gate._clients.values()])
 
 
 CAMERA = "/servicebot/camera_front/image_raw"

@@ -114,3 +114,17 @@ def test_a_reader_reads_each_done_right_as_the_names_change() -> None:
                                requests=[period + index for index in range(len(endpoints))],
                                leaving=period == len(names) - 1)
         assert reader.read(serialize_message(message)) == done_of(message)
+
+
+def test_a_reader_reads_each_done_right_when_only_its_period_or_one_number_changes() -> None:
+    reader = DoneReader()
+    same = {"client": 3, "endpoints": ["/ab", "/cd"], "requests": [1, 2]}
+    changes: list[dict[str, object]] = [
+        {}, {}, {"requests": [1, 3]}, {"requests": [1, 3]}, {"client": 4},
+        {"reading_topics": ["/cam"], "reading_from": [9]},
+        {"reading_topics": ["/cam"], "reading_from": [10]}, {}, {"leaving": True}, {}]
+    for period, change in enumerate(changes):
+        message = LockstepDone(**{**same, "period": period, **change})
+        data = bytearray(serialize_message(message))
+        data[8:12] = b"\xff\xff\xff\xff"  # padding: rclpy leaves what memory held there
+        assert reader.read(bytes(data)) == done_of(message)

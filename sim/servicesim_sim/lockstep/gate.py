@@ -43,7 +43,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["DROP_AFTER_S", "PIPELINE_LAG", "Admission", "LockstepGate", "Reading"]
+__all__ = ["DROP_AFTER_S", "PIPELINE_LAG", "Admission", "LockstepGate", "Reading", "allowed_by"]
 
 DROP_AFTER_S = 10.0
 """Wall seconds the gate waits on a client before it drops the client."""
@@ -60,6 +60,10 @@ class Reading:
     """The first period whose messages on ``topic`` the client counts."""
 
 
+_NO_REQUESTS: dict[str, int] = {}
+"""A client's counts before its first done (shared: never changed)."""
+
+
 @dataclass
 class _Client:
     name: str
@@ -69,7 +73,10 @@ class _Client:
     """The period announced when the client joined: it is never waited on for an earlier one."""
     done_period: int = -1
     requests: dict[int, dict[str, int]] = field(default_factory=dict)
-    """The requests each done counted, by period (those no longer needed are forgotten)."""
+    """The requests each done counted, by period (those no longer needed are forgotten).
+    Consecutive dones with the same counts share one dict: nobody changes them."""
+    said: tuple[dict[str, int], dict[str, int]] | None = None
+    """The last done's counts as it said them, and as kept (endpoints the gate serves)."""
     readings: dict[int, tuple[Reading, ...]] = field(default_factory=dict)
     """What each done said the client reads (none: nothing), by period, kept as requests."""
 
@@ -81,7 +88,7 @@ class _Client:
     def requests_by(self, period: int) -> dict[str, int]:
         """The counts of the latest done for ``period`` or before (none: nothing yet)."""
         latest = self.latest_by(period)
-        return {} if latest is None else self.requests[latest]
+        return _NO_REQUESTS if latest is None else self.requests[latest]
 
     def readings_by(self, period: int) -> tuple[Reading, ...]:
         """What the latest done for ``period`` or before said the client reads."""
@@ -97,6 +104,17 @@ class Admission:
     number: int
     """Its place in the endpoint's requests (1 for the first the simulator ever took)."""
     serve: Callable[[], None] = field(compare=False)
+
+
+def allowed_by(sources: list[tuple[dict[str, int], dict[str, int]]]) -> dict[str, int]:
+    """Per endpoint, the sum of the clients' baselines and counts (``sources``, a pair for
+    each client)."""
+    allowed: dict[str, int] = {}
+    for baseline, requests in sources:
+        for endpoint in set(baseline) | set(requests):
+            allowed[endpoint] = (allowed.get(endpoint, 0) + baseline.get(endpoint, 0)
+                                 + requests.get(endpoint, 0))
+    return allowed
 
 
 class LockstepGate:
@@ -118,6 +136,13 @@ class LockstepGate:
         self._next_id = 1
         self._waiting_since: float | None = None
         self._admissions: list[Admission] = []
+        self._allowed: dict[str, int] = {}
+        """:meth:`allowed`, looked at again only after a change of what it depends on (a join,
+        a leave, a done, an announcement, a drop): the loop asks for it on every look."""
+        self._allowed_stale = True
+        self._allowed_from: list[tuple[dict[str, int], dict[str, int]]] = []
+        """What the last :meth:`allowed` was worked out from: each client's baseline and
+        counts. A new done with the counts of the last one gives the same dicts again."""
 
     @property
     def active(self) -> bool:
@@ -131,6 +156,7 @@ class LockstepGate:
         """A new client, held to the period last announced; its id."""
         client_id = self._next_id
         self._next_id += 1
+        self._allowed_stale = True
         self._clients[client_id] = _Client(name=name or f"client {client_id}",
                                            baseline=dict(self.taken), joined_period=self.period)
         return client_id
@@ -147,9 +173,12 @@ class LockstepGate:
         if client is None:
             return False
         if period > client.done_period:
+            self._allowed_stale = True
             client.done_period = period
-            client.requests[period] = {endpoint: count for endpoint, count in requests.items()
-                                       if endpoint in self.endpoints}
+            if client.said is None or client.said[0] != requests:
+                client.said = (requests, {endpoint: count for endpoint, count in requests.items()
+                                          if endpoint in self.endpoints})
+            client.requests[period] = client.said[1]
             if readings:
                 client.readings[period] = readings
             self._forget_old(client)
@@ -169,6 +198,8 @@ class LockstepGate:
         step = self.period + 1
         readers: dict[str, int] = {}
         for client in self._clients.values():
+            if not client.readings:  # most periods: nobody subscribed since the join
+                continue
             for reading in client.readings_by(self.waits_for(client)):
                 if reading.start <= step:
                     readers[reading.topic] = readers.get(reading.topic, 0) + 1
@@ -177,6 +208,7 @@ class LockstepGate:
     def leave(self, client_id: int) -> str | None:
         """A client leaves: the gate no longer waits for it; its name, None if unknown."""
         client = self._clients.pop(client_id, None)
+        self._allowed_stale = True
         return None if client is None else client.name
 
     def take(self, endpoint: str) -> int:
@@ -192,16 +224,22 @@ class LockstepGate:
         """Period ``period`` is over and announced; the gate waits on it from now."""
         self.period = period
         self._waiting_since = None
+        self._allowed_stale = True
 
     def allowed(self) -> dict[str, int]:
-        """Per endpoint, the requests the joined clients' done messages account for."""
-        allowed: dict[str, int] = {}
-        for client in self._clients.values():
-            requests = client.requests_by(self.waits_for(client))
-            for endpoint in set(client.baseline) | set(requests):
-                allowed[endpoint] = (allowed.get(endpoint, 0) + client.baseline.get(endpoint, 0)
-                                     + requests.get(endpoint, 0))
-        return allowed
+        """Per endpoint, the requests the joined clients' done messages account for (the
+        caller must not change it)."""
+        if self._allowed_stale:
+            sources = [(client.baseline, client.requests_by(self.waits_for(client)))
+                       for client in self._clients.values()]
+            last = self._allowed_from
+            if len(sources) != len(last) or any(
+                    baseline is not old_baseline or requests is not old_requests
+                    for (baseline, requests), (old_baseline, old_requests) in zip(
+                        sources, last, strict=True)):
+                self._allowed, self._allowed_from = allowed_by(sources), sources
+            self._allowed_stale = False
+        return self._allowed
 
     def missing(self) -> list[str]:
         """What the gate still waits for before the next step, in words; empty when open."""
@@ -215,9 +253,14 @@ class LockstepGate:
                 if self.taken.get(endpoint, 0) < count]
 
     def lacks_done(self) -> bool:
-        """Whether some client has not said it is done with the period the gate waits on."""
-        return any(client.done_period < self.waits_for(client)
-                   for client in self._clients.values())
+        """Whether some client has not said it is done with the period the gate waits on
+        (:meth:`waits_for`, written out: the loop asks on every look)."""
+        waited = self.period - self.lag
+        for client in self._clients.values():
+            done = client.done_period
+            if done < waited or done < client.joined_period:  # done < max(both)
+                return True
+        return False
 
     def is_open(self) -> bool:
         """Whether the simulator may step on: :meth:`missing` would be empty. Asked every
@@ -256,4 +299,12 @@ class LockstepGate:
                   if client.done_period < self.waits_for(client)] or list(self._clients)
         names = [self._clients.pop(client_id).name for client_id in silent]
         self._waiting_since = None
+        self._allowed_stale = True
         return names
+
+    def overdue(self, now_s: float) -> bool:
+        """Whether :meth:`drop_silent` at wall ``now_s`` would drop a client: the gate has
+        been shut for :attr:`drop_after_s` (so the caller puts what it lacked into words only
+        then)."""
+        return (self._waiting_since is not None
+                and now_s - self._waiting_since >= self.drop_after_s and not self.is_open())

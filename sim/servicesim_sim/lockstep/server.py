@@ -59,11 +59,17 @@ PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
 GATE_WAIT_S = 0.05
 """Wall seconds of one wait for the clients inside the gate (then the drop rule is checked)."""
 LOOK_EVERY_PERIODS = 10
+LOOK_EVERY_S = 0.05
+"""In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
+request; it looks for other work (a join, a request from outside) once at least this many
+periods and this much wall time have passed since it last did. What it finds is served as
+ever: a gated request in the gate's order, whenever it was taken; anything else as it comes,
+as from any process outside the lockstep. A look costs a few hundred microseconds (a wait
+on every entity of the node), a tenth of a period's own work each period at
+:data:`LOOK_EVERY_PERIODS` alone when the simulator runs many times faster than real time."""
 MATCH_WAIT_S = 10.0
 """Wall seconds :meth:`LockstepServer.hold` waits at most for a writer to match the readers
 the clients name (then it steps on, with a warning, and the client stalls on what it lacks)."""
-"""In lockstep the loop hands over to rclpy only when a coroutine resumes or the gate lacks a
-request; at least this often it looks for other work (a join, a request from outside)."""
 
 
 LAG_VARIABLE = "SERVICESIM_LOCKSTEP_LAG"
@@ -106,6 +112,8 @@ class LockstepServer:
         self.dones = DoneInbox(node, gate=self.gate, topic=DONE_TOPIC, qos=PROTOCOL_QOS,
                                callback_group=self.callback_group)
         self._periods_unlooked = 0
+        self._next_look_s = 0.0
+        """The wall time (``time.monotonic``) before which the loop does not look again."""
         self._writers: dict[str, Any] = {}
         """Offered topics' publishers, and others the clients read, found once by topic."""
         self._readers: dict[str, int] | None = None
@@ -218,7 +226,8 @@ class LockstepServer:
 
         The done messages are taken and waited for by :class:`DoneInbox`, without rclpy's
         executor, which runs only when the gate lacks requests (they must be taken to be
-        served) and every :data:`LOOK_EVERY_PERIODS` periods.
+        served) and once :data:`LOOK_EVERY_PERIODS` periods and :data:`LOOK_EVERY_S` have passed
+        since it last looked.
         A client the gate waited on for too long is dropped, with one warning naming it.
         """
         self._periods_unlooked += 1
@@ -229,8 +238,9 @@ class LockstepServer:
                 self._periods_unlooked = 0
                 executor.wait_and_run(timeout_sec=GATE_WAIT_S)
             self._drop_silent()
-        if self._periods_unlooked >= LOOK_EVERY_PERIODS:
-            self._periods_unlooked = 0
+        if self._periods_unlooked >= LOOK_EVERY_PERIODS and (
+                (now := time.monotonic()) >= self._next_look_s):
+            self._periods_unlooked, self._next_look_s = 0, now + LOOK_EVERY_S
             executor.run_ready()
         self.admit(executor)
         self._readers = self.gate.readers_next() if self.gate.active else None
@@ -265,8 +275,9 @@ class LockstepServer:
         return writer
 
     def _drop_silent(self) -> None:
-        missing = self.gate.missing()
-        for name in self.gate.drop_silent(time.monotonic()):
+        now = time.monotonic()
+        missing = self.gate.missing() if self.gate.overdue(now) else []  # words only for a drop
+        for name in self.gate.drop_silent(now):
             self.node.get_logger().warning(
                 f"lockstep: dropped client {name!r} after {self.gate.drop_after_s:.0f} s "
                 f"of wall time at period {self.gate.period} without {', '.join(missing)}; "
