@@ -10,8 +10,8 @@ then the failures over all runs, test by test. Each run's whole output is kept i
 
 This is how a flaky test is found: one that fails even once in the runs waits on wall time
 somewhere, or the code it tests has a race. Figures are wall-clock on this machine; nothing is
-asserted. Ctrl-C stops the run under way and the hogs and still prints the table of the runs
-that finished. Bad arguments give one line and exit status 2.
+asserted. Ctrl-C stops the run under way and the hogs, still prints the table of the runs
+that finished and exits with status 130. Bad arguments give one line and exit status 2.
 """
 
 from __future__ import annotations
@@ -141,6 +141,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     folder.mkdir(parents=True, exist_ok=True)
     print(f"logs in {folder}", flush=True)
     done: list[SuiteRun] = []
+    interrupted = False
     hog_processes = start_hogs(hogs)
     try:
         for number in range(1, runs + 1):
@@ -150,9 +151,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(run.line(), flush=True)
     except KeyboardInterrupt:
         print("interrupted: the run under way is stopped", file=sys.stderr)
+        interrupted = True
     finally:
         stop(hog_processes)
     report(done, hogs=hogs)
+    if interrupted:
+        return 130
     return 0 if done and all(run.exit_code == 0 for run in done) else 1
 
 
