@@ -43,6 +43,7 @@ from sensor_msgs.msg import Image
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
 from bt_servicesim.behaviours.ports import GOAL_OUT, OCCUPANCY, ROBOT_POSE
 from bt_servicesim.planning.geometry import Point, Pose2D
+from bt_servicesim.planning.goals import ROBOT_CLEARANCE
 from bt_servicesim.planning.guest_camera import (
     CameraModel,
     camera_goal,
@@ -141,9 +142,16 @@ class LookForGuest(ActionNode):
         self._started, self._looks, self._frame, self._step = self._now(), 0, None, None
         self._turns = []
         try:
-            robot = self.get_input("robot_pose")
-        except NoDataAvailable:
-            self.feedback_message = "no robot pose: cannot look round"
+            robot, grid = self.get_input("robot_pose"), self.get_input("occupancy")
+        except NoDataAvailable as missing:
+            self.feedback_message = f"cannot look round: {missing}"
+            return
+        room = grid.clearance(robot.x, robot.y)
+        if room < ROBOT_CLEARANCE:
+            # a turn in place sweeps the box's corners round: the navigation checks its
+            # footprint, a bare cmd_vel turn does not, so turn only where the map has room
+            self.feedback_message = (f"too near a wall to turn in place: {room:.2f} m of room, "
+                                     f"the box's corners need {ROBOT_CLEARANCE:.2f} m")
             return
         self._turns = look_turns(robot, towards=self._last_seen(), step=self.turn_step)
         self.reader = shared_subscription(node, Image, self.camera_topic, self._on_image,

@@ -173,6 +173,17 @@ def test_a_silent_camera_fails_the_look_in_bounded_time(world: SensorWorld) -> N
     assert robot.time - 100.0 < 5.0
 
 
+def test_a_robot_beside_a_wall_does_not_turn_in_place(world: SensorWorld) -> None:
+    # the hall's west wall ends at x = 0: the box's corners, 0.32 m from its centre, would
+    # sweep into it; the guest stands in plain sight, and still the robot does not turn
+    robot = TurningRobot(world, Pose2D(0.25, 10.0, 0.0), [(GUEST, "guest", 4.0, 10.0)])
+    behaviour = look(world, last_seen=Pose2D(4.0, 10.0))
+    assert robot.run(behaviour) == Status.FAILURE
+    assert behaviour.feedback_message.startswith("too near a wall to turn in place")
+    assert all(rate == 0.0 for rate in robot.commands)
+    assert robot.pictures == 0 and robot.pose.yaw == 0.0
+
+
 def test_a_robot_without_a_pose_cannot_look() -> None:
     behaviour = LookForGuest(name="look")
     with pytest.raises(RuntimeError, match="setup"):
