@@ -7,7 +7,10 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 ARGS ?=
 TESTS ?= tests
-JOBS ?= auto
+# One pytest-xdist worker more than the machine has cores: a worker spends about a quarter of
+# its time waiting (a subprocess starting, DDS discovery), and the extra one fills it
+# (docs/reference/performance.md, "The test suite").
+JOBS ?= $(shell echo $$(( $$(nproc 2>/dev/null || echo 1) + 1 )))
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
 .PHONY: setup run test lint interfaces graphviz chromium clean

@@ -2,8 +2,9 @@
 
 ``python benchmarks/suite_under_load.py [--runs N] [--hogs H] [--jobs J] [--log-dir DIR]
 [-- PYTEST_ARGS...]`` runs ``make test``'s pytest command (``pytest -n J --dist loadgroup
-tests``) ``N`` times one after the other (default 10) while ``H`` busy-loop processes (default
-one: a CPU hog on one core, as a shared machine or a CI runner has) spin beside it, and prints,
+tests``, ``J`` one more than the machine's cores unless given) ``N`` times one after the other
+(default 10) while ``H`` busy-loop processes (default one: a CPU hog on one core, as a shared
+machine or a CI runner has) spin beside it, and prints,
 for each run, its wall time, how many tests passed and failed, and the failing tests by name;
 then the failures over all runs, test by test. Each run's whole output is kept in ``--log-dir``
 (a new temporary folder by default) so that a failure can be read afterwards.
@@ -122,7 +123,9 @@ def arguments(argv: Sequence[str]) -> tuple[int, int, str, Path | None, list[str
                                    description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=10, help="runs of the suite (10)")
     parser.add_argument("--hogs", type=int, default=1, help="busy-loop processes beside it (1)")
-    parser.add_argument("--jobs", default="2", help="pytest-xdist workers, as make test (2)")
+    parser.add_argument("--jobs", default=str((os.cpu_count() or 1) + 1),
+                        help="pytest-xdist workers (default: as make test, one more than the "
+                        "machine's cores)")
     parser.add_argument("--log-dir", type=Path, help="keep each run's output here")
     parser.add_argument("pytest_args", nargs="*", help="after --: pytest's arguments (tests)")
     args = parser.parse_args(argv)

@@ -116,8 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="do not join the simulator's lockstep even where it offers it: "
                         "the tree ticks on /clock as it would on Gazebo (runs may not replay)")
     parser.add_argument("--trajectory", choices=TRAJECTORY_POLICIES, default="always",
-                        help="draw trajectory.png after every run (always, the default) or only "
-                        "when the mission did not complete (failed); python -m "
+                        help="draw trajectory.png after every run (always, the default), only "
+                        "when the mission did not complete (failed), or not at all (never: "
+                        "about a CPU second less a run); python -m "
                         "bt_servicesim.trajectory DIR draws any run's later from its run.mcap")
     parser.add_argument("--no-profile", action="store_false", dest="profile",
                         help="write no profile.json and count no node's ticks (to measure "

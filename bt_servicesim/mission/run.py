@@ -266,8 +266,8 @@ class MissionRun:
         if simulator is not None:
             simulator.ask_to_stop()  # it shuts down on the other core while the records close
         try:
-            records.finish(title=self._title(monitor), trajectory=(
-                self.settings.trajectory == "always" or code != EXIT_COMPLETED))
+            records.finish(title=self._title(monitor), trajectory=self.settings.draws_trajectory(
+                completed=code == EXIT_COMPLETED))
         finally:
             if simulator is not None:
                 simulator.stop()

@@ -29,10 +29,12 @@ STARTUP_LIMIT_S = 60.0
 CLOCKS = ("sim", "system")
 """What the executive keeps time by: the backend's ``/clock`` (a simulator, Gazebo), or the
 system clock (a real robot, which publishes no ``/clock``: ``use_sim_time`` false)."""
-TRAJECTORY_POLICIES = ("always", "failed")
-"""When the run draws ``trajectory.png``: after every run, or only after a mission that did
-not complete (an evaluation: the picture is the CPU of a tenth of a warm episode, and any run's
-can be drawn later from its ``run.mcap`` with ``python -m bt_servicesim.trajectory DIR``)."""
+TRAJECTORY_POLICIES = ("always", "failed", "never")
+"""When the run draws ``trajectory.png``: after every run, only after a mission that did not
+complete (an evaluation: the picture is the CPU of a tenth of a warm episode), or never (a run
+whose figures are all that is wanted: the drawing costs about a CPU second, matplotlib's import
+with it). Any run's picture can be drawn later from its ``run.mcap`` with ``python -m
+bt_servicesim.trajectory DIR``."""
 NAV_PARAMS_NAME = "nav_params.yaml"
 """The copy of the navigation parameters file a run was given, in its run directory."""
 REPORT_NAME = "report.json"
@@ -71,6 +73,11 @@ class RunSettings:
     nav_params: Path | None = None
     """The robot's navigation parameters file (``run --nav-params``), absolute, passed to the
     simulator; None: its default, the original servicebot's configuration."""
+
+    def draws_trajectory(self, *, completed: bool) -> bool:
+        """Whether the run draws ``trajectory.png`` after a mission that did or did not
+        complete, as :attr:`trajectory` says."""
+        return self.trajectory == "always" or (self.trajectory == "failed" and not completed)
 
 
 def nav_params_record(path: Path | None) -> dict[str, str] | None:

@@ -114,7 +114,7 @@ def test_a_guest_beyond_rfid_range_of_the_area_is_explored_for_and_guided(
 def test_a_guest_who_drifts_while_guided_is_reacquired(tmp_path: Path) -> None:
     # drift times are world times, the shipped world file's (487, 654, ... s): at scale 0.15
     # the first is due at 72.6 s, while the shipped task guides the guest from about 30 s to 95 s
-    code, report = mission(tmp_path, "--sim-arg=--drift-scale=0.15")
+    code, report = mission(tmp_path, "--sim-arg=--drift-scale=0.15", "--trajectory", "never")
     assert_completed(code, report)
     assert report["penalties"]["drifts"] >= 1
     # a pick-up that succeeds ends the recovery in the same tick (the RecoveryNode halts it and
@@ -160,7 +160,7 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
     keeps the shipped tree's berth around people (its navigation parameters)."""
     code, report = mission(tmp_path, "--seed", "10", "--speed", "0", "--time-limit", "600",
                            "--sim-arg=--walker-routes", "--sim-arg=random",
-                           "--nav-params", TREE_NAV_PARAMS)
+                           "--nav-params", TREE_NAV_PARAMS, "--trajectory", "never")
     assert_completed(code, report)
     spots = [message for message in tree_log_feedback(tmp_path, "FindGiveWaySpot")
              if message.startswith("give way at")]
@@ -177,7 +177,7 @@ def test_a_random_abort_beside_an_idler_keeps_the_costmaps_and_touches_nobody(
     into them: over 500 000 contact points. The recovery keeps the costmaps after an abort no
     obstacle caused."""
     code, report = mission(tmp_path, "--seed", "11", "--sim-arg=--difficulty",
-                           "--sim-arg=hard")
+                           "--sim-arg=hard", "--trajectory", "never")
     assert_completed(code, report)
     kept = [message for message in tree_log_feedback(tmp_path, "WaypointRecovery.WayBlocked")
             if message.startswith("navigation error 9000")]

@@ -73,7 +73,8 @@ def watched_run(tmp_path_factory: pytest.TempPathFactory) -> WatchedRun:
     with log.open("w") as stdout:
         process = subprocess.Popen(
             [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", str(SPEED),
-             "--time-limit", str(TIME_LIMIT_S), "--out", str(out), "--foxglove", "0"],
+             "--time-limit", str(TIME_LIMIT_S), "--out", str(out), "--foxglove", "0",
+             "--trajectory", "never"],
             stdout=stdout, stderr=subprocess.STDOUT, text=True)
     try:
         url = _wait_for_url(log, process)

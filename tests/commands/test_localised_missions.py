@@ -52,7 +52,7 @@ def test_a_mission_starting_far_from_the_origin_and_turned_completes_from_locali
         start: tuple[float, float, float]) -> None:
     if arguments:
         out = tmp_path
-        code, report = mission(out, *arguments)
+        code, report = mission(out, *arguments, "--trajectory", "never")
     else:
         shipped = request.getfixturevalue("shipped_task_run")
         out, code, report = shipped.out, shipped.code, shipped.report

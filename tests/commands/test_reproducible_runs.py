@@ -17,8 +17,9 @@ import pytest
 
 from tests.fakes.commands import run_module
 
-#: flat out, with a short time limit: the mission gets past its first two checkpoints
-RUN = ["--headless", "--speed", "0", "--seed", "3", "--time-limit", "60"]
+#: flat out, with a short time limit: the mission gets past its first two checkpoints; no
+#: picture, though a mission cut short draws one by default
+RUN = ["--headless", "--speed", "0", "--seed", "3", "--time-limit", "60", "--trajectory", "never"]
 WALL_LIMIT_S = 400
 
 
@@ -50,6 +51,7 @@ def test_the_same_seed_twice_in_lockstep_gives_the_same_report(tmp_path: Path) -
         assert (tmp_path / "first" / name).read_bytes() == \
             (tmp_path / "second" / name).read_bytes(), f"{name} differs"
     assert first["penalties_by_cause"] == second["penalties_by_cause"] is not None
+    assert not (tmp_path / "first" / "trajectory.png").exists(), "--trajectory never drew one"
     for out, report in ((tmp_path / "first", first), (tmp_path / "second", second)):
         times = tick_times(out)
         assert report["ticks"] == len(times) > 500

@@ -24,7 +24,9 @@ from tests.fakes.commands import run_module
 from tests.raising_leaf import MESSAGE
 
 REPO = Path(__file__).resolve().parents[2]
-RUN = [sys.executable, "-m", "bt_servicesim.run", "--headless"]
+#: No picture: these tests judge the run's process and report, and the drawing is a CPU second.
+RUN_ARGUMENTS = ["--headless", "--trajectory", "never"]
+RUN = [sys.executable, "-m", "bt_servicesim.run", *RUN_ARGUMENTS]
 WALL_LIMIT_S = 300.0
 
 
@@ -211,7 +213,7 @@ def standalone_simulator(tmp_path: Path) -> Iterator[subprocess.Popen[bytes]]:
 @pytest.mark.long
 def test_a_run_beside_a_standalone_simulator_uses_its_own(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
-    result = run_module("bt_servicesim.run", "--headless", "--speed", "10", "--time-limit",
+    result = run_module("bt_servicesim.run", *RUN_ARGUMENTS, "--speed", "10", "--time-limit",
                         SHORT_MISSION_S, "--out", str(tmp_path / "run"), timeout=WALL_LIMIT_S)
     assert result.returncode == 1, result.stderr[-2000:]
     assert_played_to_its_time_limit(report_of(tmp_path / "run"))
@@ -222,7 +224,7 @@ def test_a_run_beside_a_standalone_simulator_uses_its_own(
 @pytest.mark.long
 def test_attach_runs_against_the_backend_already_on_the_shells_domain(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
-    result = run_module("bt_servicesim.run", "--headless", "--attach", "--out",
+    result = run_module("bt_servicesim.run", *RUN_ARGUMENTS, "--attach", "--out",
                         str(tmp_path / "run"), timeout=WALL_LIMIT_S)
     assert result.returncode == 0, result.stderr[-2000:]
     report = report_of(tmp_path / "run")
@@ -237,7 +239,7 @@ def test_attach_on_the_system_clock_runs_without_sim_time(
         tmp_path: Path, standalone_simulator: subprocess.Popen[bytes]) -> None:
     """As on a real robot, which publishes no /clock: the tree ticks on the system clock, and
     its own time limit (8 s of it here) ends the mission."""
-    result = run_module("bt_servicesim.run", "--headless", "--attach", "--clock", "system",
+    result = run_module("bt_servicesim.run", *RUN_ARGUMENTS, "--attach", "--clock", "system",
                         "--time-limit", "8", "--out", str(tmp_path / "run"), timeout=WALL_LIMIT_S)
     report = report_of(tmp_path / "run")
     assert result.returncode == 1, result.stderr[-2000:]

@@ -59,7 +59,7 @@ def test_btview_snapshot_shows_the_live_mission_and_the_server_stops_with_the_ru
     started = time.monotonic()
     run = subprocess.Popen(
         [sys.executable, "-m", "bt_servicesim.run", "--headless", "--speed", SPEED,
-         "--groot", str(port), "--out", str(tmp_path / "run")],
+         "--groot", str(port), "--out", str(tmp_path / "run"), "--trajectory", "never"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         rows = snapshot_while_running(port, run)
