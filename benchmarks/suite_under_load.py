@@ -93,7 +93,8 @@ def run_suite(*, number: int, jobs: str, pytest_args: Sequence[str], log: Path) 
     start = time.monotonic()
     with log.open("w") as out:
         suite = subprocess.Popen(command, cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
-                                 start_new_session=True)
+                                 start_new_session=True,  # bytecode written, as make test
+                                 env={**os.environ, "PYTHONDONTWRITEBYTECODE": ""})
         try:
             exit_code = suite.wait()
         except KeyboardInterrupt:
