@@ -294,7 +294,7 @@ def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Names
         try:
             make_executive = executive_factory(settings)
             monitor = _open_monitor(settings)
-            live = open_live_server(settings.foxglove) if settings.foxglove else None
+            live = _open_live_server(settings)
         except (MissionTreeError, LiveServerError) as error:
             raise UsageError(str(error)) from error
         from bt_servicesim.mission.run import MissionRun  # rclpy once the tree is good
@@ -349,6 +349,16 @@ def _open_monitor(settings: RunSettings) -> Groot2Server | None:
 
     host, port = settings.groot
     return Groot2Server(host=host, port=port)
+
+
+def _open_live_server(settings: RunSettings) -> LiveServer | None:
+    """The Foxglove server with a channel for every recorded topic, listening, if the run was
+    asked for one."""
+    if settings.foxglove is None:
+        return None
+    from bt_servicesim.monitor.foxglove_bridge import live_channels
+
+    return open_live_server(settings.foxglove, channels=live_channels())
 
 
 def _users_domain() -> int | None:

@@ -9,7 +9,8 @@ same ``ros2msg`` schema the recording carries (built by
 is sim time. Nothing is decoded: Foxglove decodes ROS 2 messages from their schema, as it does
 when it opens ``run.mcap``. So what one sees live is what the recording will hold.
 
-The server (:mod:`bt_servicesim.monitor.live_server`) is opened before anything else starts.
+The server (:mod:`bt_servicesim.monitor.live_server`) is opened before anything else starts,
+with a channel for every topic already (:func:`live_channels`).
 Latched topics (the map, the target areas,
 ``/tf_static``, the task) reach a client that subscribes after they were published: the last
 message of each is logged again when someone subscribes, as DDS gives a late subscriber the
@@ -27,7 +28,7 @@ from collections.abc import Callable, Iterable
 import foxglove
 from rclpy.node import Node
 
-from bt_servicesim.monitor.live_server import LiveServer
+from bt_servicesim.monitor.live_server import LiveChannel, LiveServer
 from bt_servicesim.records.mcap import (
     RECORDED_TOPICS,
     RecordedTopic,
@@ -37,25 +38,34 @@ from bt_servicesim.records.mcap import (
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 
 
+def live_channels(topics: Iterable[RecordedTopic] = RECORDED_TOPICS) -> list[LiveChannel]:
+    """The server's channels for ``topics``: each with the schema its recording carries."""
+    definitions: dict[str, str] = {}
+    channels = []
+    for topic in topics:
+        name = type_name(topic.message_type)
+        if name not in definitions:
+            definitions[name] = complete_definition(name)
+        channels.append(LiveChannel(topic=topic.name, schema_name=name, schema=definitions[name]))
+    return channels
+
+
 class FoxgloveBridge:
-    """Forwards ``topics`` from ``node`` to ``server`` until :meth:`close` (module docstring)."""
+    """Forwards ``topics`` from ``node`` to ``server`` until :meth:`close` (module docstring).
+
+    ``server`` offers a channel for each topic (:func:`live_channels`, given when it was
+    opened)."""
 
     def __init__(self, *, node: Node, server: LiveServer,
                  topics: Iterable[RecordedTopic] = RECORDED_TOPICS) -> None:
         self.node = node
         self.server = server
         self.counts: dict[str, int] = {}
-        self._channels: list[foxglove.Channel] = []
         self._readers: list[Reader] = []
-        schemas: dict[str, foxglove.Schema] = {}
         for topic in topics:
-            name = type_name(topic.message_type)
-            if name not in schemas:
-                schemas[name] = foxglove.Schema(name=name, encoding="ros2msg",
-                                                data=complete_definition(name).encode())
-            channel = foxglove.Channel(topic.name, schema=schemas[name], message_encoding="cdr",
-                                       context=server.context)
-            self._channels.append(channel)
+            channel = server.channels.get(topic.name)
+            if channel is None:
+                raise ValueError(f"the live server offers no channel for {topic.name}")
             self.counts[topic.name] = 0
             self._readers.append(shared_subscription(
                 node, topic.message_type, topic.name, self._forwards(topic, channel), topic.qos,
@@ -86,8 +96,5 @@ class FoxgloveBridge:
         for reader in self._readers:
             reader.cancel()
         self._readers.clear()
-        for channel in self._channels:
-            channel.close()
-        self._channels.clear()
         self.server.stop()
 

@@ -5,18 +5,26 @@ an address of the user's (:class:`LiveAddress`: 127.0.0.1 and Foxglove's port 87
 user names others) with a logging context of its own, so that only the run's bridge
 (:mod:`bt_servicesim.monitor.foxglove_bridge`) logs to it. It is opened while the run checks
 its input: an address in use is the user's error, one line and exit status 2, and no
-simulator has been started. No ROS here: the run opens it before rclpy is imported, and
-foxglove-sdk (70 ms to import) only when a server is asked for.
+simulator has been started. No ROS here, and foxglove-sdk (70 ms to import) only when a server
+is asked for.
+
+Every channel the server will ever offer is created before it listens (:class:`LiveChannel`).
+A client may connect at once (a Foxglove app left open on the address reconnects within a
+second, and a script reads the URL as soon as it is printed); foxglove-sdk files the channels
+that exist as it registers the client, before it reads a word from it, while a channel added
+later can reach a connected client advertised before the server has filed it for that
+client, and the client's subscription to it is then refused ("unknown channel"): a whole live
+run without ``/tf``, as a loaded test machine showed.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from foxglove import Context
+    from foxglove import Channel, Context
     from foxglove.websocket import ChannelView, Client, ServerListener
 
 DEFAULT_HOST = "127.0.0.1"
@@ -55,20 +63,41 @@ class LiveAddress:
         return f"{host}:{self.port}"
 
 
-class LiveServer:
-    """foxglove-sdk's WebSocket server on an address, with a context of its own."""
+@dataclass(frozen=True)
+class LiveChannel:
+    """A channel the server offers: a topic and its message type's ``ros2msg`` schema."""
 
-    def __init__(self, address: LiveAddress) -> None:
+    topic: str
+    schema_name: str
+    """The message type, ``package/msg/Name``."""
+    schema: str
+    """Its definition with every type it uses, as a ROS 2 recording stores it."""
+
+
+class LiveServer:
+    """foxglove-sdk's WebSocket server on an address, with a context of its own and its
+    channels created before it listens (module docstring)."""
+
+    def __init__(self, address: LiveAddress, *, channels: Sequence[LiveChannel] = ()) -> None:
         import foxglove
 
         self.address = address
         self.context: Context = foxglove.Context()
+        self.channels: dict[str, Channel] = {}
+        """The channels by topic, to log to."""
+        schemas: dict[str, foxglove.Schema] = {}
+        for offered in channels:
+            schema = schemas.setdefault(offered.schema_name, foxglove.Schema(
+                name=offered.schema_name, encoding="ros2msg", data=offered.schema.encode()))
+            self.channels[offered.topic] = foxglove.Channel(
+                offered.topic, schema=schema, message_encoding="cdr", context=self.context)
         self._replays: dict[int, Callable[[], None]] = {}
         try:
             self._server = foxglove.start_server(
                 name=SERVER_NAME, host=address.host, port=address.port, context=self.context,
                 server_listener=_replaying_listener(self._replays), supported_encodings=["cdr"])
         except RuntimeError as error:
+            self._close_channels()
             reason = str(error).removeprefix("FoxgloveError: ")
             raise LiveServerError(f"--foxglove {address}: cannot serve there: {reason}") from None
 
@@ -87,8 +116,14 @@ class LiveServer:
         self._replays[channel_id] = replay
 
     def stop(self) -> None:
-        """Close every connection and stop listening; idempotent."""
+        """Close the channels and every connection, and stop listening; idempotent."""
+        self._close_channels()
         self._server.stop()
+
+    def _close_channels(self) -> None:
+        for channel in self.channels.values():
+            channel.close()
+        self.channels.clear()
 
 
 def _replaying_listener(replays: dict[int, Callable[[], None]]) -> ServerListener:
@@ -106,9 +141,11 @@ def _replaying_listener(replays: dict[int, Callable[[], None]]) -> ServerListene
     return ReplayOnSubscribe()
 
 
-def open_live_server(address: LiveAddress) -> LiveServer:
-    """The server, listening; :class:`LiveServerError` when it cannot be."""
-    return LiveServer(address)
+def open_live_server(address: LiveAddress, *,
+                     channels: Sequence[LiveChannel] = ()) -> LiveServer:
+    """The server, offering ``channels`` and listening; :class:`LiveServerError` when it
+    cannot be."""
+    return LiveServer(address, channels=channels)
 
 
 def describe(server: LiveServer) -> str:

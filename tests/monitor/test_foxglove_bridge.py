@@ -23,7 +23,7 @@ from mcap_ros2.decoder import DecoderFactory
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
-from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
+from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge, live_channels
 from bt_servicesim.monitor.live_server import LiveAddress, LiveServer
 from bt_servicesim.records.mcap import AREA_MARKERS_TOPIC, RECORDED_TOPICS, RecordedTopic
 from tests.fakes.graphs import SimTimeGraph
@@ -80,7 +80,7 @@ class Client:
 
 @pytest.fixture
 def bridged(sim_clock: SimTimeGraph) -> Iterator[tuple[SimTimeGraph, FoxgloveBridge]]:
-    server = LiveServer(LiveAddress(port=0))
+    server = LiveServer(LiveAddress(port=0), channels=live_channels(TOPICS))
     bridge = FoxgloveBridge(node=sim_clock.node, server=server, topics=TOPICS)
     yield sim_clock, bridge
     bridge.close()
@@ -109,9 +109,11 @@ def test_a_client_gets_latched_messages_sent_before_it_came_and_then_live_ones(
     transform = TransformStamped(child_frame_id="odom")
     transform.header.frame_id, transform.transform.translation.x = "map", 2.5
     graph.spin_until(lambda: tf.get_subscription_count() > 0, "the bridge to read /tf")
-    graph.spin_until(lambda: bridge.counts["/tf"] >= 1, "/tf to arrive",
-                     before=lambda: tf.publish(TFMessage(transforms=[transform]))
-                     if bridge.counts["/tf"] == 0 else None)
+    # the server files a client's subscriptions one by one on a thread of its own: the areas'
+    # replay does not prove /tf's filed yet, so /tf is published until it reaches the client
+    graph.spin_until(lambda: not client.received.empty(), "/tf to reach the client",
+                     before=lambda: tf.publish(TFMessage(transforms=[transform])),
+                     limit_s=WAIT_S)
     topic, log_time, message = client.next()
     assert topic == "/tf" and log_time == 13_000_000_000
     assert (message.transforms[0].header.frame_id, message.transforms[0].child_frame_id,
@@ -119,3 +121,40 @@ def test_a_client_gets_latched_messages_sent_before_it_came_and_then_live_ones(
 
     bridge.close()
     assert client.closed.wait(WAIT_S), "closing the bridge stops the server"
+
+
+def test_a_client_that_connects_before_the_bridge_is_offered_every_channel_at_once(
+        sim_clock: SimTimeGraph) -> None:
+    """A viewer may connect the moment the server listens (a Foxglove app left open
+    reconnects): it is advertised every channel then, and subscribes to them all, before the
+    bridge reads a topic; what the bridge forwards afterwards reaches it."""
+    server = LiveServer(LiveAddress(port=0), channels=live_channels(TOPICS))
+    client = Client(server.url)
+    try:
+        assert client.subscribed.wait(WAIT_S), "every channel advertised as the client came"
+        bridge = FoxgloveBridge(node=sim_clock.node, server=server, topics=TOPICS)
+        sim_clock.jump_to(3.0)
+        tf = publisher(sim_clock, TOPICS[0])
+        transform = TransformStamped(child_frame_id="odom")
+        transform.header.frame_id = "map"
+        sim_clock.spin_until(lambda: tf.get_subscription_count() > 0, "the bridge to read /tf")
+        # the client's subscription is filed by the server's own thread, some time after the
+        # client sent it: /tf is published until a message reaches the client
+        sim_clock.spin_until(lambda: not client.received.empty(), "/tf to reach the client",
+                             before=lambda: tf.publish(TFMessage(transforms=[transform])),
+                             limit_s=WAIT_S)
+        topic, log_time, _ = client.next()
+        assert (topic, log_time) == ("/tf", 3_000_000_000) and bridge.counts["/tf"] >= 1
+    finally:
+        server.stop()
+    assert client.closed.wait(WAIT_S)
+
+
+def test_a_bridge_asked_for_a_topic_the_server_does_not_offer_says_which(
+        sim_clock: SimTimeGraph) -> None:
+    server = LiveServer(LiveAddress(port=0), channels=live_channels(TOPICS[:1]))
+    try:
+        with pytest.raises(ValueError, match=r"offers no channel for /servicesim/markers/areas"):
+            FoxgloveBridge(node=sim_clock.node, server=server, topics=TOPICS)
+    finally:
+        server.stop()
