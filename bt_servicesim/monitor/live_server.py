@@ -14,7 +14,7 @@ second, and a script reads the URL as soon as it is printed); foxglove-sdk files
 that exist as it registers the client, before it reads a word from it, while a channel added
 later can reach a connected client advertised before the server has filed it for that
 client, and the client's subscription to it is then refused ("unknown channel"): a whole live
-run without ``/tf``, as a loaded test machine showed.
+run without that topic.
 """
 
 from __future__ import annotations
