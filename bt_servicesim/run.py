@@ -43,6 +43,7 @@ from bt_servicesim.mission.settings import (
     TRAJECTORY_POLICIES,
     RunSettings,
 )
+from bt_servicesim.mission.shutdown_limit import SHUTDOWN_LIMIT_S
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for, signal_of
 from bt_servicesim.monitor.groot2_protocol import DEFAULT_HOST, DEFAULT_PORT
 from bt_servicesim.monitor.live_server import DEFAULT_PORT as FOXGLOVE_PORT
@@ -246,7 +247,7 @@ def _run_directory(argument: str | None, *, overwrite: bool) -> Path:
     return out
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, *, shutdown_limit_s: float | None = None) -> int:
     """Check the input, start the simulator, then load the tree while it comes up.
 
     What needs only the arguments is checked first, the tree file's structure too. The
@@ -257,6 +258,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     its word on them before it takes the directory), so bad input still leaves nothing but its
     one-line error. One :class:`StopSignals` covers the whole start-up, up to the run's own: a
     stop signal at any moment of it ends the run in one line.
+
+    ``shutdown_limit_s``: the command's own process passes it, so that the process ends that
+    many seconds after the report whatever its shut-down still does
+    (:mod:`bt_servicesim.mission.shutdown_limit`); a caller in whose process the run plays
+    leaves it out.
     """
     args = build_parser().parse_args(argv)
     try:
@@ -264,7 +270,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as error:
         return error_line(PROG, error)
     with StopSignals() as stops, HeadStart(settings, sim_args=tuple(args.sim_arg)) as head_start:
-        started = _start(settings, head_start, args=args, stops=stops)
+        started = _start(settings, head_start, args=args, stops=stops,
+                         shutdown_limit_s=shutdown_limit_s)
         if isinstance(started, int):
             return started
         mission, monitor, live = started
@@ -277,7 +284,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Namespace,
-           stops: StopSignals) -> tuple[MissionRun, Groot2Server | None, LiveServer | None] | int:
+           stops: StopSignals, shutdown_limit_s: float | None
+           ) -> tuple[MissionRun, Groot2Server | None, LiveServer | None] | int:
     """The head start, then the tree, the servers and the run, which takes the simulator over;
     an exit status if any was refused or a stop signal came meanwhile (everything taken back).
 
@@ -303,7 +311,8 @@ def _start(settings: RunSettings, head_start: HeadStart, *, args: argparse.Names
 
         mission = MissionRun(
             settings=settings, make_executive=make_executive, extra_sim_args=tuple(args.sim_arg),
-            monitor=monitor, live_server=live, simulator=head_start.hand_over())
+            monitor=monitor, live_server=live, simulator=head_start.hand_over(),
+            shutdown_limit_s=shutdown_limit_s)
         stops.hold()
         return mission, monitor, live
     except (UsageError, OSError, NoFreeDomainError, SimulatorDiedError) as error:
@@ -394,4 +403,4 @@ def executive_factory(settings: RunSettings) -> ExecutiveFactory:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(shutdown_limit_s=SHUTDOWN_LIMIT_S))

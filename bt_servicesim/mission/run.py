@@ -55,6 +55,7 @@ from bt_servicesim.mission.settings import (
     RunSettings,
     nav_params_record,
 )
+from bt_servicesim.mission.shutdown_limit import bound_the_shutdown
 from bt_servicesim.mission.simulator_process import SimulatorProcess
 from bt_servicesim.mission.stopping import (
     BetweenSpins,
@@ -101,6 +102,7 @@ class MissionRun:
         live_server: LiveServer | None = None,
         backend: SimulatorProcess | None = None,
         simulator: SimulatorProcess | None = None,
+        shutdown_limit_s: float | None = None,
     ) -> None:
         """``monitor``, when given, serves the tree from the moment it exists; the caller
         closes it. ``live_server``: Foxglove's server, open, to forward the run's topics to.
@@ -112,8 +114,13 @@ class MissionRun:
 
         ``simulator``: the run's own simulator, already started by the command
         (:mod:`bt_servicesim.mission.head_start`); the run stops it as one it started itself.
+
+        ``shutdown_limit_s``: the process ends that many wall seconds after the run's report is
+        written, whatever its shut-down still does (:mod:`bt_servicesim.mission.shutdown_limit`);
+        only for the ``run`` command's own process.
         """
         self.settings = settings
+        self.shutdown_limit_s = shutdown_limit_s
         self.extra_sim_args = extra_sim_args
         self.make_executive = make_executive
         self.monitor = monitor
@@ -272,6 +279,8 @@ class MissionRun:
             if simulator is not None:
                 simulator.stop()
         self._finish(monitor, code, executive, profile=records.profile)
+        if self.shutdown_limit_s is not None:
+            bound_the_shutdown(exit_status=code, limit_s=self.shutdown_limit_s)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()
         node.destroy_node()

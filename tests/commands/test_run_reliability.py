@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -166,6 +167,26 @@ def test_an_exception_in_a_tick_fails_the_mission_with_its_reason(tmp_path: Path
     assert report["status"] == "failed"
     assert report["failure"] == f"the mission tree raised RuntimeError in Buggy: {MESSAGE}"
     assert "raise RuntimeError(MESSAGE)" in (tmp_path / "run" / report["traceback"]).read_text()
+
+
+@pytest.mark.long
+def test_a_run_whose_shutdown_hangs_ends_at_its_limit_with_the_missions_status(
+        tmp_path: Path) -> None:
+    """A deadlock after the report (here an exit handler that never returns, where rclpy or
+    Fast DDS would hang) cannot hold the run's caller: the process ends at its limit, its report
+    complete, its simulator gone, the stacks in its output for a bug report."""
+    command = [sys.executable, "-c", "import atexit, sys, threading\n"
+               "atexit.register(threading.Event().wait)\n"
+               "from bt_servicesim.run import main\n"
+               "sys.exit(main(sys.argv[1:], shutdown_limit_s=1.0))", *RUN_ARGUMENTS]
+    process = start_run(tmp_path / "run", "--speed", "0", "--seed", "3",
+                        "--time-limit", SHORT_MISSION_S, command=command)
+    _, stderr = process.communicate(timeout=WALL_LIMIT_S)
+    assert process.returncode == 1, stderr[-2000:]
+    assert "did not end within 1 s of its report: ending the process with exit status 1" \
+        in stderr
+    assert re.search(r'threading\.py", line \d+ in wait\n', stderr), "the stack of the hang"
+    assert_played_to_its_time_limit(report_of(tmp_path / "run"))
 
 
 @pytest.mark.long
