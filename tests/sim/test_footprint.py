@@ -152,6 +152,17 @@ def test_navigation_turns_to_the_goal_yaw_clear_of_a_person_beside_it() -> None:
     assert sim.referee.penalties.contact == 0.0
 
 
+def test_navigation_makes_room_to_turn_when_pinned_between_a_wall_and_a_person() -> None:
+    # hard seed 27's robot: its side 1.7 cm off the wall to its right, someone 0.11 m off its
+    # front corner, the goal behind it. A turn on the spot either way sweeps a corner into the
+    # wall, and driving straight on or back never makes the room; navigation must manoeuvre
+    # (not flip-flop between backing off and creeping on until it gives up)
+    sim = robot_at((-11.42, 5.97, math.radians(-176.0)))
+    sim.crowd.people.append(Person(name="human_00001", role=IDLER, x=-11.8, y=5.4, yaw=0.0))
+    assert navigate(sim, (-5.97, 7.18, -2.92), seconds=60.0) == "succeeded"
+    assert sim.referee.penalties.contact == 0.0
+
+
 def test_the_nearest_gap_is_the_least_gap_or_a_bound_beyond_the_threshold() -> None:
     """Within ``beyond`` the answer is the least of the gaps, bit for bit; past it, it may be
     any gap past it, so whoever compares it with a threshold up to ``beyond`` decides alike."""
