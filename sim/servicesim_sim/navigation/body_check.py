@@ -123,16 +123,14 @@ class BodyCheck:
         if twist == STOP or self.keeps_clear(pose, twist, None):
             return twist
         clearances = self.clearances(pose)
-        clear = [option for option in BODY_SAMPLES
-                 if self.keeps_clear(pose, option, clearances)]
-        if not clear:
-            return STOP
         if twist[0] == 0.0:
-            self._manoeuvre = self._making_room(pose, twist, clear, clearances, now)
+            self._manoeuvre = self._making_room(pose, twist, clearances, now)
             if self._manoeuvre is not None:
                 return self._manoeuvre.twist
-        return min(clear, key=lambda option: (abs(option[1] - twist[1]),
-                                              abs(option[0] - twist[0])))
+        options = sorted(BODY_SAMPLES, key=lambda option: (abs(option[1] - twist[1]),
+                                                           abs(option[0] - twist[0])))
+        return next((option for option in options
+                     if self.keeps_clear(pose, option, clearances)), STOP)
 
     def keeps_clear(self, pose: Pose, twist: Twist, now: Clearances | None) -> bool:
         """Whether ``twist`` keeps the body off walls and marked people over the horizon
@@ -161,12 +159,13 @@ class BodyCheck:
                     return False
         return True
 
-    def _making_room(self, pose: Pose, turn: Twist, clear: list[Twist], now: Clearances,
+    def _making_room(self, pose: Pose, turn: Twist, now: Clearances,
                      time: float) -> Manoeuvre | None:
         """The manoeuvre that makes room for the refused ``turn``: the shortest hold of a
         moving sample after which the turn keeps clear, else the sample whose hold leaves the
         centre the most room; None when no moving sample keeps clear for a hold."""
-        moving = [option for option in clear if option[0] != 0.0]
+        moving = [option for option in BODY_SAMPLES
+                  if option[0] != 0.0 and self.keeps_clear(pose, option, now)]
         found = self._freeing_the_turn(pose, turn, moving, now)
         if found is not None:
             return Manoeuvre(twist=found[0], until=time + found[1])
