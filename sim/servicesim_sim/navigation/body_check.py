@@ -14,13 +14,16 @@ Design intent:
   then speed): setting off beside someone, the robot drives straight on until its turn clears.
 * A refused turn on the spot is the case where the nearest sample does not help: beside a wall
   or a person the box cannot turn, and driving straight forwards or backwards never makes the
-  room (the robot pinned so flip-flopped between backing off and creeping on). Like a sampling
-  planner's window of velocities and the recoveries of Nav2, the check then looks further: it
-  holds each moving sample up to :data:`ESCAPE_HOLD` and takes the first (shortest) one after
-  which the wanted turn keeps clear for :data:`ESCAPE_TURN`; when none does, the sample that
-  takes the box's centre furthest from walls and people (the room a turn needs, whatever the
-  heading). Either is held as a manoeuvre for its time while it stays clear, so the robot
-  does not alternate between two opposite samples step after step.
+  room (a robot pinned so flip-flopped between backing off and creeping on until navigation
+  gave up). So is a refused drive whose nearest clear sample drives the other way (backing
+  off, then creeping on into the same refusal). Like a sampling planner's window of
+  velocities and the escapes of move_base's TrajectoryPlanner, the check then looks further:
+  it holds each moving sample (nearest first) up to :data:`ESCAPE_HOLD` and takes the first,
+  shortest hold after which the refused twist keeps clear for :data:`ESCAPE_FREE`. For a turn
+  on the spot that no hold frees, it takes the sample that leaves the box's centre the most
+  room from walls and people (the room a turn needs, whatever the heading). The manoeuvre is
+  held for its time while it keeps clear and navigation commands anything but a stop, so the
+  robot does not alternate between two opposite samples step after step.
 * Everything is a pure function of poses, the marks and sim time: a seed replays exactly.
 """
 
@@ -48,8 +51,8 @@ ESCAPE_STEP = 0.15
 """Seconds between the poses at which a held sample or a turn is checked."""
 ESCAPE_HOLD = 1.5
 """Seconds a sample is held at most to make room for a refused turn."""
-ESCAPE_TURN = 0.6
-"""Radians the wanted turn must then keep clear for."""
+ESCAPE_FREE = 0.6
+"""Seconds the refused twist must then keep clear for (a turn on the spot: 0.6 rad)."""
 ROOM_HOLD = 1.0
 """Seconds a sample is held, when no manoeuvre frees the turn, to judge the room it makes ..."""
 ROOM_COMMIT = 0.5
@@ -113,24 +116,29 @@ class BodyCheck:
         self._manoeuvre: Manoeuvre | None = None
 
     def command(self, pose: Pose, twist: Twist, *, now: float) -> Twist:
-        """``twist`` if it keeps clear, else a sample that does, else stop; while the follower
-        wants a turn on the spot, a manoeuvre making room for it is held to its end."""
+        """``twist`` if it keeps clear, else the manoeuvre held, else a sample that does,
+        else stop."""
         held = self._manoeuvre
-        if (held is not None and now < held.until and twist[0] == 0.0 and twist != STOP
+        if (held is not None and now < held.until and twist != STOP
                 and self.keeps_clear(pose, held.twist, self.clearances(pose))):
             return held.twist
         self._manoeuvre = None
         if twist == STOP or self.keeps_clear(pose, twist, None):
             return twist
         clearances = self.clearances(pose)
-        if twist[0] == 0.0:
-            self._manoeuvre = self._making_room(pose, twist, clearances, now)
-            if self._manoeuvre is not None:
-                return self._manoeuvre.twist
         options = sorted(BODY_SAMPLES, key=lambda option: (abs(option[1] - twist[1]),
                                                            abs(option[0] - twist[0])))
-        return next((option for option in options
-                     if self.keeps_clear(pose, option, clearances)), STOP)
+        nearest = next((option for option in options
+                        if self.keeps_clear(pose, option, clearances)), STOP)
+        if twist[0] == 0.0 or nearest[0] * twist[0] < 0.0:
+            self._manoeuvre = self._making_room(pose, twist, options, clearances, now)
+            if self._manoeuvre is not None:
+                return self._manoeuvre.twist
+        return nearest
+
+    def forget(self) -> None:
+        """Drop the manoeuvre held (a new goal, or none)."""
+        self._manoeuvre = None
 
     def keeps_clear(self, pose: Pose, twist: Twist, now: Clearances | None) -> bool:
         """Whether ``twist`` keeps the body off walls and marked people over the horizon
@@ -159,41 +167,44 @@ class BodyCheck:
                     return False
         return True
 
-    def _making_room(self, pose: Pose, turn: Twist, now: Clearances,
+    def _making_room(self, pose: Pose, twist: Twist, options: list[Twist], now: Clearances,
                      time: float) -> Manoeuvre | None:
-        """The manoeuvre that makes room for the refused ``turn``: the shortest hold of a
-        moving sample after which the turn keeps clear, else the sample whose hold leaves the
-        centre the most room; None when no moving sample keeps clear for a hold."""
-        moving = [option for option in BODY_SAMPLES
+        """The manoeuvre that makes room for the refused ``twist``: the shortest hold of a
+        moving sample (of ``options``, nearest the twist first) after which the twist keeps
+        clear; else, for a turn on the spot, the sample whose hold leaves the centre the most
+        room; else None."""
+        moving = [option for option in options
                   if option[0] != 0.0 and self.keeps_clear(pose, option, now)]
-        found = self._freeing_the_turn(pose, turn, moving, now)
+        found = self._freeing(pose, twist, moving, now)
         if found is not None:
             return Manoeuvre(twist=found[0], until=time + found[1])
-        holds = ([step * ESCAPE_STEP for step in range(1, round(ROOM_HOLD / ESCAPE_STEP) + 1)])
+        if twist[0] != 0.0:
+            return None
+        holds = [step * ESCAPE_STEP for step in range(1, round(ROOM_HOLD / ESCAPE_STEP) + 1)]
         roomy = [option for option in moving if self._holds_clear(pose, option, holds, now)]
         if not roomy:
             return None
-        best = max(roomy, key=lambda option: (round(self._room(arc_end(pose, option,
-                                                                       ROOM_HOLD)), 3),
-                                              -abs(option[1] - turn[1])))
+        best = max(roomy, key=lambda option: round(self._room(arc_end(pose, option,
+                                                                      ROOM_HOLD)), 3))
         return Manoeuvre(twist=best, until=time + ROOM_COMMIT)
 
-    def _freeing_the_turn(self, pose: Pose, turn: Twist, moving: list[Twist],
-                          now: Clearances) -> tuple[Twist, float] | None:
-        """The first of ``moving`` (nearest the turn first) and the shortest hold of it,
-        every :data:`ESCAPE_STEP` up to :data:`ESCAPE_HOLD`, that keeps clear and leaves room
-        to turn the way ``turn`` does for :data:`ESCAPE_TURN`; None if none does."""
-        rate = math.copysign(1.0, turn[1])
-        turning = [step * ESCAPE_STEP for step in range(1, math.ceil(ESCAPE_TURN / ESCAPE_STEP)
-                                                        + 1)]
-        alive = sorted(moving, key=lambda option: (abs(option[1] - turn[1]), -option[0]))
+    def _freeing(self, pose: Pose, twist: Twist, moving: list[Twist],
+                 now: Clearances) -> tuple[Twist, float] | None:
+        """The first of ``moving`` and the shortest hold of it, every :data:`ESCAPE_STEP` up
+        to :data:`ESCAPE_HOLD`, that keeps clear and after which ``twist`` keeps clear for
+        :data:`ESCAPE_FREE` (a turn on the spot at the full rate, as far as it may need to
+        go); None if none does."""
+        freed = (0.0, math.copysign(1.0, twist[1])) if twist[0] == 0.0 else twist
+        ahead = [step * ESCAPE_STEP
+                 for step in range(1, math.ceil(ESCAPE_FREE / ESCAPE_STEP) + 1)]
+        alive = moving
         for step in range(1, round(ESCAPE_HOLD / ESCAPE_STEP) + 1):
             seconds = step * ESCAPE_STEP
             alive = [option for option in alive
                      if self._holds_clear(pose, option, (seconds,), now)]
             for option in alive:
                 end = arc_end(pose, option, seconds)
-                if self._holds_clear(end, (0.0, rate), turning, self.clearances(end)):
+                if self._holds_clear(end, freed, ahead, self.clearances(end)):
                     return option, seconds
         return None
 

@@ -26,7 +26,10 @@ Design intent:
   move_base's local planner checked the footprint of each trajectory against its costmap: the
   box must keep 1 cm off walls and off the bodies of the people marked in the costmap (or come
   no nearer than it is), else the nearest sampled twist that does is taken, else it stops. So
-  the corners do not sweep into a person beside the robot as it turns or sets off.
+  the corners do not sweep into a person beside the robot as it turns or sets off. A refused
+  turn on the spot, or a drive whose nearest clear sample backs off, is answered by a
+  manoeuvre that makes room for it (a sampled arc, forward or backing off, held up to 1.5 s),
+  not by samples that never free it (:mod:`~servicesim_sim.navigation.body_check`).
 * A robot that has not moved 0.25 m in 10 s forgets the people marked outside a 3 m square
   round it (move_base's conservative reset), backs up 0.15 m when the costmap has room behind
   it, and replans (a recovery); after 20 s without progress navigation aborts. The people near
@@ -271,6 +274,8 @@ class Navigator:
 
     def _reset_goal(self, *, goal: Pose | None, now: float, abort_after_s: float | None) -> None:
         self._goal = goal
+        if self.body_check is not None:
+            self.body_check.forget()
         self._abort_at = None if abort_after_s is None else now + abort_after_s
         self._track: PolylinePath | None = None
         self._located: tuple[PolylinePath, float, float] | None = None
