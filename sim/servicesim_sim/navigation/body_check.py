@@ -19,11 +19,13 @@ Design intent:
   off, then creeping on into the same refusal). Like a sampling planner's window of
   velocities and the escapes of move_base's TrajectoryPlanner, the check then looks further:
   it holds each moving sample (nearest first) up to :data:`ESCAPE_HOLD` and takes the first,
-  shortest hold after which the refused twist keeps clear for :data:`ESCAPE_FREE`. For a turn
-  on the spot that no hold frees, it takes the sample that leaves the box's centre the most
-  room from walls and people (the room a turn needs, whatever the heading). The manoeuvre is
-  held for its time while it keeps clear and navigation commands anything but a stop, so the
-  robot does not alternate between two opposite samples step after step.
+  shortest hold after which the refused twist keeps clear for :data:`ESCAPE_FREE`. When no
+  hold frees it, a turn on the spot takes the sample that leaves the box's centre the most
+  room from walls and people (the room a turn needs, whatever the heading), a drive the
+  nearest clear sample, each for :data:`ROOM_COMMIT` before looking again. A manoeuvre is held
+  for its time while it keeps clear and navigation commands anything but a stop, so the robot
+  does not alternate between two opposite samples step after step, and the search (about
+  10 ms) runs at most twice a second while the robot stays pinned.
 * Everything is a pure function of poses, the marks and sim time: a seed replays exactly.
 """
 
@@ -54,9 +56,9 @@ ESCAPE_HOLD = 1.5
 ESCAPE_FREE = 0.6
 """Seconds the refused twist must then keep clear for (a turn on the spot: 0.6 rad)."""
 ROOM_HOLD = 1.0
-"""Seconds a sample is held, when no manoeuvre frees the turn, to judge the room it makes ..."""
+"""Seconds a sample is held, when no hold frees a turn, to judge the room it makes."""
 ROOM_COMMIT = 0.5
-"""... and seconds it is kept before looking again."""
+"""Seconds a sample taken when no hold frees the refused twist is kept before looking again."""
 
 GAP_BOUND_SLACK = 1e-6
 """Metres past the body margin a bound of the gap to the people must be to be taken for the
@@ -130,10 +132,10 @@ class BodyCheck:
                                                            abs(option[0] - twist[0])))
         nearest = next((option for option in options
                         if self.keeps_clear(pose, option, clearances)), STOP)
-        if twist[0] == 0.0 or nearest[0] * twist[0] < 0.0:
-            self._manoeuvre = self._making_room(pose, twist, options, clearances, now)
-            if self._manoeuvre is not None:
-                return self._manoeuvre.twist
+        if nearest != STOP and (twist[0] == 0.0 or nearest[0] * twist[0] < 0.0):
+            self._manoeuvre = self._making_room(pose, twist, options, clearances, now,
+                                                nearest=nearest)
+            return self._manoeuvre.twist
         return nearest
 
     def forget(self) -> None:
@@ -168,24 +170,21 @@ class BodyCheck:
         return True
 
     def _making_room(self, pose: Pose, twist: Twist, options: list[Twist], now: Clearances,
-                     time: float) -> Manoeuvre | None:
+                     time: float, *, nearest: Twist) -> Manoeuvre:
         """The manoeuvre that makes room for the refused ``twist``: the shortest hold of a
         moving sample (of ``options``, nearest the twist first) after which the twist keeps
         clear; else, for a turn on the spot, the sample whose hold leaves the centre the most
-        room; else None."""
+        room, else the ``nearest`` clear sample, held a while before looking again."""
         moving = [option for option in options
                   if option[0] != 0.0 and self.keeps_clear(pose, option, now)]
         found = self._freeing(pose, twist, moving, now)
         if found is not None:
             return Manoeuvre(twist=found[0], until=time + found[1])
-        if twist[0] != 0.0:
-            return None
         holds = [step * ESCAPE_STEP for step in range(1, round(ROOM_HOLD / ESCAPE_STEP) + 1)]
-        roomy = [option for option in moving if self._holds_clear(pose, option, holds, now)]
-        if not roomy:
-            return None
-        best = max(roomy, key=lambda option: round(self._room(arc_end(pose, option,
-                                                                      ROOM_HOLD)), 3))
+        roomy = [option for option in moving if twist[0] == 0.0
+                 and self._holds_clear(pose, option, holds, now)]
+        best = max(roomy, default=nearest,
+                   key=lambda option: round(self._room(arc_end(pose, option, ROOM_HOLD)), 3))
         return Manoeuvre(twist=best, until=time + ROOM_COMMIT)
 
     def _freeing(self, pose: Pose, twist: Twist, moving: list[Twist],
