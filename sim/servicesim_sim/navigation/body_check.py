@@ -24,8 +24,8 @@ Design intent:
   room from walls and people (the room a turn needs, whatever the heading), a drive the
   nearest clear sample, each for :data:`ROOM_COMMIT` before looking again. A manoeuvre is held
   for its time while it keeps clear and navigation commands anything but a stop, so the robot
-  does not alternate between two opposite samples step after step, and the search (about
-  10 ms) runs at most twice a second while the robot stays pinned.
+  does not alternate between two opposite samples step after step, and the search (dozens of
+  footprint checks) runs at most twice a second while the robot stays pinned.
 * Everything is a pure function of poses, the marks and sim time: a seed replays exactly.
 """
 

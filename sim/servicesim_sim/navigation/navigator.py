@@ -249,7 +249,6 @@ class Navigator:
                  tuning: Tuning | None = None, lidar: Lidar | None = None,
                  body: Body | None = None) -> None:
         self.tuning = tuning or Tuning()
-        self.body = body
         self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
         self.parameters = parameters
         self.xy_tolerance = parameters.goal_checker.xy_goal_tolerance
