@@ -52,7 +52,7 @@ straight or in an arc; gentle turns (0.2 rad/s) too, whose corners swing out lea
 ESCAPE_STEP = 0.15
 """Seconds between the poses at which a held sample or a turn is checked."""
 ESCAPE_HOLD = 1.5
-"""Seconds a sample is held at most to make room for a refused turn."""
+"""Seconds a sample is held at most to make room for a refused twist."""
 ESCAPE_FREE = 0.6
 """Seconds the refused twist must then keep clear for (a turn on the spot: 0.6 rad)."""
 ROOM_HOLD = 1.0
