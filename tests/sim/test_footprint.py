@@ -6,6 +6,7 @@ clear for metres, so the tests put the robot there, facing or beside the wall.
 
 from __future__ import annotations
 
+import itertools
 import math
 from functools import cache
 
@@ -150,6 +151,33 @@ def test_navigation_turns_to_the_goal_yaw_clear_of_a_person_beside_it() -> None:
     person_beside(sim, across=0.56)
     assert navigate(sim, (WALL_X, 2.0, math.pi), seconds=40.0) == "succeeded"
     assert sim.referee.penalties.contact == 0.0
+
+
+def pinned() -> SimEngine:
+    """Hard seed 27's robot: its side 1.7 cm off the wall to its right, someone 0.11 m off its
+    front corner. A turn on the spot either way sweeps a corner into the wall, and driving
+    straight on or back never makes the room to turn."""
+    sim = robot_at((-11.42, 5.97, math.radians(-176.0)))
+    sim.crowd.people.append(Person(name="human_00001", role=IDLER, x=-11.8, y=5.4, yaw=0.0))
+    return sim
+
+
+def test_navigation_makes_room_to_turn_when_pinned_between_a_wall_and_a_person() -> None:
+    sim = pinned()
+    assert navigate(sim, (-5.97, 7.18, -2.92), seconds=60.0) == "succeeded"  # behind it
+    assert sim.referee.penalties.contact == 0.0
+
+
+def test_a_pinned_robot_does_not_flip_flop_between_backing_off_and_creeping_on() -> None:
+    sim = pinned()
+    sim.navigate(-5.97, 7.18, -2.92)
+    drives = []
+    for _ in range(round(10.0 / sim.dt)):
+        sim.step()
+        drives.append(sim.robot.v)
+    reversals = sum(1 for before, after in itertools.pairwise(drives) if before * after < 0.0)
+    assert reversals <= 3
+    assert math.dist(sim.robot.pose[:2], (-11.42, 5.97)) > 0.25
 
 
 def test_the_nearest_gap_is_the_least_gap_or_a_bound_beyond_the_threshold() -> None:

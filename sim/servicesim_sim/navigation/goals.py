@@ -25,7 +25,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from servicesim_sim.navigation.navigator import NavigateToPoseError, Pose
+from servicesim_sim.navigation.body_check import Pose
+from servicesim_sim.navigation.navigator import NavigateToPoseError
 
 GLOBAL_FRAME = "map"
 ODOM_FRAME = "odom"

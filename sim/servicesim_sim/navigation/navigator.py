@@ -26,7 +26,10 @@ Design intent:
   move_base's local planner checked the footprint of each trajectory against its costmap: the
   box must keep 1 cm off walls and off the bodies of the people marked in the costmap (or come
   no nearer than it is), else the nearest sampled twist that does is taken, else it stops. So
-  the corners do not sweep into a person beside the robot as it turns or sets off.
+  the corners do not sweep into a person beside the robot as it turns or sets off. A refused
+  turn on the spot, or a drive whose nearest clear sample backs off, is answered by a
+  manoeuvre that makes room for it (a sampled arc, forward or backing off, held up to 1.5 s),
+  not by samples that never free it (:mod:`~servicesim_sim.navigation.body_check`).
 * A robot that has not moved 0.25 m in 10 s forgets the people marked outside a 3 m square
   round it (move_base's conservative reset), backs up 0.15 m when the costmap has room behind
   it, and replans (a recovery); after 20 s without progress navigation aborts. The people near
@@ -40,14 +43,21 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from servicesim_sim.navigation.body_check import (
+    STOP,
+    Body,
+    BodyCheck,
+    Clearances,
+    Pose,
+    Twist,
+)
 from servicesim_sim.navigation.costmap import INSCRIBED, PERSON_RADIUS, Costmap, Lidar
 from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.navigation.planner import (
@@ -59,15 +69,9 @@ from servicesim_sim.navigation.planner import (
 from servicesim_sim.world.files import OccupancyMap
 
 NavigationStatus = Literal["idle", "running", "succeeded", "aborted", "canceled"]
-Pose = tuple[float, float, float]
-Twist = tuple[float, float]
-STOP: Twist = (0.0, 0.0)
 OBSTRUCTION_RECHECK_M = 0.1
 """Metres along the path after which a path obstruction is looked for again (sooner if the
 costmap changed)."""
-GAP_BOUND_SLACK = 1e-6
-"""Metres past the body margin a bound of the gap to the people must be to be taken for the
-gap: less the body's width it is still past the margin, however the sums round."""
 
 
 class FollowPathError(IntEnum):
@@ -232,39 +236,6 @@ def pursue(path: PolylinePath, s: float, pose: Pose, limits: Limits, tuning: Tun
     return speed, turn
 
 
-class Body(Protocol):
-    """The robot's body on the map (:class:`servicesim_sim.world.footprint.Footprint`)."""
-
-    def clearance(self, pose: Pose, *, beyond: float = 0.0) -> float:
-        """Metres between the body at ``pose`` and the nearest wall (see Footprint)."""
-        ...
-
-    def nearest_gap(self, pose: Pose, points: Sequence[tuple[float, float]], *,
-                    beyond: float = 0.0) -> float:
-        """Metres between the body at ``pose`` and the nearest point (see Footprint)."""
-        ...
-
-
-BODY_SAMPLES: tuple[Twist, ...] = (
-    *((v, w) for v in (0.3, 0.15) for w in (1.0, 0.5, 0.0, -0.5, -1.0)),
-    (0.0, 1.0), (0.0, 0.5), (0.0, -0.5), (0.0, -1.0), (-0.1, 0.0), (-0.1, 0.5), (-0.1, -0.5))
-"""The twists tried, as a sampling local planner would, when the follower's own would bring
-the body against a wall or a marked person: forward arcs, turns on the spot, backing off."""
-Clearances = tuple[float, float]  # metres from the body to walls, and to marked people
-
-
-def arc_end(pose: Pose, twist: Twist, seconds: float) -> Pose:
-    """Where (v, w) held for ``seconds`` takes a differential drive from ``pose``."""
-    x, y, yaw = pose
-    v, w = twist
-    turn = w * seconds
-    if abs(turn) > 1e-9:
-        radius = v / w
-        return (x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
-                y - radius * (math.cos(yaw + turn) - math.cos(yaw)), yaw + turn)
-    return x + v * seconds * math.cos(yaw), y + v * seconds * math.sin(yaw), yaw
-
-
 class Navigator:
     """One navigation goal at a time, driven step by step by the engine (see module docstring).
 
@@ -278,7 +249,6 @@ class Navigator:
                  tuning: Tuning | None = None, lidar: Lidar | None = None,
                  body: Body | None = None) -> None:
         self.tuning = tuning or Tuning()
-        self.body = body
         self.limits = Limits(max_speed=max_speed, max_turn_rate=max_turn_rate)
         self.parameters = parameters
         self.xy_tolerance = parameters.goal_checker.xy_goal_tolerance
@@ -294,11 +264,17 @@ class Navigator:
         self.recoveries = 0
         self.path: list[tuple[float, float]] = []
         self._observed_at = -math.inf
+        self._now = 0.0
         self._people: list[tuple[float, float]] = []
+        self.body_check = None if body is None else BodyCheck(
+            body, marks=self._marks, horizon=self.tuning.body_horizon,
+            margin=self.tuning.body_margin, person_body=self.tuning.person_body)
         self._reset_goal(goal=None, now=0.0, abort_after_s=None)
 
     def _reset_goal(self, *, goal: Pose | None, now: float, abort_after_s: float | None) -> None:
         self._goal = goal
+        if self.body_check is not None:
+            self.body_check.forget()
         self._abort_at = None if abort_after_s is None else now + abort_after_s
         self._track: PolylinePath | None = None
         self._located: tuple[PolylinePath, float, float] | None = None
@@ -350,44 +326,22 @@ class Navigator:
     def _keeping_the_body_clear(self, pose: Pose, twist: Twist) -> Twist:
         """``twist`` if it keeps the body's outline :attr:`Tuning.body_margin` off walls and
         off the bodies (:attr:`Tuning.person_body`) of the people marked in the costmap over
-        the next :attr:`Tuning.body_horizon` (or no nearer than now), else the sampled twist
-        nearest it that does (turn first, then speed), else stop: the footprint check
-        move_base's local planner made of every trajectory it sampled against its costmap,
-        where the lidar's hits on people are obstacles as walls are."""
-        if self.body is None or twist == STOP or self._body_keeps_clear(pose, twist, None):
+        the next :attr:`Tuning.body_horizon` (or no nearer than now), else what the
+        :class:`~servicesim_sim.navigation.body_check.BodyCheck` gives way to: the footprint
+        check move_base's local planner made of every trajectory it sampled against its
+        costmap, where the lidar's hits on people are obstacles as walls are."""
+        if self.body_check is None:
             return twist
-        now = self._clearances(pose)
-        options = sorted(BODY_SAMPLES, key=lambda option: (abs(option[1] - twist[1]),
-                                                           abs(option[0] - twist[0])))
-        return next((option for option in options
-                     if self._body_keeps_clear(pose, option, now)), STOP)
-
-    def _body_keeps_clear(self, pose: Pose, twist: Twist, now: Clearances | None) -> bool:
-        """Whether ``twist`` keeps the body off walls and marked people over the horizon
-        (halfway and at its end), or, given its clearances ``now``, brings it no nearer to
-        either that it is within the margin of."""
-        margin = self.tuning.body_margin
-        for share in (0.5, 1.0):
-            ahead = self._clearances(arc_end(pose, twist, share * self.tuning.body_horizon))
-            for index, gap in enumerate(ahead):
-                if gap < margin and (now is None or gap <= now[index] + 1e-4):
-                    return False
-        return True
+        return self.body_check.command(pose, twist, now=self._now)
 
     def _clearances(self, pose: Pose) -> Clearances:
         """Metres from the body at ``pose`` to the nearest wall and to the nearest marked
-        person's body (gaps wider than the margin may be any gap wider than it: only whether
-        a gap is within the margin, and then how it compares with a gap now, decides)."""
-        assert self.body is not None
-        margin, person_body = self.tuning.body_margin, self.tuning.person_body
-        walls = self.body.clearance(pose, beyond=margin)
-        marks = [(mark.x, mark.y) for mark in self.costmap.marks]
-        beyond = margin + person_body + GAP_BOUND_SLACK
-        people = self.body.nearest_gap(pose, marks, beyond=beyond) - person_body
-        return walls, people
+        person's body (see :meth:`BodyCheck.clearances`)."""
+        assert self.body_check is not None
+        return self.body_check.clearances(pose)
 
     def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
-        self._people = people
+        self._people, self._now = people, now
         self._observe(pose, now)
         if self.status != "running":
             return STOP
@@ -616,6 +570,10 @@ class Navigator:
                                     y - reach * math.sin(yaw)) < INSCRIBED
 
     # ------------------------------------------------------------------ bookkeeping
+    def _marks(self) -> list[tuple[float, float]]:
+        """Where the people marked in the costmap stand."""
+        return [(mark.x, mark.y) for mark in self.costmap.marks]
+
     def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
         if not force and 0.0 <= now - self._observed_at < self.tuning.observe_period:
             return

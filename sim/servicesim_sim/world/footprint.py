@@ -127,6 +127,11 @@ class Footprint:
         ys = y + sin * self._outline_x + cos * self._outline_y
         return float(self.walls.at(xs, ys).min())
 
+    def centre_clearance(self, x: float, y: float) -> float:
+        """Metres between the point (x, y) and the nearest wall, negative inside one: the room
+        the box has to turn about a centre there is this less its corners' reach."""
+        return float(self.walls.at(np.array([x]), np.array([y]))[0])
+
     def _centre_gap(self, x: float, y: float) -> float:
         """A lower bound of the metres from (x, y) to the nearest obstacle's boundary, read
         from the map's own distance grid (cheap: this runs every physics step)."""
