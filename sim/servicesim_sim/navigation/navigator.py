@@ -264,7 +264,6 @@ class Navigator:
         self.recoveries = 0
         self.path: list[tuple[float, float]] = []
         self._observed_at = -math.inf
-        self._now = 0.0
         self._people: list[tuple[float, float]] = []
         self.body_check = None if body is None else BodyCheck(
             body, marks=self._marks, horizon=self.tuning.body_horizon,
@@ -321,9 +320,9 @@ class Navigator:
         A command that would bring the body against a wall or a person the costmap holds is
         changed for one that does not."""
         twist = self._command(pose=pose, people=people, now=now)
-        return self._keeping_the_body_clear(pose, twist)
+        return self._keeping_the_body_clear(pose, twist, now=now)
 
-    def _keeping_the_body_clear(self, pose: Pose, twist: Twist) -> Twist:
+    def _keeping_the_body_clear(self, pose: Pose, twist: Twist, *, now: float) -> Twist:
         """``twist`` if it keeps the body's outline :attr:`Tuning.body_margin` off walls and
         off the bodies (:attr:`Tuning.person_body`) of the people marked in the costmap over
         the next :attr:`Tuning.body_horizon` (or no nearer than now), else what the
@@ -332,7 +331,7 @@ class Navigator:
         costmap, where the lidar's hits on people are obstacles as walls are."""
         if self.body_check is None:
             return twist
-        return self.body_check.command(pose, twist, now=self._now)
+        return self.body_check.command(pose, twist, now=now)
 
     def _clearances(self, pose: Pose) -> Clearances:
         """Metres from the body at ``pose`` to the nearest wall and to the nearest marked
@@ -341,7 +340,7 @@ class Navigator:
         return self.body_check.clearances(pose)
 
     def _command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
-        self._people, self._now = people, now
+        self._people = people
         self._observe(pose, now)
         if self.status != "running":
             return STOP
