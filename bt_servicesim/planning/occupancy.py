@@ -286,7 +286,8 @@ class OccupancyGrid2D:
 
 _last_clearances: list[tuple[tuple[bytes, tuple[int, ...], float], np.ndarray]] = []
 """The last map's clearances, by its cells' digest: an evaluation's warm executive builds the
-same map every episode, and the distance transform was 0.16 CPU s of each."""
+same map every episode, and the distance transform costs ten times the digest (25 ms of CPU
+on the office against 2 ms)."""
 
 
 def _clearances(values: np.ndarray, resolution: float) -> np.ndarray:
@@ -302,14 +303,30 @@ def _clearances(values: np.ndarray, resolution: float) -> np.ndarray:
 
 
 def _computed_clearances(values: np.ndarray, resolution: float) -> np.ndarray:
-    from scipy import ndimage
-
     blocked = (values < 0) | (values >= OCCUPIED_FROM)
-    padded = np.pad(blocked, 1, constant_values=True)
-    cells = ndimage.distance_transform_edt(~padded)[1:-1, 1:-1]
+    cells = _cells_to_blocked(np.pad(~blocked, 1, constant_values=False))[1:-1, 1:-1]
     clearances = np.where(blocked, 0.0, (cells - 0.5) * resolution).astype(np.float32)
     clearances.flags.writeable = False
     return clearances
+
+
+def _cells_to_blocked(free: np.ndarray) -> np.ndarray:
+    """``scipy.ndimage.distance_transform_edt(free)``, worked out on the free cells' bounding
+    box and the ring of cells around it: a map is mostly obstacle (the office's building fills
+    under a third of its grid), and the box gives every cell the same value. A free cell's
+    nearest blocked cell beyond the ring has a blocked cell of the ring, the one met by clamping
+    it into the box, no farther away along either axis; blocked cells are 0 either way."""
+    from scipy import ndimage
+
+    rows = np.flatnonzero(free.any(axis=1))
+    cells = np.zeros(free.shape, dtype=np.float64)
+    if rows.size == 0:
+        return cells
+    cols = np.flatnonzero(free.any(axis=0))
+    box = (slice(max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, free.shape[0])),
+           slice(max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, free.shape[1])))
+    cells[box] = ndimage.distance_transform_edt(free[box])
+    return cells
 
 
 @dataclass(frozen=True, eq=False)

@@ -78,6 +78,27 @@ def test_the_same_map_again_reuses_its_clearances_and_another_map_gets_its_own()
     assert np.allclose(coarser.clearances, 2.0 * other.clearances)  # same cells, twice the size
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_clearances_are_one_distance_transform_of_the_whole_padded_map(seed: int) -> None:
+    """Worked out on the free cells' bounding box, every cell's clearance is the one the whole
+    map's transform gives, the map's edge counting as unknown: free space inside the map, and
+    free space that reaches its edges."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    values = cells(6.0, 4.0)
+    values[:] = -1
+    rows, cols = values.shape
+    top, left = (0, 0) if seed % 2 else (rows // 4, cols // 5)
+    room = rng.random((rows - top - rows // 6, cols - left - cols // 7)) < 0.7
+    values[top:top + room.shape[0], left:left + room.shape[1]] = np.where(room, 0, 100)
+    grid = OccupancyGrid2D.from_message(grid_message(values, resolution=RESOLUTION * (1 + seed)))
+    blocked = (values < 0) | (values >= 50)
+    whole = ndimage.distance_transform_edt(~np.pad(blocked, 1, constant_values=True))[1:-1, 1:-1]
+    expected = np.where(blocked, 0.0, (whole - 0.5) * RESOLUTION * (1 + seed)).astype(np.float32)
+    assert np.array_equal(grid.clearances, expected)
+
+
 def test_unknown_and_intermediate_values() -> None:
     values = cells(4.0, 4.0)
     fill(values, 2.0, 0.0, 4.0, 4.0, value=-1)

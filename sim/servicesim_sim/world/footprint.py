@@ -33,6 +33,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from servicesim_sim.world.distance import distance_to_blocked
 from servicesim_sim.world.files import OccupancyMap
 
 Pose = tuple[float, float, float]
@@ -54,7 +55,7 @@ class WallDistance:
         self.map = occupancy_map
         blocked = np.pad(occupancy_map.blocked_mask(), 1, constant_values=True)
         half = occupancy_map.resolution / 2.0
-        outside = ndimage.distance_transform_edt(~blocked) * occupancy_map.resolution - half
+        outside = distance_to_blocked(~blocked) * occupancy_map.resolution - half
         inside = ndimage.distance_transform_edt(blocked) * occupancy_map.resolution - half
         self.grid = np.where(blocked, -inside, outside).astype(np.float64)
         self.grid.setflags(write=False)
