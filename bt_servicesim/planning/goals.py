@@ -242,8 +242,7 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
 
     Before either, a plan must leave the robot its way back: with the guest standing at the
     guest spot, the goal stays connected to the arrival route a little before the spot
-    (:func:`~bt_servicesim.planning.way_out.way_back_open`), and the guest stays
-    :data:`STAY_MARGIN` deep in the box. A guest left in the middle of a
+    (:func:`~bt_servicesim.planning.way_out.way_back_open`). A guest left in the middle of a
     corridor shuts it for good; a walker who then comes from ahead waits for the robot, and
     the robot stands between the two until the mission's time runs out.
     """
@@ -277,13 +276,9 @@ def _way_back_stays_open(grid: OccupancyGrid2D,
     """Whether the robot at a plan's goal can get back past the guest standing at its guest
     spot (give or take TRAIL_ACROSS_ERROR), to the arrival route
     :data:`~bt_servicesim.planning.way_out.WAY_BACK` before it
-    (:func:`~bt_servicesim.planning.way_out.way_back_open`), the guest left in the box at
-    least :data:`STAY_MARGIN` deep: a way back bought with a refused drop-off costs more than
-    it saves."""
+    (:func:`~bt_servicesim.planning.way_out.way_back_open`)."""
 
     def stays_open(plan: TrailingPlan) -> bool:
-        if plan.margin < STAY_MARGIN:  # a guest left outside the box is refused: no gain
-            return False
         back = way_back_point(routes, plan.guest_spot)
         return back is not None and way_back_open(
             grid, goal=(plan.goal.x, plan.goal.y), guest_spot=plan.guest_spot, back=back,
