@@ -35,6 +35,7 @@ from bt_servicesim.planning.rules import (
     PICKUP_REACH,
     ROBOT_FOOTPRINT,
 )
+from bt_servicesim.planning.way_out import way_back_open, way_back_point
 
 __all__ = [
     "TrailingPlan",
@@ -238,24 +239,52 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
     (:func:`bt_servicesim.planning.entrances.doorways_near`): a guest spot keeps
     :data:`DOORWAY_KEEP` from each where any spot of the box does, since the guest stays there
     for good and a walker they hold up in a doorway shuts it.
+
+    Before either, a plan must leave the robot its way back: with the guest standing at the
+    guest spot, the goal stays connected to the arrival route a little before the spot
+    (:func:`~bt_servicesim.planning.way_out.way_back_open`). A guest left in the middle of a
+    corridor shuts it for good; a walker who then comes from ahead waits for the robot, and
+    the robot stands between the two until the mission's time runs out.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
         return None
     stay = _staying_plan(box, robot)
     clear_of_guest = _clear_of(stay.guest_spot)
-    for keep_off_doors in ((True, False) if doorways else (False,)):
-        def keep(candidate: TrailingPlan, off_doors: bool = keep_off_doors) -> bool:
-            return clear_of_guest(candidate) and (
-                not off_doors or _off_doorways(candidate, doorways))
+    way_out = _way_back_stays_open(grid, routes)
+    for need_way_out in (True, False):
+        for keep_off_doors in ((True, False) if doorways else (False,)):
+            def keep(candidate: TrailingPlan, off_doors: bool = keep_off_doors,
+                     open_way: bool = need_way_out) -> bool:
+                return (clear_of_guest(candidate)
+                        and (not off_doors or _off_doorways(candidate, doorways))
+                        and (not open_way or way_out(candidate)))
 
-        plans = list(_trailing_plans(box, grid, routes, robot, keep=keep))
-        if stay.margin >= STAY_MARGIN and (not keep_off_doors or _off_doorways(stay, doorways)):
-            plans.append(stay)
-        plan = _best_plan(plans)
-        if plan is not None:
-            return plan
+            plans = list(_trailing_plans(box, grid, routes, robot, keep=keep))
+            if stay.margin >= STAY_MARGIN and (
+                    not keep_off_doors or _off_doorways(stay, doorways)) and (
+                    not need_way_out or way_out(stay)):
+                plans.append(stay)
+            plan = _best_plan(plans)
+            if plan is not None:
+                return plan
     return _inside_fallback(box, grid, robot, routes)
+
+
+def _way_back_stays_open(grid: OccupancyGrid2D,
+                         routes: RouteTree) -> Callable[[TrailingPlan], bool]:
+    """Whether the robot at a plan's goal can get back past the guest standing at its guest
+    spot (give or take TRAIL_ACROSS_ERROR), to the arrival route
+    :data:`~bt_servicesim.planning.way_out.WAY_BACK` before it
+    (:func:`~bt_servicesim.planning.way_out.way_back_open`)."""
+
+    def stays_open(plan: TrailingPlan) -> bool:
+        back = way_back_point(routes, plan.guest_spot)
+        return back is not None and way_back_open(
+            grid, goal=(plan.goal.x, plan.goal.y), guest_spot=plan.guest_spot, back=back,
+            guest_spread=TRAIL_ACROSS_ERROR)
+
+    return stays_open
 
 
 def _off_doorways(plan: TrailingPlan, doorways: Sequence[Point]) -> bool:
