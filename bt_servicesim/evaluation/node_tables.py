@@ -18,6 +18,10 @@ plain rows (no ROS, no py_trees), written as CSV and JSON in the evaluation dire
 ``phases``
     per phase: sim time, share of the kinematic bound and time over it, points by cause (per
     episode), and the proxemic zones' shares (guest apart from everyone else);
+``situations``
+    per penalty and what the person near was doing (a walker walking, a walker standing for the
+    robot, ...; :mod:`bt_servicesim.records.situations`): points per episode, with the robot
+    moving and standing;
 ``triage``
     failed episodes grouped by the phase they reached, the node that failed last and the
     reason, each group with its seeds, the ``run`` command that replays one and the ``replay``
@@ -37,6 +41,8 @@ from dataclasses import dataclass
 from itertools import combinations
 from pathlib import Path
 from typing import Any
+
+from bt_servicesim.records.situations import ROBOT_MOVING, ROBOT_STANDING
 
 PROFILE_NAME = "profile.json"  # as bt_servicesim.records.profile writes it
 TABLES_NAME = "profiles.json"
@@ -244,6 +250,29 @@ def cause_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     return rows
 
 
+def situation_rows(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
+    """Points per episode by penalty and what the person near was doing
+    (:mod:`bt_servicesim.records.situations`), with the robot moving and standing, per executive
+    and set. A profile written before situations were kept adds nothing."""
+    rows = []
+    for (executive, scenario), group in sorted(_groups(episodes).items()):
+        moving: dict[str, float] = {}
+        standing: dict[str, float] = {}
+        for episode in group:
+            for situation, split in episode.figures["penalties"].get("by_situation", {}).items():
+                moving[situation] = moving.get(situation, 0.0) + split.get(ROBOT_MOVING, 0.0)
+                standing[situation] = standing.get(situation, 0.0) + split.get(ROBOT_STANDING, 0.0)
+        total = sum(moving.values()) + sum(standing.values())
+        for situation in sorted(moving, key=lambda key: -(moving[key] + standing[key])):
+            points = moving[situation] + standing[situation]
+            rows.append({"executive": executive, "scenario": scenario, "situation": situation,
+                         "episodes": len(group), "points_per_episode": _r(points / len(group)),
+                         "robot_moving_per_episode": _r(moving[situation] / len(group)),
+                         "robot_standing_per_episode": _r(standing[situation] / len(group)),
+                         "share": _r(points / total) if total else None})
+    return rows
+
+
 # ------------------------------------------------------------------------------------ triage
 def triage_groups(episodes: Sequence[Episode]) -> list[dict[str, Any]]:
     """Failed episodes grouped by phase reached, node that failed last and reason."""
@@ -337,7 +366,8 @@ def profile_tables(rows: Iterable[Mapping[str, Any]], executives: Sequence[str]
     episodes = load_episodes(rows)
     nodes = node_rows(episodes)
     return {"nodes": nodes, "recoveries": recovery_rows(episodes), "phases": phase_rows(episodes),
-            "causes": cause_rows(episodes), "triage": triage_groups(episodes),
+            "causes": cause_rows(episodes), "situations": situation_rows(episodes),
+            "triage": triage_groups(episodes),
             "tree_diff": tree_diff_rows(nodes, executives)}
 
 

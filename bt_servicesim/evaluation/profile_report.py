@@ -28,6 +28,17 @@ def profile_sections(tables: Mapping[str, list[dict[str, Any]]],
     lines += [f"| {row['executive']} | {row['scenario']} | {row['cause']} | "
               f"{row['points_per_episode']:.1f} | {_percent(row['share'])} |"
               for row in tables["causes"]]
+    if tables.get("situations"):
+        lines += ["", "### Points by situation (per episode)", "",
+                  "What the person near was doing, and the robot: a walker stands while anyone "
+                  "is in its lane, so points beside a walker standing for the robot are points "
+                  "the robot holds where they are.", "",
+                  "| executive | set | situation | points | robot moving | robot standing | "
+                  "share |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {row['executive']} | {row['scenario']} | {row['situation']} | "
+                  f"{row['points_per_episode']:.1f} | {row['robot_moving_per_episode']:.1f} | "
+                  f"{row['robot_standing_per_episode']:.1f} | {_percent(row['share'])} |"
+                  for row in tables["situations"]]
     lines += ["", "### Phases (per episode)", "",
               "| executive | set | phase | reached | succeeded | sim s | bound share | "
               "time over bound (median) | points | guest intimate / personal | others "

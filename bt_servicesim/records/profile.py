@@ -47,6 +47,7 @@ from typing import Any
 
 from py_trees.common import Status
 
+from bt_servicesim.records.situations import PeopleSample, situation_points
 from bt_servicesim.records.tree_log import TickRecord
 from bt_servicesim.tree.shape import TreeShape
 
@@ -399,12 +400,14 @@ def _shares(zones: Mapping[str, float]) -> dict[str, float]:
 # ------------------------------------------------------------------------------------ profile
 def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: str | None,
                   bookings: Sequence[Booking] = (), proximity: Sequence[Proximity] = (),
-                  checkpoints: Sequence[CheckpointMark] = (), end_s: float | None = None,
+                  checkpoints: Sequence[CheckpointMark] = (),
+                  people: Sequence[PeopleSample] = (), end_s: float | None = None,
                   tree_file: str | None = None,
                   counts: Mapping[str, Sequence[int]] | None = None) -> dict[str, Any]:
     """The profile of one run (``profile.json``'s content; see the module docstring).
 
-    ``counts``: the log's counts line (None: not in the log)."""
+    ``counts``: the log's counts line (None: not in the log); ``people``: where everyone was,
+    for the points' situations (:mod:`bt_servicesim.records.situations`)."""
     counter = NodeCounter(shape=shape, phases=phases)
     last_tick, last_time = 0, 0.0
     for record in records:
@@ -448,7 +451,8 @@ def build_profile(*, shape: TreeShape, records: Iterable[TickRecord], phases: st
         "sim_time_s": round(end, 3),
         "ticks": last_tick,
         "penalties": {"by_cause": _rounded(total), "by_role": _rounded(by_role(total)),
-                      "outside_phases": _rounded(by_role(phase_points.get(NO_PHASE, {})))},
+                      "outside_phases": _rounded(by_role(phase_points.get(NO_PHASE, {}))),
+                      "by_situation": situation_points(people, booked)},
         "phases": [{
             "phase": phase,
             "sim_time_s": round(phase_time.get(phase, 0.0), 3),

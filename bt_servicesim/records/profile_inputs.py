@@ -30,6 +30,7 @@ from std_msgs.msg import String
 
 from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, PENALTY_CAUSES_TOPIC
 from bt_servicesim.records.profile import Booking, CheckpointMark, Proximity
+from bt_servicesim.records.situations import PeopleSample
 from bt_servicesim.ros.planar_cdr import odometry_pose
 
 DEFAULT_PHASES = "Mission"
@@ -47,6 +48,7 @@ class ProfileInputs:
     referee_bookings: list[Booking] = field(default_factory=list)
     proximity: list[Proximity] = field(default_factory=list)
     checkpoints: list[CheckpointMark] = field(default_factory=list)
+    people: list[PeopleSample] = field(default_factory=list)
     end_s: float = 0.0
     robot: tuple[float, float] | None = None
     _done: tuple[bool, ...] = ()
@@ -110,6 +112,10 @@ def _on_actors(inputs: ProfileInputs, now: float, data: bytes) -> None:
     x, y = inputs.robot
     guest: float | None = None
     others: float | None = None
+    inputs.people.append(PeopleSample(sim_time_s=now, robot=(x, y), people={
+        str(name): (str(role), float(position.x), float(position.y))
+        for name, role, position in zip(message.names, message.roles, message.positions,
+                                        strict=True)}))
     for role, position in zip(message.roles, message.positions, strict=True):
         distance = math.hypot(position.x - x, position.y - y)
         if role == "guest":
@@ -130,7 +136,8 @@ def profile_of_run(run: Path) -> dict[str, Any]:
     return build_profile(shape=header.shape, records=records,
                          phases=header.phases or DEFAULT_PHASES,
                          bookings=inputs.attributed, proximity=inputs.proximity,
-                         checkpoints=inputs.checkpoints, end_s=inputs.end_s,
+                         checkpoints=inputs.checkpoints, people=inputs.people,
+                         end_s=inputs.end_s,
                          tree_file=header.tree_file, counts=header.counts)
 
 

@@ -123,3 +123,37 @@ def test_failed_episodes_are_grouped_with_their_replay_commands(tmp_path: Path) 
     assert group["count"] == 2 and group["seeds"] == [40, 41]
     assert group["phase"] == "Pickup" and group["node"] == "NavigateToGoal"
     assert group["replay"].startswith(f"python -m bt_servicesim.replay {out} --tick ")
+
+
+def test_points_by_situation_add_up_per_set_and_show_in_the_results(tmp_path: Path) -> None:
+    rows = evaluation_rows(tmp_path, {"bt": DEFAULT_TREE})  # three episodes
+    for n, row in enumerate(rows):
+        path = Path(row["out"]) / PROFILE_NAME
+        profile = json.loads(path.read_text())
+        profile["penalties"]["by_situation"] = {
+            "approximation/walker standing for the robot": {"robot moving": float(n),
+                                                            "robot standing": 2.0},
+            "approximation/idler": {"robot moving": 3.0, "robot standing": 0.0}}
+        path.write_text(json.dumps(profile))
+    tables = profile_tables(rows, ["bt"])
+    situations = {row["situation"]: row for row in tables["situations"]}
+    held = situations["approximation/walker standing for the robot"]
+    assert (held["points_per_episode"], held["robot_moving_per_episode"],
+            held["robot_standing_per_episode"], held["share"]) == (3.0, 1.0, 2.0, 0.5)
+    assert situations["approximation/idler"]["points_per_episode"] == 3.0
+    report = "\n".join(profile_sections(tables, ["bt"]))
+    assert ("| bt | random | approximation/walker standing for the robot | 3.0 | 1.0 | 2.0 | 50% |"
+            in report)
+
+
+def test_profiles_written_before_situations_were_kept_leave_the_table_out(
+        tmp_path: Path) -> None:
+    rows = evaluation_rows(tmp_path, {"bt": DEFAULT_TREE})
+    for row in rows:
+        path = Path(row["out"]) / PROFILE_NAME
+        profile = json.loads(path.read_text())
+        del profile["penalties"]["by_situation"]
+        path.write_text(json.dumps(profile))
+    tables = profile_tables(rows, ["bt"])
+    assert tables["situations"] == []
+    assert "Points by situation" not in "\n".join(profile_sections(tables, ["bt"]))

@@ -16,10 +16,13 @@ from bt_servicesim.records.profile import (
     Proximity,
     Segment,
     add_bounds,
+    build_profile,
     increments,
     proxemics,
     spread,
 )
+from bt_servicesim.records.situations import PeopleSample
+from bt_servicesim.records.tree_log import read_records
 from tests.mission_script import Script, matches
 from tests.records.scripted_runs import play
 
@@ -120,3 +123,20 @@ def test_each_phase_gets_the_bound_of_the_checkpoints_it_booked() -> None:
     assert phases["Pickup"]["time_over_bound"] == 2.0 and phases["Pickup"]["bound_share"] == 0.15
     assert phases["ReturnToStart"]["time_over_bound"] == 2.0
     assert phases["BeginTask"]["bound_s"] is None
+
+
+def test_points_near_a_walker_standing_in_the_robots_way_are_booked_to_that_situation(
+        tmp_path: Path) -> None:
+    """The walker human_7 walked east until the mission began and stands from then on, the
+    robot 1 m ahead of it in its lane: every point booked near it is a walker standing for the
+    robot."""
+    script = Script({GUIDE: [(Status.SUCCESS, 20)], **FOLLOWING})
+    run = play(tmp_path, script, book=walker_crosses_while_guiding)
+    header, records = read_records(run.log)
+    people = [PeopleSample(sim_time_s=step / 2.0, robot=(1.0, 0.0), people={
+        "human_7": ("walker", min(step / 2.0, 0.0), 0.0)}) for step in range(-8, 400)]
+    profile = build_profile(shape=header.shape, records=records, phases=header.phases,
+                            bookings=run.bookings, people=people, counts=header.counts)
+    assert profile["penalties"]["by_situation"] == {
+        "approximation/walker standing for the robot": {"robot moving": 0.0,
+                                                        "robot standing": 2.0 * 20}}
