@@ -20,11 +20,8 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from servicesim_sim.model.engine import SimEngine
-from servicesim_sim.model.people import CrowdError
-from servicesim_sim.model.playable import playable_engine as playable_engine_of
 from servicesim_sim.model.scenario import Difficulty, ScenarioError
 from servicesim_sim.navigation.parameters import (
     SERVICEBOT,
@@ -33,6 +30,9 @@ from servicesim_sim.navigation.parameters import (
     load_navigation_parameters,
 )
 from servicesim_sim.world.files import DEFAULT_WORLD, World, WorldError, load_world
+
+if TYPE_CHECKING:
+    from servicesim_sim.model.engine import SimEngine
 
 
 class SettingsError(ValueError):
@@ -99,7 +99,13 @@ def navigation_from(args: argparse.Namespace) -> NavigationParameters:
 
 
 def playable_engine(settings: SimSettings) -> SimEngine:
-    """The world set in motion for these settings, or a :class:`SettingsError` saying why not."""
+    """The world set in motion for these settings, or a :class:`SettingsError` saying why not.
+
+    The model is imported here, not with the module: settings that cannot be played are refused
+    before the simulator loads what only playing needs (scipy among it)."""
+    from servicesim_sim.model.people import CrowdError
+    from servicesim_sim.model.playable import playable_engine as playable_engine_of
+
     try:
         return playable_engine_of(settings.world, seed=settings.seed,
                                   difficulty=settings.difficulty,

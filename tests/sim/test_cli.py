@@ -163,3 +163,23 @@ def test_a_stop_signal_the_simulator_was_started_with_ignored_stays_ignored(
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+@pytest.mark.parametrize("arguments", [
+    ["--seed", "x"],  # refused by the parser
+    ["--speed=-5"],  # refused by the settings
+    ["--world", "WORLD"],  # a world file that is no world
+])
+def test_input_the_simulator_refuses_is_refused_before_it_loads_scipy(
+        arguments: list[str], tmp_path: Path) -> None:
+    """What only playing needs (scipy among it) is not loaded to refuse a command line."""
+    world = tmp_path / "world.yaml"
+    world.write_text("name: no map\n")
+    program = ("import sys\nfrom servicesim_sim.__main__ import main\n"
+               "try:\n    code = main(sys.argv[1:])\nexcept SystemExit as stop:\n"
+               "    code = stop.code\n"
+               "print(code, sorted(n for n in sys.modules if n.split('.')[0] == 'scipy'))")
+    given = [str(world) if argument == "WORLD" else argument for argument in arguments]
+    result = subprocess.run([sys.executable, "-c", program, *given], capture_output=True,
+                            text=True, timeout=60, check=False)
+    assert result.stdout.strip() == "2 []", result.stdout + result.stderr

@@ -25,11 +25,13 @@ import math
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from servicesim_sim.world.files import OccupancyMap
+if TYPE_CHECKING:  # the argument parser reads this module's rate: no map, no scipy
+    from servicesim_sim.world.files import OccupancyMap
 
 WIDTH = 640
 HEIGHT = 480

@@ -13,6 +13,9 @@ carries ``guest_path``, the one deliberate difference of the guest from the orig
 switched back: ``trail`` (the default) follows the robot's trail, ``straight`` walks straight at
 the robot, through walls, as the original's guest did. ``walker_routes`` ``random`` gives every
 walker a random loop of ours instead of the world's (the office: the original's).
+
+scipy is imported where a task is drawn, not with the module: the command checks its arguments
+(the difficulty among them) before it loads what only playing needs.
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from servicesim_sim.world.files import AreaBox, DriftSpec, TaskSpec, World
 
@@ -224,6 +226,8 @@ def _out_of_range_spot(world: World, box: AreaBox, free: np.ndarray,
 
 
 def _reachable_from(world: World, free: np.ndarray, x: float, y: float) -> np.ndarray:
+    from scipy import ndimage  # with the task, not with the module: see the module docstring
+
     labels, _ = ndimage.label(free)
     row, col = world.map.world_to_cell(x, y)
     if not world.map.in_bounds(row, col) or labels[row, col] == 0:

@@ -17,13 +17,14 @@ ring on that side, and nothing beyond it for the whole grid's transform either.
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
 
 def distance_to_blocked(free: np.ndarray) -> np.ndarray:
     """``scipy.ndimage.distance_transform_edt(free)``, in cells: for each free (True) cell the
     distance from its centre to the nearest blocked (False) cell's centre, 0 on blocked cells,
     worked out on the free cells' bounding box and its ring of cells."""
+    from scipy import ndimage  # with the first transform: loading a world file needs none
+
     rows = np.flatnonzero(free.any(axis=1))
     distance = np.zeros(free.shape, dtype=np.float64)
     if rows.size == 0:
