@@ -517,6 +517,30 @@ def test_navigation_is_shown_the_guest_following_or_not() -> None:
     assert (sim.guest.x, sim.guest.y) in sim._obstacles()
 
 
+def test_navigations_costmap_marks_and_clears_people_while_no_goal_runs() -> None:
+    """move_base's and Nav2's costmaps update at their own rate (the servicebot's 5 Hz) whether
+    or not a goal runs: a robot standing with no goal marks the person it faces, and clears the
+    mark once they have gone."""
+    sim = engine()
+    sim.new_task()
+    at_pick_up_beside_guest(sim)
+    guest = sim.guest
+    sim.robot.yaw = math.atan2(guest.y - sim.robot.y, guest.x - sim.robot.x)
+    spot = (guest.x, guest.y)
+
+    def marked() -> bool:
+        return any(math.hypot(mark.x - spot[0], mark.y - spot[1]) < 0.05
+                   for mark in sim.navigator.costmap.marks)
+
+    for _ in range(15):  # 0.3 sim s
+        sim.step()
+    assert sim.navigator.status == "idle" and marked()
+    guest.x, guest.y = sim.robot.x, sim.robot.y - 40.0  # gone, far out of view
+    for _ in range(15):
+        sim.step()
+    assert sim.navigator.status == "idle" and not marked()
+
+
 def test_the_depth_sums_are_what_ndarray_sum_gives_bit_for_bit() -> None:
     """_book_contacts sums depths with np.add.reduce (ndarray.sum without its wrapper): the
     same pairwise summation, whatever the number of people and where the zeros fall."""

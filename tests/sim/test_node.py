@@ -47,6 +47,7 @@ class Graph:
         self.simulator = SimulatorNode(settings, node=self.sim_node)
         self.sim_executor = DrainingExecutor(context=context)
         self.sim_executor.add_node(self.sim_node)
+        self.ended_by = "nothing"
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.client = Node("probe", context=context)
         self.executor = SingleThreadedExecutor(context=context)
@@ -56,12 +57,13 @@ class Graph:
     def _run(self) -> None:
         try:
             self.simulator.run(self.sim_executor)
-        except Exception:  # the context shutting down ends the loop
-            return
+        except Exception as error:  # the context shutting down ends the loop
+            self.ended_by = repr(error)
 
     def account(self) -> str:
         """Whether the simulator's loop lives and how far it got: for a failing wait."""
-        return (f"simulator loop {'alive' if self.thread.is_alive() else 'gone'} at sim time "
+        return (f"simulator loop {'alive' if self.thread.is_alive() else 'gone'} "
+                f"(ended by {self.ended_by}) at sim time "
                 f"{self.simulator.engine.sim_time:.1f} s, "
                 f"{self.sim_executor.refused_sends} of its replies refused by DDS")
 

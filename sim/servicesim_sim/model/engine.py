@@ -290,16 +290,23 @@ class SimEngine:
     def _drive_command(self) -> tuple[float, float]:
         """Navigation's controller publishes on ``cmd_vel`` too: at 20 Hz while a goal runs, and
         a zero twist when it ends (as Nav2's controller server does). Otherwise the last
-        command persists."""
+        command persists. Navigation's costmap sees the people at its own rate with or without
+        a goal, as Nav2's and move_base's costmaps update whether or not they drive."""
+        due = self.sim_time >= self._next_control - 1e-9
+        if due:
+            self._next_control = self.sim_time + CONTROLLER_PERIOD_S
         if self.navigator.status == "running":
             self._nav_driving = True
-            if self.sim_time >= self._next_control - 1e-9:
-                self._next_control = self.sim_time + CONTROLLER_PERIOD_S
+            if due:
                 self._cmd_vel = self.navigator.command(
                     pose=self.robot.pose, people=self._obstacles(), now=self.sim_time)
-        elif self._nav_driving:
+            return self._cmd_vel
+        if self._nav_driving:
             self._nav_driving = False
             self._cmd_vel = (0.0, 0.0)
+        if due and self.navigator.observation_due(self.sim_time):
+            self.navigator.observe(pose=self.robot.pose, people=self._obstacles(),
+                                   now=self.sim_time)
         return self._cmd_vel
 
     def _obstacles(self) -> list[tuple[float, float]]:

@@ -237,7 +237,8 @@ class Costmap:
         """
         robot = np.array([robot_x, robot_y], dtype=np.float64)
         people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
-        old = np.array([(mark.x, mark.y) for mark in self.marks]).reshape(-1, 2)
+        current = self.marks  # read once: a sweep works on one set of marks
+        old = np.array([(mark.x, mark.y) for mark in current]).reshape(-1, 2)
         old_in_field = (self._in_field(robot, robot_yaw, old) if old.size
                         else np.zeros(0, dtype=bool))
         surface = np.hypot(*(people - robot).T) - self.person_radius
@@ -252,7 +253,7 @@ class Costmap:
         rayed = keep & ~standing & old_in_field
         if rayed.any():
             keep[rayed] = ~self._in_line_of_sight(robot, old[rayed], occluders=visible)
-        marks = tuple(mark for mark, kept in zip(self.marks, keep, strict=True) if kept)
+        marks = tuple(mark for mark, kept in zip(current, keep, strict=True) if kept)
         marks += tuple(PersonMark(float(x), float(y), now) for x, y in seen)
         self.visible_people = tuple((float(x), float(y)) for x, y in seen)
         self._set_marks(marks)

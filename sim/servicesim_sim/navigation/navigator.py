@@ -12,8 +12,9 @@ Design intent:
   to the middle of doors, so the corners pursuit cuts stay clear of the jambs: on 1 m doors met
   at right angles the footprint kept over 0.2 m from the walls (a follower that stopped and
   turned at sharp corners kept 0.27 m but took 15-25 % longer, and was dropped).
-* The costmap sees people through the lidar, ten sweeps a sim second. The robot replans when
-  it strays from its path, and reconsiders its path when the costmap changed: within a second
+* The costmap sees people through the lidar, five sweeps a sim second (the servicebot's
+  costmaps' ``update_frequency``), whether or not a goal runs. The robot replans when it
+  strays from its path, and reconsiders its path when the costmap changed: within a second
   when people now obstruct the next 4 m (taking the way round unless it is over 5 m longer),
   else every 5 s (taking only a way at least 1 m and 10 % shorter). So the robot neither
   dithers between routes as people come and go nor replans at every change (a plan takes
@@ -315,6 +316,16 @@ class Navigator:
         self.costmap.clear()
         self._replan_needed = True
 
+    def observation_due(self, now: float) -> bool:
+        """Whether the costmap's next sweep is due (:attr:`Tuning.observe_period`)."""
+        return not 0.0 <= now - self._observed_at < self.tuning.observe_period
+
+    def observe(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> None:
+        """A sweep of the costmap with no goal to drive, if one is due: the costmap marks and
+        clears people at its own rate whether or not a goal runs, as Nav2's does."""
+        self._people = people
+        self._observe(pose, now)
+
     def command(self, *, pose: Pose, people: list[tuple[float, float]], now: float) -> Twist:
         """The (v, w) for this step; observes people first, stops unless a goal is running.
         A command that would bring the body against a wall or a person the costmap holds is
@@ -574,7 +585,7 @@ class Navigator:
         return [(mark.x, mark.y) for mark in self.costmap.marks]
 
     def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
-        if not force and 0.0 <= now - self._observed_at < self.tuning.observe_period:
+        if not force and not self.observation_due(now):
             return
         if not all(math.isfinite(value) for value in pose):
             return
