@@ -34,6 +34,11 @@ tow stops, keep far enough from everyone standing near that no walker is held up
 whichever way it is bound, and no route to the spot runs through anyone. The mission tries
 again (and gives way again, from where everyone then stands) when it stays blocked.
 
+The same spot serves a robot that is about to stand still of its own accord (to look round for
+a lost guest): a walker stands for anyone in its lane, so a robot that stands within a lane's
+length of someone (:func:`people_held_up`) may hold them there for as long as it stands. It
+steps to a spot off the lanes, clear of them, first.
+
 Pure: numpy and the occupancy grid, no ROS, no py_trees; a tick computes it once per recovery.
 """
 
@@ -58,7 +63,8 @@ from bt_servicesim.planning.rules import (
 
 __all__ = [
     "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "PERSON_BODY", "Doorway",
-    "doorway", "give_way_spot", "local_grid_around", "passage_axis", "recent_trail",
+    "HOLD_UP_REACH", "doorway", "give_way_spot", "local_grid_around", "passage_axis",
+    "people_held_up", "recent_trail",
     "travel_heading", "without_the_guest",
 ]
 
@@ -112,6 +118,10 @@ PEOPLE_REACH = 8.0
 """Metres (in x and in y) around the robot within which people on the costmap count."""
 ON_TRAIL = 0.6
 """Metres from the robot's trail within which a person stands on it (the guest walks it)."""
+HOLD_UP_REACH = PEOPLE_LANE_LENGTH
+"""Metres from the robot within which someone standing may be held up by it: a walker's lane
+reaches this far ahead of it (the robot's origin, on the floor, is in it from about 1.12 m, and
+a costmap's mark lags), and the costmap does not say which way a person faces."""
 GUEST_STOP_ROOM_WITHOUT_LANES = 0.5
 """Metres of free space around a following guest's stop when the lanes had to be given up."""
 
@@ -345,6 +355,17 @@ def _clear_of_people(xs: np.ndarray, ys: np.ndarray, people: np.ndarray) -> np.n
     gaps = np.hypot(xs[:, None] - people[None, :, 0], ys[:, None] - people[None, :, 1])
     clear: NDArray[np.bool_] = np.all(gaps >= PEOPLE_CLEAR, axis=1)
     return clear
+
+
+def people_held_up(people: np.ndarray, *, robot: Pose2D,
+                   reach: float = HOLD_UP_REACH) -> np.ndarray:
+    """Those of ``people`` (n, 2) within ``reach`` of the robot, nearest first: whoever faces it
+    from there has it in their lane, and a walker waits as long as it stands there."""
+    people = np.asarray(people, dtype=float).reshape(-1, 2)
+    gaps = np.hypot(people[:, 0] - robot.x, people[:, 1] - robot.y)
+    near: NDArray[np.float64] = people[gaps <= reach][np.argsort(gaps[gaps <= reach],
+                                                                 kind="stable")]
+    return near
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:
