@@ -62,10 +62,21 @@ from bt_servicesim.planning.rules import (
 )
 
 __all__ = [
-    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "PERSON_BODY", "Doorway",
-    "HOLD_UP_REACH", "doorway", "give_way_spot", "local_grid_around", "passage_axis",
-    "people_held_up", "recent_trail",
-    "travel_heading", "without_the_guest",
+    "GIVE_WAY_OFFSET",
+    "GUEST_STOP_ROOM",
+    "HOLD_UP_REACH",
+    "PEOPLE_CLEAR",
+    "PEOPLE_REACH",
+    "PERSON_BODY",
+    "Doorway",
+    "doorway",
+    "give_way_spot",
+    "local_grid_around",
+    "passage_axis",
+    "people_held_up",
+    "recent_trail",
+    "travel_heading",
+    "without_the_guest",
 ]
 
 GIVE_WAY_OFFSET = PEOPLE_LANE_HALF_WIDTH + max(ROBOT_FOOTPRINT) / 2.0 + 0.3

@@ -8,6 +8,7 @@ clock. Each test scripts what the world does and checks what the mission does ab
 from __future__ import annotations
 
 import py_trees
+import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.tree.loading import DEFAULT_TREE
@@ -401,6 +402,49 @@ def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> 
     navigation = next(c for c in script.calls if matches(c, "NavigateToSeenGuest"))
     assert Status.INVALID in script.terminated[navigation]
     assert script.count("ComputeDropOffGoal") == 2
+
+
+LOST_GUEST_IN_SIGHT = {
+    "WatchGuestFollows": [(Status.FAILURE, 20)],
+    "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+    "GuestCaughtUp": [Status.FAILURE],
+    "LookForGuest": [(Status.SUCCESS, 60)],
+    "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+    "SeenGuestInRange": [Status.FAILURE] * 10,
+}
+BEFORE_THE_LOOK = ("GuestCaughtUp", "SomeoneHeldUp", "FindSpotOffLanes", "StepOutOfLane",
+                   "LookForGuest")
+
+
+def steps_before_the_look(script: Script) -> list[str]:
+    return [call.rsplit(".", 1)[-1] for call in script.calls
+            if any(matches(call, key) for key in BEFORE_THE_LOOK)]
+
+
+def test_someone_near_when_the_robot_would_stand_to_look_round_is_stepped_away_from_first(
+) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.SUCCESS],
+                     "StepOutOfLane": [(Status.SUCCESS, 40)]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == list(BEFORE_THE_LOOK)
+
+
+def test_nobody_near_the_robot_looks_round_where_it_stands() -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == ["GuestCaughtUp", "SomeoneHeldUp", "LookForGuest"]
+
+
+@pytest.mark.parametrize("failing", ["FindSpotOffLanes", "StepOutOfLane"])
+def test_a_step_aside_that_fails_still_looks_round(failing: str) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.SUCCESS],
+                     failing: [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script)[-1] == "LookForGuest"
+    assert script.count("LookForGuest") == 1
 
 
 def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
