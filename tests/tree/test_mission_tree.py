@@ -18,6 +18,8 @@ Status = py_trees.common.Status
 TICK_S = 0.1
 #: The robot never stands inside the pick-up area with the guest in range before navigation ends.
 NOT_IN_AREA = {"RobotInPickUpArea": [Status.FAILURE] * 100_000}
+NOBODY_NEAR = {"SomeoneHeldUp": [Status.FAILURE] * 100_000,
+               "SomeoneStoppedNear": [Status.FAILURE] * 100_000}
 
 
 def run_mission(script: Script, *, time_limit_s: float = 900.0,
@@ -353,6 +355,7 @@ def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None
         "GuestCaughtUp": [Status.FAILURE],
         "LookForGuest": [(Status.FAILURE, 100)],  # round a corner: not in sight
         "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -372,6 +375,7 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
         "GuestCaughtUp": [Status.FAILURE] * 1000,
         "PlanGuestSearch": [Status.FAILURE] * 1000,
         "LookForGuest": [Status.FAILURE] * 1000,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
@@ -391,6 +395,7 @@ def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> 
         "LookForGuest": [(Status.SUCCESS, 60)],
         "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
         "SeenGuestInRange": [Status.FAILURE] * 10,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -411,6 +416,7 @@ LOST_GUEST_IN_SIGHT = {
     "LookForGuest": [(Status.SUCCESS, 60)],
     "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
     "SeenGuestInRange": [Status.FAILURE] * 10,
+    **NOBODY_NEAR,
 }
 BEFORE_THE_LOOK = ("GuestCaughtUp", "SomeoneHeldUp", "FindSpotOffLanes", "StepOutOfLane",
                    "LookForGuest")
@@ -447,6 +453,37 @@ def test_a_step_aside_that_fails_still_looks_round(failing: str) -> None:
     assert script.count("LookForGuest") == 1
 
 
+def test_someone_who_stops_near_while_the_robot_looks_round_is_given_way_and_the_look_restarts(
+) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT,
+                     "SomeoneStoppedNear": [Status.FAILURE] * 10 + [Status.SUCCESS]
+                     + [Status.FAILURE] * 100_000,
+                     "SomeoneHeldUp": [Status.FAILURE, Status.SUCCESS],
+                     "LookForGuest": [(Status.SUCCESS, 60), (Status.SUCCESS, 60)]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == ["GuestCaughtUp", "SomeoneHeldUp", "LookForGuest",
+                                             "SomeoneHeldUp", "FindSpotOffLanes",
+                                             "StepOutOfLane", "LookForGuest"]
+    first_look = next(c for c in script.calls if matches(c, "LookForGuest"))
+    assert Status.INVALID in script.terminated[first_look]
+    assert script.count("NavigateToSeenGuest") == 1
+
+
+def test_the_look_restarts_twice_at_most_for_people_stopping_near() -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT,
+                     "SomeoneStoppedNear": ([Status.FAILURE] * 5 + [Status.SUCCESS]) * 3
+                     + [Status.FAILURE] * 100_000,
+                     "SomeoneHeldUp": [Status.FAILURE] + [Status.SUCCESS] * 10,
+                     "LookForGuest": [(Status.SUCCESS, 60)] * 10,
+                     "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("LookForLostGuest.LookForGuest") == 3
+    assert script.count("StepOutOfLanesWhileLooking.StepOutOfLane") == 2
+    assert script.count("PlanGuestSearch") == 1  # the third interrupted look fails the camera
+
+
 def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
     script = Script({
         "WatchGuestFollows": [(Status.FAILURE, 20)],
@@ -457,6 +494,7 @@ def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
         "SeenGuestInRange": [Status.FAILURE] * 200,
         "SeenGuestReached": [Status.FAILURE],
         "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
