@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.goals import ROBOT_CLEARANCE
 from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 from bt_servicesim.planning.rules import (
     FOLLOW_GAP,
     PEOPLE_LANE_HALF_WIDTH,
@@ -68,9 +69,12 @@ __all__ = [
     "PEOPLE_CLEAR",
     "PEOPLE_REACH",
     "PERSON_BODY",
+    "STANDING_STILL",
     "Doorway",
+    "Standstill",
     "doorway",
     "give_way_spot",
+    "held_up_on_costmap",
     "local_grid_around",
     "passage_axis",
     "people_held_up",
@@ -133,6 +137,8 @@ HOLD_UP_REACH = PEOPLE_LANE_LENGTH
 """Metres from the robot within which someone standing may be held up by it: a walker's lane
 reaches this far ahead of it (the robot's origin, on the floor, is in it from about 1.12 m, and
 a costmap's mark lags), and the costmap does not say which way a person faces."""
+STANDING_STILL = 0.15
+"""Metres within which a robot still stands where it stopped (:class:`Standstill`)."""
 GUEST_STOP_ROOM_WITHOUT_LANES = 0.5
 """Metres of free space around a following guest's stop when the lanes had to be given up."""
 
@@ -377,6 +383,41 @@ def people_held_up(people: np.ndarray, *, robot: Pose2D,
     near: NDArray[np.float64] = people[gaps <= reach][np.argsort(gaps[gaps <= reach],
                                                                  kind="stable")]
     return near
+
+
+def held_up_on_costmap(costmap: Costmap2D, occupancy: OccupancyGrid2D, *, robot: Pose2D,
+                       trail: np.ndarray | None = None,
+                       reach: float = HOLD_UP_REACH) -> np.ndarray:
+    """Whom the robot may hold up (:func:`people_held_up`) among the people navigation's
+    costmap shows; given the robot's ``trail``, the guest in tow is left out
+    (:func:`without_the_guest`): they stop behind the robot of their own accord."""
+    people = people_on_costmap(costmap, occupancy, x=robot.x, y=robot.y, reach=PEOPLE_REACH)
+    if trail is not None:
+        people = without_the_guest(people, robot=robot, trail=trail)
+    return people_held_up(people, robot=robot, reach=reach)
+
+
+class Standstill:
+    """How long the robot has stood: the sim seconds since it was last more than ``still``
+    metres from where it stopped. Turning in place is standing: nobody in a lane gets by.
+
+    Args:
+        still: metres of drift that still count as standing (a stopped robot's estimate jitters)
+    """
+
+    def __init__(self, *, still: float = STANDING_STILL) -> None:
+        self.still = still
+        self._since: tuple[float, float, float] | None = None
+
+    def forget(self) -> None:
+        """Start over: the next position is where the robot stopped."""
+        self._since = None
+
+    def stood(self, x: float, y: float, now: float) -> float:
+        """Sim seconds the robot at (x, y) has stood by ``now``."""
+        if self._since is None or math.hypot(x - self._since[0], y - self._since[1]) > self.still:
+            self._since = (x, y, now)
+        return max(0.0, now - self._since[2])
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:

@@ -139,8 +139,9 @@ def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest()
     assert script.count("NavigateIntoPickUpArea") == 0
 
 
-NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100}
-"""Navigation failed for some other reason than people in the way: no giving way."""
+NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100, "HoldingSomeoneUp": [Status.FAILURE] * 100}
+"""Navigation failed for some other reason than people in the way, with nobody near: no giving
+way."""
 
 
 WAYPOINT_CLEARING = "ClearCostmapsForWaypointIfBlocked.ClearCostmaps"
@@ -194,6 +195,54 @@ def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps()
     # the spot is found on the costmap as the robot was blocked: before the clearing wipes it
     assert steps[:6] == ["NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
                          "ClearCostmaps", "NavigateToWaypoint"]
+
+
+def test_a_standoff_on_the_way_stops_the_goal_after_4_s_and_gives_way_to_whoever_is_held_up(
+) -> None:
+    # a walker stopped for the robot, the robot for the walker; navigation would wait 20 s
+    script = Script({
+        "GoToPickUpArea.StopStandoff": [Status.FAILURE],
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 300), (Status.SUCCESS, 10)],
+        "GoToPickUpArea.WayBlocked": [Status.FAILURE] * 10,  # the goal never failed itself
+        **NOT_IN_AREA,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    first = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[first][0] == Status.INVALID  # cancelled, not left to finish
+    watched = ("NavigateToGoal", "WayBlocked", "HoldingSomeoneUp", "FindGiveWaySpot",
+               "StepAside")
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if any(matches(c, f"GoToPickUpArea.{leaf}") for leaf in watched)]
+    # then the costmaps are kept (the goal did not fail of an obstacle: they hold real people)
+    assert steps == ["NavigateToGoal", "WayBlocked", "HoldingSomeoneUp", "FindGiveWaySpot",
+                     "StepAside", "WayBlocked", "NavigateToGoal"]
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 0
+
+
+def test_a_standoff_on_the_way_to_a_waypoint_gives_way_and_tries_the_waypoint_again() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 500,
+        "StopStandoffAtWaypoint": [Status.FAILURE],
+        "NavigateToWaypoint": [(Status.SUCCESS, 300), (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+        "GiveWayForWaypoint.WayBlocked": [Status.FAILURE] * 10,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "FindGiveWaySpot",
+                            "StepAside"))]
+    assert steps[:5] == ["NextWaypoint", "NavigateToWaypoint", "FindGiveWaySpot", "StepAside",
+                         "NavigateToWaypoint"]
+
+
+def test_nobody_held_up_leaves_a_long_goal_to_its_navigation() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 1500)], **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 1
+    assert script.count("GoToPickUpArea.FindGiveWaySpot") == 0
 
 
 def test_a_waypoint_that_fails_twice_is_heard_from_as_near_as_the_way_allows_then_skipped(
