@@ -189,16 +189,24 @@ def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[...
 
 
 def _scripted_standoff(script: Script) -> type:
-    """The real StandoffTimeout, counting the sim time the robot stands; whom it holds up is
-    scripted: an activation whose outcome is FAILURE has someone near (so it stops its child
-    once the robot has stood its ``seconds``), any other activation nobody."""
+    """The real StandoffTimeout with the world it reads scripted: the robot stands from the
+    decorator's first tick (the scripted leaves never move it), and an activation whose outcome
+    is FAILURE has someone near (so it stops its child once the robot has stood its
+    ``seconds``), any other activation nobody."""
     from bt_servicesim.behaviours.decorators.standoff_timeout import StandoffTimeout
+    from bt_servicesim.ros.sim_clock import sim_now_s
 
     class ScriptedStandoffTimeout(StandoffTimeout, register=False):
         def initialise(self) -> None:
             super().initialise()
+            assert self._clock is not None
+            self._started = sim_now_s(self._clock)
             self._someone_near = (script.scripted(self.name)
                                   and script.next_outcome(self.name)[0] == Status.FAILURE)
+
+        def _stood(self) -> float:
+            assert self._clock is not None
+            return sim_now_s(self._clock) - self._started
 
         def _held_up(self) -> tuple[bool, str]:
             return self._someone_near, "scripted"

@@ -398,8 +398,10 @@ def held_up_on_costmap(costmap: Costmap2D, occupancy: OccupancyGrid2D, *, robot:
 
 
 class Standstill:
-    """How long the robot has stood: the sim seconds since it was last more than ``still``
-    metres from where it stopped. Turning in place is standing: nobody in a lane gets by.
+    """How long the robot has stood since it stopped on its way: the sim seconds since it was
+    last more than ``still`` metres from where it stopped, counted only once it has moved off
+    where it was at first (a start is not a stop: the robot that has just dropped off its guest
+    turns and sets off beside them). Turning in place is standing: nobody in a lane gets by.
 
     Args:
         still: metres of drift that still count as standing (a stopped robot's estimate jitters)
@@ -408,16 +410,21 @@ class Standstill:
     def __init__(self, *, still: float = STANDING_STILL) -> None:
         self.still = still
         self._since: tuple[float, float, float] | None = None
+        self._on_its_way = False
 
     def forget(self) -> None:
-        """Start over: the next position is where the robot stopped."""
+        """Start over: the next position is where the robot starts from."""
         self._since = None
+        self._on_its_way = False
 
     def stood(self, x: float, y: float, now: float) -> float:
-        """Sim seconds the robot at (x, y) has stood by ``now``."""
-        if self._since is None or math.hypot(x - self._since[0], y - self._since[1]) > self.still:
+        """Sim seconds the robot at (x, y) has stood by ``now`` since it stopped on its way."""
+        if self._since is None:
             self._since = (x, y, now)
-        return max(0.0, now - self._since[2])
+        elif math.hypot(x - self._since[0], y - self._since[1]) > self.still:
+            self._since = (x, y, now)
+            self._on_its_way = True
+        return max(0.0, now - self._since[2]) if self._on_its_way else 0.0
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:

@@ -12,8 +12,9 @@ fails, and the mission's recovery gives way
 near (waiting for a way to clear, turning in place) is left to its navigation.
 
 Standing is measured in sim time from the robot's pose
-(:class:`~bt_servicesim.planning.give_way.Standstill`), counted from the decorator's own
-initialise: a robot that stood before its goal began is not taken for one that stands now.
+(:class:`~bt_servicesim.planning.give_way.Standstill`), from the first stop after the robot set
+off: a robot that stood before its goal began, or has yet to leave where it stands (beside the
+guest it has just dropped off), is not taken for one held up on its way.
 """
 
 from __future__ import annotations
