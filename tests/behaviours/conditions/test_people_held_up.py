@@ -13,6 +13,7 @@ import py_trees
 from bt_servicesim.behaviours.conditions.people_held_up import PeopleHeldUp
 from bt_servicesim.behaviours.node import kind_of
 from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.planning.guest_localisation import RfidHistory, RfidReading
 from tests.fakes.leaves import wire
 from tests.fakes.maps import costmap_of, open_room
 
@@ -39,6 +40,20 @@ def test_someone_beside_or_behind_counts_too_the_costmap_does_not_say_which_way_
     for person in [(7.0, 8.2), (5.9, 7.0)]:
         condition = check(robot_pose=ROBOT, occupancy=grid, costmap=costmap_of(grid, [person]))
         assert condition.status == Status.SUCCESS, person
+
+
+def test_the_guest_in_tow_stopped_on_the_trail_behind_is_left_out() -> None:
+    grid = open_room()
+    trail = RfidHistory()
+    for t in range(11):  # the robot came along y = 7 to (7, 7); the guest stops 1.2 m back
+        trail.add(RfidReading(stamp=float(t), x=2.0 + 0.5 * t, y=7.0, names=frozenset()))
+    costmap = costmap_of(grid, [(5.8, 7.0)])
+    leading = check(robot_pose=ROBOT, occupancy=grid, costmap=costmap, guest_follows=True,
+                    rfid_history=trail)
+    assert leading.status == Status.FAILURE
+    alone = check(robot_pose=ROBOT, occupancy=grid, costmap=costmap, guest_follows=False,
+                  rfid_history=trail)
+    assert alone.status == Status.SUCCESS
 
 
 def test_people_beyond_a_lanes_length_are_not() -> None:
