@@ -85,6 +85,10 @@ class Script:
                 return outcome if isinstance(outcome, tuple) else (outcome, 0)
         return Status.SUCCESS, 0
 
+    def scripted(self, name: str) -> bool:
+        """Whether outcomes are left for the behaviour called ``name``."""
+        return any(matches(name, key) and queue for key, queue in self.outcomes.items())
+
     def count(self, key: str) -> int:
         return sum(1 for name in self.calls if matches(name, key))
 
@@ -180,4 +184,31 @@ def scripted_registry(tree_file: Path, script: Script) -> dict[str, Callable[...
     for tag, ports in leaf_ports(tree_file).items():
         if tag not in KEEP_REAL:
             registry[tag] = _scripted_leaf(tag, ports, script, real.get(tag))
+    registry["StandoffTimeout"] = _scripted_standoff(script)
     return registry
+
+
+def _scripted_standoff(script: Script) -> type:
+    """The real StandoffTimeout with the world it reads scripted: the robot stands from the
+    decorator's first tick (the scripted leaves never move it), and an activation whose outcome
+    is FAILURE has someone near (so it stops its child once the robot has stood its
+    ``seconds``), any other activation nobody."""
+    from bt_servicesim.behaviours.decorators.standoff_timeout import StandoffTimeout
+    from bt_servicesim.ros.sim_clock import sim_now_s
+
+    class ScriptedStandoffTimeout(StandoffTimeout, register=False):
+        def initialise(self) -> None:
+            super().initialise()
+            assert self._clock is not None
+            self._started = sim_now_s(self._clock)
+            self._someone_near = (script.scripted(self.name)
+                                  and script.next_outcome(self.name)[0] == Status.FAILURE)
+
+        def _stood(self) -> float:
+            assert self._clock is not None
+            return sim_now_s(self._clock) - self._started
+
+        def _held_up(self) -> tuple[bool, str]:
+            return self._someone_near, "scripted"
+
+    return ScriptedStandoffTimeout

@@ -34,6 +34,11 @@ tow stops, keep far enough from everyone standing near that no walker is held up
 whichever way it is bound, and no route to the spot runs through anyone. The mission tries
 again (and gives way again, from where everyone then stands) when it stays blocked.
 
+The same spot serves a robot that is about to stand still of its own accord (to look round for
+a lost guest): a walker stands for anyone in its lane, so a robot that stands within a lane's
+length of someone (:func:`people_held_up`) may hold them there for as long as it stands. It
+steps to a spot off the lanes, clear of them, first.
+
 Pure: numpy and the occupancy grid, no ROS, no py_trees; a tick computes it once per recovery.
 """
 
@@ -49,6 +54,7 @@ from numpy.typing import NDArray
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.goals import ROBOT_CLEARANCE
 from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap
 from bt_servicesim.planning.rules import (
     FOLLOW_GAP,
     PEOPLE_LANE_HALF_WIDTH,
@@ -57,9 +63,24 @@ from bt_servicesim.planning.rules import (
 )
 
 __all__ = [
-    "GIVE_WAY_OFFSET", "GUEST_STOP_ROOM", "PEOPLE_CLEAR", "PEOPLE_REACH", "PERSON_BODY", "Doorway",
-    "doorway", "give_way_spot", "local_grid_around", "passage_axis", "recent_trail",
-    "travel_heading", "without_the_guest",
+    "GIVE_WAY_OFFSET",
+    "GUEST_STOP_ROOM",
+    "HOLD_UP_REACH",
+    "PEOPLE_CLEAR",
+    "PEOPLE_REACH",
+    "PERSON_BODY",
+    "STANDING_STILL",
+    "Doorway",
+    "Standstill",
+    "doorway",
+    "give_way_spot",
+    "held_up_on_costmap",
+    "local_grid_around",
+    "passage_axis",
+    "people_held_up",
+    "recent_trail",
+    "travel_heading",
+    "without_the_guest",
 ]
 
 GIVE_WAY_OFFSET = PEOPLE_LANE_HALF_WIDTH + max(ROBOT_FOOTPRINT) / 2.0 + 0.3
@@ -112,6 +133,12 @@ PEOPLE_REACH = 8.0
 """Metres (in x and in y) around the robot within which people on the costmap count."""
 ON_TRAIL = 0.6
 """Metres from the robot's trail within which a person stands on it (the guest walks it)."""
+HOLD_UP_REACH = PEOPLE_LANE_LENGTH
+"""Metres from the robot within which someone standing may be held up by it: a walker's lane
+reaches this far ahead of it (the robot's origin, on the floor, is in it from about 1.12 m, and
+a costmap's mark lags), and the costmap does not say which way a person faces."""
+STANDING_STILL = 0.15
+"""Metres within which a robot still stands where it stopped (:class:`Standstill`)."""
 GUEST_STOP_ROOM_WITHOUT_LANES = 0.5
 """Metres of free space around a following guest's stop when the lanes had to be given up."""
 
@@ -345,6 +372,59 @@ def _clear_of_people(xs: np.ndarray, ys: np.ndarray, people: np.ndarray) -> np.n
     gaps = np.hypot(xs[:, None] - people[None, :, 0], ys[:, None] - people[None, :, 1])
     clear: NDArray[np.bool_] = np.all(gaps >= PEOPLE_CLEAR, axis=1)
     return clear
+
+
+def people_held_up(people: np.ndarray, *, robot: Pose2D,
+                   reach: float = HOLD_UP_REACH) -> np.ndarray:
+    """Those of ``people`` (n, 2) within ``reach`` of the robot, nearest first: whoever faces it
+    from there has it in their lane, and a walker waits as long as it stands there."""
+    people = np.asarray(people, dtype=float).reshape(-1, 2)
+    gaps = np.hypot(people[:, 0] - robot.x, people[:, 1] - robot.y)
+    near: NDArray[np.float64] = people[gaps <= reach][np.argsort(gaps[gaps <= reach],
+                                                                 kind="stable")]
+    return near
+
+
+def held_up_on_costmap(costmap: Costmap2D, occupancy: OccupancyGrid2D, *, robot: Pose2D,
+                       trail: np.ndarray | None = None,
+                       reach: float = HOLD_UP_REACH) -> np.ndarray:
+    """Whom the robot may hold up (:func:`people_held_up`) among the people navigation's
+    costmap shows; given the robot's ``trail``, the guest in tow is left out
+    (:func:`without_the_guest`): they stop behind the robot of their own accord."""
+    people = people_on_costmap(costmap, occupancy, x=robot.x, y=robot.y, reach=PEOPLE_REACH)
+    if trail is not None:
+        people = without_the_guest(people, robot=robot, trail=trail)
+    return people_held_up(people, robot=robot, reach=reach)
+
+
+class Standstill:
+    """How long the robot has stood since it stopped on its way: the sim seconds since it was
+    last more than ``still`` metres from where it stopped, counted only once it has moved off
+    where it was at first (a start is not a stop: the robot that has just dropped off its guest
+    turns and sets off beside them). Turning in place is standing: nobody in a lane gets by.
+
+    Args:
+        still: metres of drift that still count as standing (a stopped robot's estimate jitters)
+    """
+
+    def __init__(self, *, still: float = STANDING_STILL) -> None:
+        self.still = still
+        self._since: tuple[float, float, float] | None = None
+        self._on_its_way = False
+
+    def forget(self) -> None:
+        """Start over: the next position is where the robot starts from."""
+        self._since = None
+        self._on_its_way = False
+
+    def stood(self, x: float, y: float, now: float) -> float:
+        """Sim seconds the robot at (x, y) has stood by ``now`` since it stopped on its way."""
+        if self._since is None:
+            self._since = (x, y, now)
+        elif math.hypot(x - self._since[0], y - self._since[1]) > self.still:
+            self._since = (x, y, now)
+            self._on_its_way = True
+        return max(0.0, now - self._since[2]) if self._on_its_way else 0.0
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:

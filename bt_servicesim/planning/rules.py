@@ -24,6 +24,7 @@ __all__ = [
     "PEOPLE_LANE_HALF_WIDTH",
     "PEOPLE_LANE_LENGTH",
     "PERSON_APPROXIMATION_RADIUS",
+    "PERSON_BODY_RADIUS",
     "PICKUP_RANGE",
     "PICKUP_REACH",
     "RFID_PERIOD",
@@ -52,6 +53,9 @@ GUEST_LOST_DISTANCE = 4.0
 """A guest this far behind the robot stops following (the task goes back to checkpoint 2)."""
 
 # ---------------------------------------------------------------------------- other people
+PERSON_BODY_RADIUS = 0.25
+"""Metres round a person's centre that their body takes (the lidar sees a person about this
+wide, and the referee's contact penalty starts at their body)."""
 PEOPLE_LANE_HALF_WIDTH = 0.6
 """A walker stops while anyone stands in a lane this many metres either side of its way (and
 :data:`PEOPLE_LANE_LENGTH` ahead), and waits as long as it stays blocked

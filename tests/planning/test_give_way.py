@@ -22,6 +22,7 @@ from bt_servicesim.planning.give_way import (
     doorway,
     give_way_spot,
     passage_axis,
+    people_held_up,
     recent_trail,
     without_the_guest,
 )
@@ -215,3 +216,22 @@ def test_the_guest_is_whoever_stands_on_the_trail_the_robot_passed_last() -> Non
     assert without_the_guest(nobody_on_it, robot=ROBOT, trail=came).tolist() == (
         nobody_on_it.tolist())
     assert without_the_guest(np.zeros((0, 2)), robot=ROBOT, trail=came).shape == (0, 2)
+
+
+def test_people_held_up_are_those_within_a_lanes_length_nearest_first() -> None:
+    people = np.array([(11.4, 4.8), (10.0, 5.9), (12.0, 4.8), (10.0, 2.0)])
+    near = people_held_up(people, robot=ROBOT)
+    assert near.tolist() == [[10.0, 5.9], [11.4, 4.8]]
+    assert people_held_up(people, robot=ROBOT, reach=1.0).shape == (0, 2)
+    assert people_held_up(np.zeros((0, 2)), robot=ROBOT).shape == (0, 2)
+
+
+def test_a_spot_to_step_to_before_standing_is_looked_for_only_within_its_route() -> None:
+    """Someone stands a metre from the robot in the corridor: the spot off the lanes within a
+    few metres is the room through the door beside it; within a metre there is none."""
+    grid = office()
+    near = np.array([(9.0, 4.8)])
+    spot = give_way_spot(grid, robot=ROBOT, trail=trail(), people=near, max_route=5.0)
+    assert spot is not None and spot.y > 5.8, spot  # the room
+    assert math.dist((spot.x, spot.y), (9.0, 4.8)) > PEOPLE_LANE_LENGTH
+    assert give_way_spot(grid, robot=ROBOT, trail=trail(), people=near, max_route=1.0) is None

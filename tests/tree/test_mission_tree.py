@@ -8,6 +8,7 @@ clock. Each test scripts what the world does and checks what the mission does ab
 from __future__ import annotations
 
 import py_trees
+import pytest
 from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
 
 from bt_servicesim.tree.loading import DEFAULT_TREE
@@ -17,6 +18,8 @@ Status = py_trees.common.Status
 TICK_S = 0.1
 #: The robot never stands inside the pick-up area with the guest in range before navigation ends.
 NOT_IN_AREA = {"RobotInPickUpArea": [Status.FAILURE] * 100_000}
+NOBODY_NEAR = {"SomeoneHeldUp": [Status.FAILURE] * 100_000,
+               "SomeoneStoppedNear": [Status.FAILURE] * 100_000}
 
 
 def run_mission(script: Script, *, time_limit_s: float = 900.0,
@@ -136,8 +139,9 @@ def test_a_robot_inside_the_area_after_the_approach_goes_straight_to_the_guest()
     assert script.count("NavigateIntoPickUpArea") == 0
 
 
-NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100}
-"""Navigation failed for some other reason than people in the way: no giving way."""
+NOT_BLOCKED = {"WayBlocked": [Status.FAILURE] * 100, "HoldingSomeoneUp": [Status.FAILURE] * 100}
+"""Navigation failed for some other reason than people in the way, with nobody near: no giving
+way."""
 
 
 WAYPOINT_CLEARING = "ClearCostmapsForWaypointIfBlocked.ClearCostmaps"
@@ -191,6 +195,54 @@ def test_a_blocked_way_gives_way_lets_people_pass_and_then_clears_the_costmaps()
     # the spot is found on the costmap as the robot was blocked: before the clearing wipes it
     assert steps[:6] == ["NavigateToWaypoint", "WayBlocked", "FindGiveWaySpot", "StepAside",
                          "ClearCostmaps", "NavigateToWaypoint"]
+
+
+def test_a_standoff_on_the_way_stops_the_goal_after_4_s_and_gives_way_to_whoever_is_held_up(
+) -> None:
+    # a walker stopped for the robot, the robot for the walker; navigation would wait 20 s
+    script = Script({
+        "GoToPickUpArea.StopStandoff": [Status.FAILURE],
+        "GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 300), (Status.SUCCESS, 10)],
+        "GoToPickUpArea.WayBlocked": [Status.FAILURE] * 10,  # the goal never failed itself
+        **NOT_IN_AREA,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    first = next(c for c in script.calls if matches(c, "GoToPickUpArea.NavigateToGoal"))
+    assert script.terminated[first][0] == Status.INVALID  # cancelled, not left to finish
+    watched = ("NavigateToGoal", "WayBlocked", "HoldingSomeoneUp", "FindGiveWaySpot",
+               "StepAside")
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if any(matches(c, f"GoToPickUpArea.{leaf}") for leaf in watched)]
+    # then the costmaps are kept (the goal did not fail of an obstacle: they hold real people)
+    assert steps == ["NavigateToGoal", "WayBlocked", "HoldingSomeoneUp", "FindGiveWaySpot",
+                     "StepAside", "WayBlocked", "NavigateToGoal"]
+    assert script.count("GoToPickUpArea.ClearCostmaps") == 0
+
+
+def test_a_standoff_on_the_way_to_a_waypoint_gives_way_and_tries_the_waypoint_again() -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 500,
+        "StopStandoffAtWaypoint": [Status.FAILURE],
+        "NavigateToWaypoint": [(Status.SUCCESS, 300), (Status.SUCCESS, 10), (Status.RUNNING, 0)],
+        "GiveWayForWaypoint.WayBlocked": [Status.FAILURE] * 10,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "FindGiveWaySpot",
+                            "StepAside"))]
+    assert steps[:5] == ["NextWaypoint", "NavigateToWaypoint", "FindGiveWaySpot", "StepAside",
+                         "NavigateToWaypoint"]
+
+
+def test_nobody_held_up_leaves_a_long_goal_to_its_navigation() -> None:
+    script = Script({"GoToPickUpArea.NavigateToGoal": [(Status.SUCCESS, 1500)], **NOT_IN_AREA})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("GoToPickUpArea.NavigateToGoal") == 1
+    assert script.count("GoToPickUpArea.FindGiveWaySpot") == 0
 
 
 def test_a_waypoint_that_fails_twice_is_heard_from_as_near_as_the_way_allows_then_skipped(
@@ -352,6 +404,7 @@ def test_a_guest_lost_while_guided_is_searched_for_and_picked_up_again() -> None
         "GuestCaughtUp": [Status.FAILURE],
         "LookForGuest": [(Status.FAILURE, 100)],  # round a corner: not in sight
         "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -371,6 +424,7 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
         "GuestCaughtUp": [Status.FAILURE] * 1000,
         "PlanGuestSearch": [Status.FAILURE] * 1000,
         "LookForGuest": [Status.FAILURE] * 1000,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script, max_ticks=50_000)
     assert status == Status.FAILURE
@@ -390,6 +444,7 @@ def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> 
         "LookForGuest": [(Status.SUCCESS, 60)],
         "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
         "SeenGuestInRange": [Status.FAILURE] * 10,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
@@ -403,6 +458,81 @@ def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> 
     assert script.count("ComputeDropOffGoal") == 2
 
 
+LOST_GUEST_IN_SIGHT = {
+    "WatchGuestFollows": [(Status.FAILURE, 20)],
+    "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+    "GuestCaughtUp": [Status.FAILURE],
+    "LookForGuest": [(Status.SUCCESS, 60)],
+    "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+    "SeenGuestInRange": [Status.FAILURE] * 10,
+    **NOBODY_NEAR,
+}
+BEFORE_THE_LOOK = ("GuestCaughtUp", "SomeoneHeldUp", "FindSpotOffLanes", "StepOutOfLane",
+                   "LookForGuest")
+
+
+def steps_before_the_look(script: Script) -> list[str]:
+    return [call.rsplit(".", 1)[-1] for call in script.calls
+            if any(matches(call, key) for key in BEFORE_THE_LOOK)]
+
+
+def test_someone_near_when_the_robot_would_stand_to_look_round_is_stepped_away_from_first(
+) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.SUCCESS],
+                     "StepOutOfLane": [(Status.SUCCESS, 40)]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == list(BEFORE_THE_LOOK)
+
+
+def test_nobody_near_the_robot_looks_round_where_it_stands() -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == ["GuestCaughtUp", "SomeoneHeldUp", "LookForGuest"]
+
+
+@pytest.mark.parametrize("failing", ["FindSpotOffLanes", "StepOutOfLane"])
+def test_a_step_aside_that_fails_still_looks_round(failing: str) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT, "SomeoneHeldUp": [Status.SUCCESS],
+                     failing: [Status.FAILURE]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script)[-1] == "LookForGuest"
+    assert script.count("LookForGuest") == 1
+
+
+def test_someone_who_stops_near_while_the_robot_looks_round_is_given_way_and_the_look_restarts(
+) -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT,
+                     "SomeoneStoppedNear": [Status.FAILURE] * 10 + [Status.SUCCESS]
+                     + [Status.FAILURE] * 100_000,
+                     "SomeoneHeldUp": [Status.FAILURE, Status.SUCCESS],
+                     "LookForGuest": [(Status.SUCCESS, 60), (Status.SUCCESS, 60)]})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert steps_before_the_look(script) == ["GuestCaughtUp", "SomeoneHeldUp", "LookForGuest",
+                                             "SomeoneHeldUp", "FindSpotOffLanes",
+                                             "StepOutOfLane", "LookForGuest"]
+    first_look = next(c for c in script.calls if matches(c, "LookForGuest"))
+    assert Status.INVALID in script.terminated[first_look]
+    assert script.count("NavigateToSeenGuest") == 1
+
+
+def test_the_look_restarts_twice_at_most_for_people_stopping_near() -> None:
+    script = Script({**LOST_GUEST_IN_SIGHT,
+                     "SomeoneStoppedNear": ([Status.FAILURE] * 5 + [Status.SUCCESS]) * 3
+                     + [Status.FAILURE] * 100_000,
+                     "SomeoneHeldUp": [Status.FAILURE] + [Status.SUCCESS] * 10,
+                     "LookForGuest": [(Status.SUCCESS, 60)] * 10,
+                     "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5})
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("LookForLostGuest.LookForGuest") == 3
+    assert script.count("StepOutOfLanesWhileLooking.StepOutOfLane") == 2
+    assert script.count("PlanGuestSearch") == 1  # the third interrupted look fails the camera
+
+
 def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
     script = Script({
         "WatchGuestFollows": [(Status.FAILURE, 20)],
@@ -413,6 +543,7 @@ def test_a_seen_guest_not_reached_is_searched_for_along_the_trail() -> None:
         "SeenGuestInRange": [Status.FAILURE] * 200,
         "SeenGuestReached": [Status.FAILURE],
         "SearchForLostGuest.GuestInRange": [Status.FAILURE] * 5,
+        **NOBODY_NEAR,
     })
     status, _ = run_mission(script)
     assert status == Status.SUCCESS

@@ -25,6 +25,7 @@ from bt_servicesim.planning.entrances import doorways_near
 from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.give_way import (
+    MAX_ROUTE,
     PEOPLE_REACH,
     give_way_spot,
     recent_trail,
@@ -219,6 +220,10 @@ class GiveWaySpot(_Computation):
     in tow, who stops short of it. The people standing near come from navigation's costmap
     (:func:`people_on_costmap`), the guest in tow left out (:func:`without_the_guest`): the
     spot keeps clear of them; without a costmap it is found without.
+
+    Args:
+        name: the behaviour's name
+        max_route: metres of route within which the spot is looked for
     """
 
     INPUT_PORTS: Ports = {
@@ -233,8 +238,10 @@ class GiveWaySpot(_Computation):
     }
     OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
 
-    def __init__(self, name: str = "GiveWaySpot", **kwargs: Any) -> None:
+    def __init__(self, name: str = "GiveWaySpot", max_route: float = MAX_ROUTE,
+                 **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
+        self.max_route = float(max_route)
 
     def compute(self, robot_pose: Pose2D, occupancy: OccupancyGrid2D,
                 rfid_history: RfidHistory, guest_follows: bool,
@@ -247,7 +254,8 @@ class GiveWaySpot(_Computation):
             if guest_follows:
                 people = without_the_guest(people, robot=robot_pose, trail=trail)
         spot = give_way_spot(occupancy, robot=robot_pose, trail=trail,
-                             guest_follows=guest_follows, people=people)
+                             guest_follows=guest_follows, people=people,
+                             max_route=self.max_route)
         self.feedback_message = (f"give way at {describe(spot)}" if spot is not None
                                  else "no spot to give way at") + f" ({_seen(people)})"
         return spot

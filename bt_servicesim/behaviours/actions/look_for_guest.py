@@ -53,6 +53,7 @@ from bt_servicesim.planning.guest_camera import (
 )
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 from bt_servicesim.planning.people import Costmap2D, people_on_costmap
+from bt_servicesim.planning.rules import PERSON_BODY_RADIUS
 from bt_servicesim.ros.shared_subscription import Reader, shared_subscription
 from bt_servicesim.ros.sim_clock import node_from_setup_kwargs, sim_now_s
 
@@ -146,12 +147,9 @@ class LookForGuest(ActionNode):
         except NoDataAvailable as missing:
             self.feedback_message = f"cannot look round: {missing}"
             return
-        room = grid.clearance(robot.x, robot.y)
-        if room < ROBOT_CLEARANCE:
-            # a turn in place sweeps the box's corners round: the navigation checks its
-            # footprint, a bare cmd_vel turn does not, so turn only where the map has room
-            self.feedback_message = (f"too near a wall to turn in place: {room:.2f} m of room, "
-                                     f"the box's corners need {ROBOT_CLEARANCE:.2f} m")
+        refusal = self._no_room_to_turn(robot, grid)
+        if refusal is not None:
+            self.feedback_message = refusal
             return
         self._turns = look_turns(robot, towards=self._last_seen(), step=self.turn_step)
         self.reader = shared_subscription(node, Image, self.camera_topic, self._on_image,
@@ -255,6 +253,30 @@ class LookForGuest(ActionNode):
         if self.reader is not None:
             self.reader.cancel()
             self.reader = None
+
+    def _no_room_to_turn(self, robot: Pose2D, grid: OccupancyGrid2D) -> str | None:
+        """Why the robot cannot turn in place here, or None. A turn in place sweeps the box's
+        corners round: the navigation checks its footprint, a bare cmd_vel turn does not, so
+        turn only where the map has room, and nobody the costmap shows stands within the
+        corners' reach (their body's radius beyond it)."""
+        room = grid.clearance(robot.x, robot.y)
+        if room < ROBOT_CLEARANCE:
+            return (f"too near a wall to turn in place: {room:.2f} m of room, "
+                    f"the box's corners need {ROBOT_CLEARANCE:.2f} m")
+        try:
+            costmap = self.get_input("costmap")
+        except NoDataAvailable:
+            return None
+        if not isinstance(costmap, Costmap2D):
+            return None
+        reach = ROBOT_CLEARANCE + PERSON_BODY_RADIUS
+        # a wider window than the reach, so that a disc it would cut is located whole
+        near = people_on_costmap(costmap, grid, x=robot.x, y=robot.y, reach=2.0 * reach)
+        gaps = [math.dist((robot.x, robot.y), (float(px), float(py))) for px, py in near]
+        if gaps and min(gaps) < reach:
+            return (f"too near someone to turn in place: a person {min(gaps):.2f} m away, "
+                    f"the box's corners need {reach:.2f} m")
+        return None
 
     def _bystanders(self, grid: OccupancyGrid2D, guest: Point) -> list[Point]:
         """Others the costmap shows near the guest: every disc but the one nearest the guest,

@@ -567,3 +567,19 @@ def test_nearest_reachable_spot_hears_a_room_shut_by_someone_in_its_door_from_th
                    occupancy=grid, costmap=costmap_of(grid, [(10.0, 5.7)]))
     assert too_deep.status == Status.FAILURE
     assert too_deep.feedback_message.startswith("nothing reachable near (11.00, 8.50")
+
+
+def test_give_way_spot_looks_only_within_its_route() -> None:
+    """In the office of tests/planning/test_give_way.py, someone a metre from the robot."""
+    grid, history = office(), RfidHistory()
+    drive(history, [(20.0, 4.8), (ROBOT.x, ROBOT.y)], guest=(40.0, 40.0))
+    costmap = costmap_of(grid, [(9.0, 4.8)])
+    near = run(GiveWaySpot(max_route=5.0), robot_pose=ROBOT, occupancy=grid,
+               rfid_history=history, costmap=costmap)
+    assert near.status == Status.SUCCESS, near.feedback_message
+    assert math.dist((output(near).x, output(near).y), (ROBOT.x, ROBOT.y)) <= 5.0
+    Blackboard.clear()
+    too_short = run(GiveWaySpot(max_route=1.0), robot_pose=ROBOT, occupancy=grid,
+                    rfid_history=history, costmap=costmap)
+    assert too_short.status == Status.FAILURE
+    assert too_short.feedback_message.startswith("no spot to give way at")

@@ -184,6 +184,25 @@ def test_a_robot_beside_a_wall_does_not_turn_in_place(world: SensorWorld) -> Non
     assert robot.pictures == 0 and robot.pose.yaw == 0.0
 
 
+def test_a_robot_beside_someone_does_not_turn_in_place(world: SensorWorld) -> None:
+    # an idler 0.54 m from the robot's centre: the box's corners (0.32 m out) would sweep into
+    # their body (hard seed 48 booked 1.9 million contact points turning so); one 0.7 m away
+    # leaves the corners room
+    for idler, turns in ((10.54, False), (10.7, True)):
+        robot = TurningRobot(world, Pose2D(10.0, 10.0, 3.14),
+                             [(GUEST, "guest", 10.0, 14.0), ("human_11111", "idler", idler, 10.0)])
+        behaviour = look(world, last_seen=Pose2D(10.0, 14.0), people_marked=[(idler, 10.0)])
+        status = robot.run(behaviour)
+        if turns:
+            assert status == Status.SUCCESS and any(rate != 0.0 for rate in robot.commands)
+        else:
+            assert status == Status.FAILURE
+            assert behaviour.feedback_message == (
+                "too near someone to turn in place: a person 0.54 m away, "
+                "the box's corners need 0.60 m")
+            assert all(rate == 0.0 for rate in robot.commands) and robot.pictures == 0
+
+
 def test_a_robot_without_a_pose_cannot_look() -> None:
     behaviour = LookForGuest(name="look")
     with pytest.raises(RuntimeError, match="setup"):
