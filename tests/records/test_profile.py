@@ -32,7 +32,7 @@ FOLLOWING = {"WatchGuestFollows": [(Status.FAILURE, 100_000)]}  # the guest foll
 GUIDE_KEY = ("ServiceSimMission.MissionTimeLimit.Mission.DropOffPhaseRetry.DropOff.DeliverGuest."
              "DropOffRetry.GuideAndDropOff.GuideRetry.GuideGuest.LeadGuestToDropOff."
              "GuideWhileGuestFollows.GoToDropOffArea.NavigateWithRecovery.NavigateRecovery."
-             "NavigateToGoal")
+             "StopStandoff.NavigateToGoal")
 
 
 def walker_crosses_while_guiding(tip: py_trees.behaviour.Behaviour, _now: float
