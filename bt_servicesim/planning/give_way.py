@@ -37,7 +37,9 @@ again (and gives way again, from where everyone then stands) when it stays block
 The same spot serves a robot that is about to stand still of its own accord (to look round for
 a lost guest): a walker stands for anyone in its lane, so a robot that stands within a lane's
 length of someone (:func:`people_held_up`) may hold them there for as long as it stands. It
-steps to a spot off the lanes, clear of them, first.
+steps to a spot off the lanes, clear of them, first. And a robot that has stood on its way
+(:class:`Standstill`) with someone that near (:func:`held_up_on_costmap`) is in a standoff: it
+gives way then rather than wait for its navigation to give up.
 
 Pure: numpy and the occupancy grid, no ROS, no py_trees; a tick computes it once per recovery.
 """
