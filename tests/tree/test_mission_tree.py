@@ -436,16 +436,20 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
     assert script.count("CallDropOffGuest") == 0
 
 
+#: The guest drifts while led and stands in sight: the look sees them.
+LOST_GUEST_IN_SIGHT = {
+    "WatchGuestFollows": [(Status.FAILURE, 20)],
+    "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
+    "GuestCaughtUp": [Status.FAILURE],
+    "LookForGuest": [(Status.SUCCESS, 60)],
+    "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
+    "SeenGuestInRange": [Status.FAILURE] * 10,
+    **NOBODY_NEAR,
+}
+
+
 def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> None:
-    script = Script({
-        "WatchGuestFollows": [(Status.FAILURE, 20)],
-        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
-        "GuestCaughtUp": [Status.FAILURE],
-        "LookForGuest": [(Status.SUCCESS, 60)],
-        "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
-        "SeenGuestInRange": [Status.FAILURE] * 10,
-        **NOBODY_NEAR,
-    })
+    script = Script(LOST_GUEST_IN_SIGHT)
     status, _ = run_mission(script)
     assert status == Status.SUCCESS
     order = [call.rsplit(".", 1)[-1] for call in script.calls if any(
@@ -458,15 +462,6 @@ def test_a_guest_in_sight_is_found_with_the_camera_before_any_trail_search() -> 
     assert script.count("ComputeDropOffGoal") == 2
 
 
-LOST_GUEST_IN_SIGHT = {
-    "WatchGuestFollows": [(Status.FAILURE, 20)],
-    "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)],
-    "GuestCaughtUp": [Status.FAILURE],
-    "LookForGuest": [(Status.SUCCESS, 60)],
-    "NavigateToSeenGuest": [(Status.SUCCESS, 100)],
-    "SeenGuestInRange": [Status.FAILURE] * 10,
-    **NOBODY_NEAR,
-}
 BEFORE_THE_LOOK = ("GuestCaughtUp", "SomeoneHeldUp", "FindSpotOffLanes", "StepOutOfLane",
                    "LookForGuest")
 
