@@ -5,6 +5,12 @@ claims one: parallel workers, two test runs at the same time and the runs the te
 see each other's nodes. This runs at import, before any test
 calls ``rclpy.init``, and subprocesses started by tests (the simulator) inherit it.
 
+The tests stop the processes they start with SIGINT, as a user's Ctrl-C would. A suite started
+with the stop signals ignored (a shell's background job ignores SIGINT, ``nohup`` SIGHUP) would
+hand that on to every child, which then keeps it ignored as Unix programs do: the stop would
+never arrive and a simulator at full speed would outlive its test. So each test process puts the
+stop signals back at their defaults first, as the run does for the simulator it starts.
+
 Every test starts and ends with an empty py_trees blackboard. The fakes these fixtures build are
 in the ``fakes`` package. Tests marked ``long`` are collected first.
 """
@@ -12,6 +18,7 @@ in the ``fakes`` package. Tests marked ``long`` are collected first.
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
@@ -34,6 +41,17 @@ def _claim_test_domain() -> DomainClaim:
     return claim_domain(start=run + index * 37)
 
 
+def _restore_stop_signals() -> None:
+    """SIGINT back to Python's KeyboardInterrupt, SIGTERM and SIGHUP to their defaults, where the
+    suite was started with them ignored; the children the tests start inherit the defaults."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    for number in (signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(number) is signal.SIG_IGN:
+            signal.signal(number, signal.SIG_DFL)
+
+
+_restore_stop_signals()
 apply_localhost_defaults()
 TEST_DOMAIN = _claim_test_domain()
 os.environ["ROS_DOMAIN_ID"] = str(TEST_DOMAIN.domain_id)

@@ -11,7 +11,6 @@ the period the last done that named the camera governed. Two runs give the same 
 
 from __future__ import annotations
 
-import signal
 import subprocess
 import sys
 import time
@@ -26,6 +25,7 @@ from servicesim_competition.msg import LockstepPeriod
 
 from bt_servicesim.ros.lockstep import PERIOD_TOPIC, PROTOCOL_QOS, LockstepClient, offered
 from bt_servicesim.ros.node import ExecutiveNode
+from tests.fakes.commands import stop_child
 
 CAMERA = "/servicebot/camera_front/image_raw"
 SUBSCRIBE_AT, UNSUBSCRIBE_AT, LAST_PERIOD = 5, 12, 16
@@ -83,8 +83,7 @@ def frames_in_lockstep(context: Any) -> tuple[dict[int, list[float]], dict[int, 
     finally:
         executor.shutdown()
         node.destroy_node()
-        simulator.send_signal(signal.SIGINT)
-        simulator.wait(timeout=30)
+        stop_child(simulator)
 
 
 @pytest.mark.long

@@ -22,6 +22,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from servicesim_competition.msg import LockstepPeriod
 
 from servicesim_sim.lockstep.server import JOIN_SERVICE, PERIOD_TOPIC
+from tests.fakes.commands import stop_child
 
 JOINING_CLIENT = textwrap.dedent(f"""
     import rclpy, time
@@ -68,9 +69,7 @@ def test_a_killed_lockstep_client_is_dropped_and_the_simulator_goes_on(
                 "the simulator did not go on"
         finally:
             for process in (client, simulator):
-                if process.poll() is None:
-                    process.send_signal(signal.SIGINT)
-                    process.wait(timeout=30)
+                stop_child(process)
 
 
 def periods_seen_beyond(period: int, *, context: Any, limit_s: float) -> bool:
