@@ -21,6 +21,7 @@ median and 90th percentile of time over the bound per executive and set.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -35,6 +36,9 @@ from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 
 BOUND_COMMAND = (sys.executable, "-m", "servicesim_sim.task_bound")
 TIMEOUT_S = 3600.0  # wall seconds for all the bounds of an evaluation (about 2 s each)
+#: Fewest tasks worth a process of their own: a process's start (its imports, the world, its
+#: search lattice) costs about what a bound or two does, so a few tasks share one process.
+TASKS_PER_PROCESS = 4
 DEFAULT_WORLD = "default"  # what a run's report names the simulator's own office
 
 
@@ -78,12 +82,14 @@ def task_key(row: dict[str, Any]) -> TaskKey | None:
 def request_bounds(keys: list[TaskKey], *, command: tuple[str, ...] | None = None,
                    timeout_s: float = TIMEOUT_S, jobs: int = 1) -> Bounds:
     """The bounds of ``keys`` from ``command`` (default :data:`BOUND_COMMAND`), run as up to
-    ``jobs`` processes at once, each on an equal share of the tasks (a bound is about a CPU
-    second: the evaluation's 600 episodes took 5 minutes on one core)."""
+    ``jobs`` processes at once, each on an equal share of the tasks and none on fewer than
+    :data:`TASKS_PER_PROCESS` unless there are fewer (a bound is about a CPU second: the
+    evaluation's 600 episodes took 5 minutes on one core)."""
     if not keys:
         return Bounds()
     command = command or BOUND_COMMAND
-    shares = [keys[start::max(1, jobs)] for start in range(min(max(1, jobs), len(keys)))]
+    processes = max(1, min(jobs, math.ceil(len(keys) / TASKS_PER_PROCESS)))
+    shares = [keys[start::processes] for start in range(processes)]
     with tempfile.TemporaryDirectory(prefix="task_bounds_") as directory:
         try:
             answers = _run_shares(command, shares, Path(directory), timeout_s)

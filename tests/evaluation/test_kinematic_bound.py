@@ -92,6 +92,16 @@ def test_bounds_asked_of_several_processes_come_back_for_the_tasks_each_was_give
     assert [r["kinematic_bound_s"] for r in bounded] == [fake_bound(seed) for seed in range(5)]
 
 
+def test_a_few_tasks_share_one_process_whatever_the_jobs(tmp_path: Path) -> None:
+    log = tmp_path / "calls.log"
+    rows = [row("bt", "random", seed, sim_time_s=90.0) for seed in range(3)]
+    bounded, problem = add_kinematic_bounds(rows, command=fake_bound_command(log), jobs=2)
+    assert problem is None
+    shares = [json.loads(line) for line in log.read_text().splitlines()]
+    assert [sorted(entry["seed"] for entry in share) for share in shares] == [[0, 1, 2]]
+    assert [r["kinematic_bound_s"] for r in bounded] == [fake_bound(seed) for seed in range(3)]
+
+
 def test_a_failing_bound_command_costs_the_bounds_not_the_evaluation(tmp_path: Path) -> None:
     failing = (sys.executable, "-c",
                "import sys; sys.stderr.write('traceback...\\nbroken world: no map\\n'); "

@@ -150,19 +150,26 @@ class LatticeGraph:
                       predecessors=predecessors[:self.nodes], source=self.source)
 
     def _edges(self, max_step: int) -> sparse.csr_matrix:
-        """Both directions of every step between two nodes; the virtual source's row empty."""
-        heads, tails, lengths = [], [], []
+        """Both directions of every step between two nodes; the virtual source's row empty.
+
+        Built row by row in CSR form: node ``n``'s steps are row ``n`` of a (nodes x steps)
+        table of the nodes they reach, so no sort of some ten million edges is needed."""
+        steps = step_directions(max_step)
         height, width = self.index.shape
-        for di, dj in step_directions(max_step):
-            a = self.index[max(0, -di):height - max(0, di), max(0, -dj):width - max(0, dj)]
-            b = self.index[max(0, di):height - max(0, -di), max(0, dj):width - max(0, -dj)]
-            both = (a >= 0) & (b >= 0)
-            heads.append(a[both])
-            tails.append(b[both])
-            lengths.append(np.full(int(both.sum()), math.hypot(di, dj) * self.resolution))
+        padded = np.full((height + 2 * max_step, width + 2 * max_step), -1, dtype=np.int32)
+        padded[max_step:max_step + height, max_step:max_step + width] = self.index
+        node_rows, node_cols = np.nonzero(self.index >= 0)  # row-major: node order
+        reached = np.empty((self.nodes, len(steps)), dtype=np.int32)
+        for column, (di, dj) in enumerate(steps):
+            reached[:, column] = padded[node_rows + max_step + di, node_cols + max_step + dj]
+        step = reached >= 0
+        lengths = np.array([math.hypot(di, dj) * self.resolution for di, dj in steps])
+        indptr = np.zeros(self.nodes + 2, dtype=np.int64)
+        np.cumsum(step.sum(axis=1), out=indptr[1:self.nodes + 1])
+        indptr[-1] = indptr[-2]
         size = self.nodes + 1
         return sparse.csr_matrix(
-            (np.concatenate(lengths), (np.concatenate(heads), np.concatenate(tails))),
+            (np.broadcast_to(lengths, reached.shape)[step], reached[step], indptr),
             shape=(size, size))
 
 
