@@ -113,7 +113,7 @@ class LatticeGraph:
         self._y0 = origin[1] + self._row0 * resolution
         self.x = self._x0 + node_cols * resolution
         self.y = self._y0 + node_rows * resolution
-        self._graph = self._edges(max_step)
+        self._edges(max_step)
 
     def junction_slack(self, junctions: int) -> float:
         """Metres the graph's copy may add for ``junctions`` points of a path that are no
@@ -137,23 +137,28 @@ class LatticeGraph:
         """Graph distances from the seeds, each starting at its value (metres)."""
         if seeds.size == 0:
             raise ValueError("a search needs at least one seed node")
-        base = self._graph
-        indptr = base.indptr.copy()
+        if seeds.size > self.nodes:
+            raise ValueError("a search has at most one seed per node")
+        edges = int(self._indptr[-1])
+        self._data[edges:edges + seeds.size] = values + SEED_OFFSET
+        self._indices[edges:edges + seeds.size] = seeds
+        indptr = self._indptr.copy()
         indptr[-1] += seeds.size
-        graph = sparse.csr_matrix(
-            (np.concatenate([base.data, values + SEED_OFFSET]),
-             np.concatenate([base.indices, seeds.astype(base.indices.dtype)]), indptr),
-            shape=base.shape)
+        graph = sparse.csr_matrix(  # views of the edges and this search's seed edges after them
+            (self._data[:edges + seeds.size], self._indices[:edges + seeds.size], indptr),
+            shape=(self.nodes + 1, self.nodes + 1), copy=False)
         distances, predecessors = csgraph.dijkstra(  # a 0-d index: 1-d results
             graph, directed=True, indices=np.asarray(self.source), return_predecessors=True)
         return Search(distances=distances[:self.nodes] - SEED_OFFSET,
                       predecessors=predecessors[:self.nodes], source=self.source)
 
-    def _edges(self, max_step: int) -> sparse.csr_matrix:
-        """Both directions of every step between two nodes; the virtual source's row empty.
+    def _edges(self, max_step: int) -> None:
+        """Both directions of every step between two nodes, in CSR form; the virtual source's
+        row last and empty, with room after the edges for a search's seed edges.
 
-        Built row by row in CSR form: node ``n``'s steps are row ``n`` of a (nodes x steps)
-        table of the nodes they reach, so no sort of some ten million edges is needed."""
+        Built row by row: node ``n``'s steps are row ``n`` of a (nodes x steps) table of the
+        nodes they reach, so no sort of some ten million edges is needed; and a search writes
+        its seeds into the room left for them rather than copying the edges."""
         steps = step_directions(max_step)
         height, width = self.index.shape
         padded = np.full((height + 2 * max_step, width + 2 * max_step), -1, dtype=np.int32)
@@ -163,14 +168,14 @@ class LatticeGraph:
         for column, (di, dj) in enumerate(steps):
             reached[:, column] = padded[node_rows + max_step + di, node_cols + max_step + dj]
         step = reached >= 0
+        self._indptr = np.zeros(self.nodes + 2, dtype=np.int32)
+        np.cumsum(step.sum(axis=1), out=self._indptr[1:self.nodes + 1])
+        self._indptr[-1] = edges = self._indptr[-2]
         lengths = np.array([math.hypot(di, dj) * self.resolution for di, dj in steps])
-        indptr = np.zeros(self.nodes + 2, dtype=np.int64)
-        np.cumsum(step.sum(axis=1), out=indptr[1:self.nodes + 1])
-        indptr[-1] = indptr[-2]
-        size = self.nodes + 1
-        return sparse.csr_matrix(
-            (np.broadcast_to(lengths, reached.shape)[step], reached[step], indptr),
-            shape=(size, size))
+        self._data = np.empty(edges + self.nodes)
+        self._data[:edges] = np.broadcast_to(lengths, reached.shape)[step]
+        self._indices = np.empty(edges + self.nodes, dtype=np.int32)
+        self._indices[:edges] = reached[step]
 
 
 def _corners_of(free: np.ndarray) -> np.ndarray:
