@@ -269,3 +269,31 @@ def test_seeds_whose_walkers_stand_in_the_cafes_only_door_play_their_next_draw()
         assert unreachable_areas(engine) == []
         again = playable_engine(office, seed=seed, difficulty=difficulty)
         assert again.crowd.states() == engine.crowd.states()
+
+
+def test_a_walker_that_passes_before_the_held_walker_stands_queues_behind_it_a_lap_later() -> None:
+    """Hard 40's first draw: the guest, out of range outside PrivateOfficeC, holds walker 20520
+    in the corridor for good from 8 s on. Walker 59185 starts 4 m west of that spot and walks
+    east past it at once, before 20520 gets there; it comes back round its loop from the east
+    and stands behind 20520, in the office's door, from about 38 s on. The check marks it
+    there, as the walking crowd (the robot parked at its start) stands, not at its start; the
+    pick-up area is cut off, and the seed plays its next draw."""
+    office: World = load_world(DEFAULT_WORLD)
+    first = SimEngine(world=office, scenario=make_scenario(office, seed=40,
+                                                           difficulty=Difficulty.hard()))
+    expected = held(first)
+    task = first.scenario.task
+    assert unreachable_areas(first) == [task.pick_up] == ["PrivateOfficeC"]
+    walker = next(w for w in first.crowd.walkers if w.person.name == "human_59185")
+    start = (walker.person.x, walker.person.y)
+    assert all(math.hypot(x - start[0], y - start[1]) > 0.3 for x, y in expected)
+    for _ in range(1200):
+        first.crowd.step(0.1, robot=(task.start_x, task.start_y, task.start_yaw),
+                         others=[(task.guest_x, task.guest_y)])
+    standing = sorted((w.person.x, w.person.y) for w in first.crowd.walkers if w.waited > 5.0)
+    assert len(standing) == len(expected) == 3
+    for (x, y), (ex, ey) in zip(standing, sorted(expected), strict=True):
+        assert math.hypot(x - ex, y - ey) < 0.15
+    assert math.hypot(walker.person.x + 20.7, walker.person.y - 18.8) < 0.2  # in the door
+    engine = playable_engine(office, seed=40, difficulty=Difficulty.hard())
+    assert engine.scenario == make_scenario(office, seed=40, difficulty=Difficulty.hard(), draw=1)

@@ -562,32 +562,42 @@ class Walker:
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
         return any(in_stop_lane(px - x, py - y, cos, sin, below=below) for px, py in points)
 
-    def stops_for_good(self, still: NDArray[np.float64]) -> tuple[float, float, float] | None:
+    def stops_for_good(self, still: NDArray[np.float64], *, after_m: float = 0.0
+                       ) -> tuple[float, float, float] | None:
         """Where this walker, walking on from here, first has one of ``still`` (n, 2: people
         who never move) in its lane, and so stands for good, as (metres walked to get there,
-        x, y); None when its loop passes them all.
+        x, y); None when its loop passes them all. ``after_m``: look from that many metres on
+        (a lap from there).
 
         The loop is sampled every :data:`STOP_SEARCH_STEP` metres, each sample facing the way
         :meth:`advance` faces the walker there; the lane is :meth:`blocked`'s.
         """
         if still.size == 0:
             return None
+        steps = after_m + np.arange(0.0, float(self.along[-1]), STOP_SEARCH_STEP)
+        xs, ys, cos, sin = self._poses_after(steps)
+        hits = in_stop_lane(still[None, :, 0] - xs[:, None], still[None, :, 1] - ys[:, None],
+                            cos[:, None], sin[:, None]).any(axis=1)
+        if not hits.any():
+            return None
+        first = int(np.argmax(hits))
+        return float(steps[first]), float(xs[first]), float(ys[first])
+
+    def pose_after(self, metres: float) -> tuple[float, float, float, float]:
+        """(x, y, cos, sin) where the walker is, and the way it faces, once it has walked
+        ``metres`` on from here."""
+        xs, ys, cos, sin = self._poses_after(np.array([metres]))
+        return float(xs[0]), float(ys[0]), float(cos[0]), float(sin[0])
+
+    def _poses_after(self, steps: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
         along = self.along
-        length = float(along[-1])
-        steps = np.arange(0.0, length, STOP_SEARCH_STEP)
-        spots = (self.travelled + self.direction * steps) % length
+        spots = (self.travelled + self.direction * steps) % float(along[-1])
         legs = np.clip(np.searchsorted(along, spots, side="right") - 1, 0, len(along) - 2)
         t = (spots - along[legs]) / (along[legs + 1] - along[legs])
         xs = self.route[legs, 0] + t * (self.route[legs + 1, 0] - self.route[legs, 0])
         ys = self.route[legs, 1] + t * (self.route[legs + 1, 1] - self.route[legs, 1])
         ways = np.array([(cos, sin) for _, cos, sin in self._facings[self.direction > 0]])
-        cos, sin = ways[legs, 0:1], ways[legs, 1:2]
-        hits = in_stop_lane(still[None, :, 0] - xs[:, None], still[None, :, 1] - ys[:, None],
-                            cos, sin).any(axis=1)
-        if not hits.any():
-            return None
-        first = int(np.argmax(hits))
-        return float(steps[first]), float(xs[first]), float(ys[first])
+        return xs, ys, ways[legs, 0], ways[legs, 1]
 
 
 # ------------------------------------------------------------------------------------ crowd
@@ -644,6 +654,22 @@ def fresh_names(rng: np.random.Generator, count: int, *, taken: set[str]) -> lis
             used.add(name)
             names.append(name)
     return names
+
+
+def _queued(walker: Walker, holder: Walker, spot: NDArray[np.float64],
+            arrival_s: float) -> tuple[float, float, float] | None:
+    """Where ``walker`` stands for good behind ``holder``, who stands at ``spot`` from
+    ``arrival_s`` on (as :meth:`Walker.stops_for_good`). A walker whose lane meets the spot
+    before then has walked past it, unless the holder, on its way there, is ahead in its lane
+    at that moment (it follows the holder, and queues); it then meets them a lap on."""
+    stop = walker.stops_for_good(spot)
+    if stop is None or stop[0] >= arrival_s * walker.speed:
+        return stop
+    x, y, cos, sin = walker.pose_after(stop[0])
+    hx, hy, _, _ = holder.pose_after(stop[0] / walker.speed * holder.speed)
+    if in_stop_lane(hx - x, hy - y, cos, sin):
+        return stop
+    return walker.stops_for_good(spot, after_m=arrival_s * walker.speed)
 
 
 class Crowd:
@@ -791,13 +817,14 @@ class Crowd:
                         if stop is not None]
             if not arrivals:
                 return held
-            _, first, x, y = min(arrivals)
-            del waiting[first], stops[first]
+            arrival, first, x, y = min(arrivals)
+            holder = waiting.pop(first)
+            del stops[first]
             held.append((x, y))
             # the first stop among more people: the earlier of the old one and the new one's
             spot = np.array([[x, y]])
-            stops = [min(filter(None, (stop, walker.stops_for_good(spot))), default=None)
-                     for walker, stop in zip(waiting, stops, strict=True)]
+            stops = [min(filter(None, (stop, _queued(walker, holder, spot, arrival))),
+                         default=None) for walker, stop in zip(waiting, stops, strict=True)]
 
     def states(self) -> list[tuple[str, str, float, float]]:
         """(name, role, x, y) of everybody, walkers first."""
