@@ -797,8 +797,9 @@ class Crowd:
 
         Each walker is taken to walk on from its start at its speed, the robot and the moving
         walkers aside, and to stop at the first such person in its lane. The walker that gets
-        to its stop first is held there; the others are looked at again with it standing,
-        until none is held. None when walkers turn back from the people who block them.
+        to its stop first is held there; the others are looked at again with it standing
+        (each where it comes along once it stands there: :func:`_queued`), until none is held.
+        None when walkers turn back from the people who block them.
         """
         if not math.isinf(self.walker_patience_s):
             return []
