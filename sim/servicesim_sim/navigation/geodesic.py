@@ -113,7 +113,7 @@ class LatticeGraph:
         self._y0 = origin[1] + self._row0 * resolution
         self.x = self._x0 + node_cols * resolution
         self.y = self._y0 + node_rows * resolution
-        self._edges(max_step)
+        self._indptr, self._data, self._indices = self._edges(max_step)
 
     def junction_slack(self, junctions: int) -> float:
         """Metres the graph's copy may add for ``junctions`` points of a path that are no
@@ -134,7 +134,8 @@ class LatticeGraph:
         return np.array(found, dtype=np.int64)
 
     def search(self, seeds: np.ndarray, values: np.ndarray) -> Search:
-        """Graph distances from the seeds, each starting at its value (metres)."""
+        """Graph distances from the seeds, each starting at its value (metres). The seeds are
+        written into the room the lattice keeps for them: one search at a time."""
         if seeds.size == 0:
             raise ValueError("a search needs at least one seed node")
         if seeds.size > self.nodes:
@@ -152,9 +153,11 @@ class LatticeGraph:
         return Search(distances=distances[:self.nodes] - SEED_OFFSET,
                       predecessors=predecessors[:self.nodes], source=self.source)
 
-    def _edges(self, max_step: int) -> None:
-        """Both directions of every step between two nodes, in CSR form; the virtual source's
-        row last and empty, with room after the edges for a search's seed edges.
+    def _edges(self, max_step: int) -> tuple[NDArray[np.int32], NDArray[np.float64],
+                                              NDArray[np.int32]]:
+        """Both directions of every step between two nodes, in CSR form (row pointers, lengths,
+        nodes reached); the virtual source's row last and empty, with room after the edges for
+        a search's seed edges.
 
         Built row by row: node ``n``'s steps are row ``n`` of a (nodes x steps) table of the
         nodes they reach, so no sort of some ten million edges is needed; and a search writes
@@ -168,14 +171,15 @@ class LatticeGraph:
         for column, (di, dj) in enumerate(steps):
             reached[:, column] = padded[node_rows + max_step + di, node_cols + max_step + dj]
         step = reached >= 0
-        self._indptr = np.zeros(self.nodes + 2, dtype=np.int32)
-        np.cumsum(step.sum(axis=1), out=self._indptr[1:self.nodes + 1])
-        self._indptr[-1] = edges = self._indptr[-2]
+        indptr = np.zeros(self.nodes + 2, dtype=np.int32)
+        np.cumsum(step.sum(axis=1), out=indptr[1:self.nodes + 1])
+        indptr[-1] = edges = indptr[-2]
         lengths = np.array([math.hypot(di, dj) * self.resolution for di, dj in steps])
-        self._data = np.empty(edges + self.nodes)
-        self._data[:edges] = np.broadcast_to(lengths, reached.shape)[step]
-        self._indices = np.empty(edges + self.nodes, dtype=np.int32)
-        self._indices[:edges] = reached[step]
+        data = np.empty(edges + self.nodes)
+        data[:edges] = np.broadcast_to(lengths, reached.shape)[step]
+        indices = np.empty(edges + self.nodes, dtype=np.int32)
+        indices[:edges] = reached[step]
+        return indptr, data, indices
 
 
 def _corners_of(free: np.ndarray) -> np.ndarray:
