@@ -11,8 +11,9 @@ then the failures over all runs, test by test. Each run's whole output is kept i
 
 This is how a flaky test is found: one that fails even once in the runs waits on wall time
 somewhere, or the code it tests has a race. Figures are wall-clock on this machine; nothing is
-asserted. Ctrl-C stops the run under way and the hogs, still prints the table of the runs
-that finished and exits with status 130. Bad arguments give one line and exit status 2.
+asserted. Ctrl-C (or SIGTERM, or SIGHUP) stops the run under way and the hogs, still prints
+the table of the runs that finished and exits with status 130. Bad arguments give one line and
+exit status 2.
 """
 
 from __future__ import annotations
@@ -146,6 +147,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"logs in {folder}", flush=True)
     done: list[SuiteRun] = []
     interrupted = False
+    for stop_signal in (signal.SIGTERM, signal.SIGHUP):  # a stop as Ctrl-C: run and hogs end
+        signal.signal(stop_signal, signal.default_int_handler)
     hog_processes = start_hogs(hogs)
     try:
         for number in range(1, runs + 1):

@@ -5,12 +5,17 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 import re
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
+
+from bt_servicesim.evaluation.episodes import descendants
 
 SIM_RTF = Path(__file__).resolve().parents[2] / "benchmarks" / "sim_rtf.py"
 STARTUP = SIM_RTF.with_name("startup.py")
@@ -116,6 +121,56 @@ def test_the_suite_under_load_benchmark_names_each_failing_test_and_the_counts()
     assert run.counts == {"failed": 1, "passed": 2074, "error": 1}
     assert run.pytest_s == 361.27
     assert "failing: tests/sim/test_x.py::test_y[1]; tests/commands/test_z.py::test_w" in run.line()
+
+
+SLEEPING_TEST = """
+import pathlib, time
+
+def test_sleeps():  # runs until it is stopped
+    pathlib.Path(__file__).with_suffix(".started").write_text("up")
+    time.sleep(120)
+"""
+
+
+def test_sigterm_stops_the_suite_under_load_benchmark_its_run_and_its_hogs(
+        tmp_path: Path) -> None:
+    test_file = tmp_path / "test_sleeping.py"
+    test_file.write_text(SLEEPING_TEST)
+    benchmark = subprocess.Popen(
+        [sys.executable, str(SIM_RTF.with_name("suite_under_load.py")), "--runs", "2", "--jobs",
+         "1", "--log-dir", str(tmp_path / "logs"), "--", str(test_file), "-p", "no:randomly"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    started: list[int] = []
+    try:
+        deadline = time.monotonic() + 60.0
+        while not test_file.with_suffix(".started").exists():
+            assert benchmark.poll() is None and time.monotonic() < deadline, \
+                benchmark.communicate()
+            time.sleep(0.1)
+        started = descendants(benchmark.pid)
+        assert len(started) >= 3  # the hog, pytest and its worker
+        benchmark.send_signal(signal.SIGTERM)
+        stdout, stderr = benchmark.communicate(timeout=60)
+    finally:
+        for pid in [benchmark.pid, *started]:  # whatever the benchmark left, this test ends
+            if alive(pid):
+                os.kill(pid, signal.SIGKILL)
+        benchmark.wait()
+    assert benchmark.returncode == 130, stderr
+    assert "interrupted: the run under way is stopped" in stderr
+    assert "0 run(s) of the suite" in stdout
+    deadline = time.monotonic() + 30.0
+    while any(alive(pid) for pid in started) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(alive(pid) for pid in started), "the run and the hog are gone"
+
+
+def alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False
 
 
 @pytest.mark.parametrize(("arguments", "named"), [

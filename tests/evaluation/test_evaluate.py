@@ -63,10 +63,10 @@ def write(report):
 
 write({**header, "status": "running"})
 if mode == "hang":
-    orphan = subprocess.Popen([sys.executable, "-c", ORPHAN, out], start_new_session=True)
-    with open(os.path.join(out, "pids"), "w") as f:
-        f.write(f"{os.getpid()} {orphan.pid}")
-    try:
+    try:  # from the moment it is seen to run (its orphan up), Ctrl-C is handled, as the run's
+        orphan = subprocess.Popen([sys.executable, "-c", ORPHAN, out], start_new_session=True)
+        with open(os.path.join(out, "pids"), "w") as f:
+            f.write(f"{os.getpid()} {orphan.pid}")
         time.sleep(120)
     except KeyboardInterrupt:  # as the run: stop, write the report, exit 130
         write({**header, "status": "interrupted", "completed": False, "score": 0.0,
