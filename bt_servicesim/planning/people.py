@@ -22,7 +22,7 @@ import numpy as np
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 
-__all__ = ["LETHAL", "WALL_MARGIN", "Costmap2D", "people_on_costmap"]
+__all__ = ["LETHAL", "WALL_MARGIN", "Costmap2D", "people_on_costmap", "people_within"]
 
 LETHAL = 100
 """The ``OccupancyGrid`` value of an obstacle's own cells, as Nav2's publisher translates its
@@ -32,6 +32,8 @@ WALL_MARGIN = 0.15
 coarse costmap cell takes the nearest wall of the map cells it covers."""
 MIN_CELLS = 3
 """A disc of fewer cells is noise, not a person (a person's is about 0.6 m across)."""
+PERSON_DISC_RADIUS = 0.3
+"""Metres: half a person's disc of lethal cells."""
 
 
 @dataclass(frozen=True)
@@ -95,3 +97,12 @@ def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y
     centres = np.column_stack([xs, ys])[sizes >= MIN_CELLS]
     order = np.argsort(np.hypot(centres[:, 0] - x, centres[:, 1] - y), kind="stable")
     return centres[order]
+
+
+def people_within(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
+                  radius: float) -> np.ndarray:
+    """Centres of the people's discs on ``costmap`` no more than ``radius`` metres from (x, y),
+    nearest first; shape (n, 2). The costmap is searched a body's width beyond ``radius``, so
+    that a disc the circle cuts is found whole, at its true centre."""
+    people = people_on_costmap(costmap, walls, x=x, y=y, reach=radius + 2 * PERSON_DISC_RADIUS)
+    return people[np.hypot(people[:, 0] - x, people[:, 1] - y) <= radius]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
-from bt_servicesim.planning.people import Costmap2D, people_on_costmap
+from bt_servicesim.planning.people import Costmap2D, people_on_costmap, people_within
 from tests.fakes.maps import costmap_of, grid_message
 
 WIDTH, HEIGHT, RESOLUTION = 10.0, 6.0, 0.1
@@ -53,6 +53,19 @@ def test_only_people_within_reach_count() -> None:
     found = people_on_costmap(everyone, walls(), x=1.0, y=3.0, reach=3.0)
     assert found == pytest.approx(np.array([[1.5, 3.0]]), abs=0.06)
     assert people_on_costmap(everyone, walls(), x=40.0, y=40.0, reach=3.0).shape == (0, 2)
+
+
+def test_people_within_a_radius_are_measured_from_their_centre_not_their_discs_edge() -> None:
+    everyone = costmap([(4.0, 3.0), (6.05, 3.0), (5.0, 4.4)])
+    found = people_within(everyone, walls(), x=5.0, y=3.0, radius=1.0)
+    assert found == pytest.approx(np.array([[4.0, 3.0]]), abs=0.06)  # 6.05 is 1.05 m away
+    two = people_within(everyone, walls(), x=5.0, y=3.0, radius=1.5)
+    assert two == pytest.approx(np.array([[4.0, 3.0], [6.05, 3.0], [5.0, 4.4]]), abs=0.06)
+
+
+def test_a_disc_the_circle_cuts_is_found_at_its_true_centre() -> None:
+    found = people_within(costmap([(5.9, 3.0)]), walls(), x=5.0, y=3.0, radius=1.0)
+    assert found == pytest.approx(np.array([[5.9, 3.0]]), abs=0.06)
 
 
 def test_the_costmap_keeps_its_frame_and_stamp_and_a_broken_one_is_refused() -> None:

@@ -263,6 +263,24 @@ def test_a_waypoint_that_fails_twice_is_heard_from_as_near_as_the_way_allows_the
                          "FindSpotNearWaypoint", "NavigateNearWaypoint", "NextWaypoint"]
 
 
+def test_a_waypoint_someone_stands_beside_is_heard_from_the_nearest_spot_clear_of_them(
+) -> None:
+    script = Script({
+        "GuestAlreadyInRange": [Status.FAILURE],
+        "Explore.GuestInRange": [Status.FAILURE] * 25,
+        "WaypointClearOfPeople": [Status.FAILURE] + [Status.SUCCESS] * 100,
+        "NavigateToWaypoint": [(Status.SUCCESS, 10)] * 100,
+        **NOT_BLOCKED,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    steps = [c.rsplit(".", 1)[-1] for c in script.calls
+             if c.endswith(("NextWaypoint", "NavigateToWaypoint", "FindSpotNearWaypoint",
+                            "NavigateNearWaypoint"))]
+    assert steps[:5] == ["NextWaypoint", "FindSpotNearWaypoint", "NavigateNearWaypoint",
+                         "NextWaypoint", "NavigateToWaypoint"]
+
+
 def test_a_waypoint_with_nothing_reachable_near_it_is_skipped() -> None:
     script = Script({
         "GuestAlreadyInRange": [Status.FAILURE],
