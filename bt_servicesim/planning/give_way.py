@@ -76,6 +76,7 @@ __all__ = [
     "Standstill",
     "doorway",
     "give_way_spot",
+    "guest_in_tow",
     "held_up_on_costmap",
     "local_grid_around",
     "passage_axis",
@@ -437,15 +438,21 @@ def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -
     with the robot, so no spot need keep clear of where they stand now. Nobody on the trail:
     ``people`` as they are."""
     people = np.asarray(people, dtype=float).reshape(-1, 2)
+    guest = guest_in_tow(people, robot=robot, trail=trail)
+    return people if guest is None else np.delete(people, guest, axis=0)
+
+
+def guest_in_tow(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> int | None:
+    """Which of ``people`` is the guest in tow (:func:`without_the_guest` says how it is
+    told), by index; None if nobody stands on the trail."""
+    people = np.asarray(people, dtype=float).reshape(-1, 2)
     if not people.size or not trail.size:
-        return people
+        return None
     gaps = np.hypot(people[:, None, 0] - trail[None, :, 0], people[:, None, 1] - trail[None, :, 1])
     on_trail = gaps <= ON_TRAIL
     passed = np.where(on_trail.any(axis=1), np.argmax(on_trail, axis=1), trail.shape[0])
     guest = int(np.argmin(passed))
-    if passed[guest] == trail.shape[0]:
-        return people
-    return np.delete(people, guest, axis=0)
+    return None if passed[guest] == trail.shape[0] else guest
 
 
 def local_grid_around(grid: OccupancyGrid2D, robot: Pose2D, reach: float, *,

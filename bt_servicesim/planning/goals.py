@@ -32,6 +32,8 @@ from bt_servicesim.planning.rules import (
     GOAL_TOLERANCE,
     GUEST_SPAWN_PADDING,
     PEOPLE_LANE_LENGTH,
+    PERSON_APPROXIMATION_RADIUS,
+    PERSON_BODY_RADIUS,
     PICKUP_REACH,
     ROBOT_FOOTPRINT,
 )
@@ -66,6 +68,10 @@ STAY_MARGIN = 0.1
 """A robot whose trailing guest has this :func:`trailing_margin` may stay where it is."""
 GUEST_BERTH = 0.6
 """A robot's last leg keeps this far from where the guest stands (people are obstacles)."""
+PEOPLE_KEEP = PERSON_APPROXIMATION_RADIUS + PERSON_BODY_RADIUS
+"""Metres a drop-off goal, and the guest's spot behind it, keep from anyone else standing
+near: the referee's ghost cylinder and a body. The guest stays there for good, the robot until
+the referee answers."""
 SIGHT_LOOKBACK = 20.0
 """How far back along the route the robot's last turn before a spot is looked for."""
 SIGHT_STRIDE = 3
@@ -201,7 +207,8 @@ class TrailingPlan(NamedTuple):
 
 
 def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
-                  doorways: Sequence[Point] = ()) -> TrailingPlan | None:
+                  doorways: Sequence[Point] = (),
+                  people: np.ndarray | None = None) -> TrailingPlan | None:
     """A robot goal that leaves the FOLLOWING GUEST inside the drop-off ``box``.
 
     Checkpoint 3 checks the guest's origin, not the robot's, and the guest walks along the
@@ -245,46 +252,75 @@ def drop_off_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
     (:func:`~bt_servicesim.planning.way_out.way_back_open`). A guest left in the middle of a
     corridor shuts it for good; a walker who then comes from ahead waits for the robot, and
     the robot stands between the two until the mission's time runs out.
+
+    ``people`` (n, 2) are the others the robot sees standing near (navigation's costmap, the
+    guest in tow left out). They stand in the way back as the guest does, and the goal and the
+    guest spot keep :data:`PEOPLE_KEEP` from each where any plan can: two walkers who wait for
+    each other, or an idler, can stand in a drop-off room for good, and a goal beside them
+    leaves the robot booked, and boxed in, for the rest of the mission. Then the doorways are
+    given up before the people, and the people before the way back.
     """
     routes = grid.routes_from(robot.x, robot.y, ROBOT_CLEARANCE)
     if routes is None:
         return None
+    people = np.zeros((0, 2)) if people is None else np.asarray(people, dtype=float).reshape(-1, 2)
     stay = _staying_plan(box, robot)
     clear_of_guest = _clear_of(stay.guest_spot)
-    way_out = _way_back_stays_open(grid, routes)
-    for need_way_out in (True, False):
-        for keep_off_doors in ((True, False) if doorways else (False,)):
-            def keep(candidate: TrailingPlan, off_doors: bool = keep_off_doors,
-                     open_way: bool = need_way_out) -> bool:
-                return (clear_of_guest(candidate)
-                        and (not off_doors or _off_doorways(candidate, doorways))
-                        and (not open_way or way_out(candidate)))
+    way_out = _way_back_stays_open(grid, routes, people)
+    for need_way_out, mind_people, off_doors in _relaxations(doorways, people):
+        def allowed(candidate: TrailingPlan, open_way: bool = need_way_out,
+                    mind: bool = mind_people, doors: bool = off_doors) -> bool:
+            return ((not doors or _off_doorways(candidate, doorways))
+                    and (not mind or _clear_of_people(candidate, people))
+                    and (not open_way or way_out(candidate)))
 
-            plans = list(_trailing_plans(box, grid, routes, robot, keep=keep))
-            if stay.margin >= STAY_MARGIN and (
-                    not keep_off_doors or _off_doorways(stay, doorways)) and (
-                    not need_way_out or way_out(stay)):
-                plans.append(stay)
-            plan = _best_plan(plans)
-            if plan is not None:
-                return plan
+        def keep(candidate: TrailingPlan,
+                 allowed: Callable[[TrailingPlan], bool] = allowed) -> bool:
+            return clear_of_guest(candidate) and allowed(candidate)
+
+        plans = list(_trailing_plans(box, grid, routes, robot, keep=keep))
+        if stay.margin >= STAY_MARGIN and allowed(stay):
+            plans.append(stay)
+        plan = _best_plan(plans)
+        if plan is not None:
+            return plan
     return _inside_fallback(box, grid, robot, routes)
 
 
-def _way_back_stays_open(grid: OccupancyGrid2D,
-                         routes: RouteTree) -> Callable[[TrailingPlan], bool]:
+def _relaxations(doorways: Sequence[Point],
+                 people: np.ndarray) -> list[tuple[bool, bool, bool]]:
+    """What a drop-off plan must do, strictest first: (leave the way back open, keep clear of
+    the people, keep off the doorways). The doorways are given up first, then the people, then
+    the way back; a rule with nothing to apply it to (no doorways, nobody near) is never tried
+    off."""
+    return [(way_out, mind_people, off_doors)
+            for way_out in (True, False)
+            for mind_people in ((True, False) if len(people) else (False,))
+            for off_doors in ((True, False) if doorways else (False,))]
+
+
+def _way_back_stays_open(grid: OccupancyGrid2D, routes: RouteTree,
+                         people: np.ndarray) -> Callable[[TrailingPlan], bool]:
     """Whether the robot at a plan's goal can get back past the guest standing at its guest
-    spot (give or take TRAIL_ACROSS_ERROR), to the arrival route
-    :data:`~bt_servicesim.planning.way_out.WAY_BACK` before it
+    spot (give or take TRAIL_ACROSS_ERROR) and the ``people`` standing where they are, to the
+    arrival route :data:`~bt_servicesim.planning.way_out.WAY_BACK` before it
     (:func:`~bt_servicesim.planning.way_out.way_back_open`)."""
 
     def stays_open(plan: TrailingPlan) -> bool:
         back = way_back_point(routes, plan.guest_spot)
         return back is not None and way_back_open(
             grid, goal=(plan.goal.x, plan.goal.y), guest_spot=plan.guest_spot, back=back,
-            guest_spread=TRAIL_ACROSS_ERROR)
+            guest_spread=TRAIL_ACROSS_ERROR, people=people if len(people) else None)
 
     return stays_open
+
+
+def _clear_of_people(plan: TrailingPlan, people: np.ndarray) -> bool:
+    """Whether the plan's goal and guest spot keep PEOPLE_KEEP from everyone in ``people``."""
+    for x, y in ((plan.goal.x, plan.goal.y), plan.guest_spot):
+        if np.any(np.hypot(people[:, 0] - x, people[:, 1] - y) < PEOPLE_KEEP):
+            return False
+    return True
 
 
 def _off_doorways(plan: TrailingPlan, doorways: Sequence[Point]) -> bool:

@@ -119,18 +119,41 @@ class PickupGoal(_Computation):
 
 class DropOffGoal(_Computation):
     """The drop-off goal that leaves the trailing guest in the box (:func:`drop_off_goal`),
-    clear of the doorways near the box (:func:`doorways_near`)."""
+    clear of the doorways near the box (:func:`doorways_near`) and of the people navigation's
+    costmap shows standing near the box (:func:`people_on_costmap`), the guest in tow left out
+    (:func:`without_the_guest`, from the robot's trail in the RFID history). Without a costmap
+    or a history it is planned without people."""
 
-    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    INPUT_PORTS: Ports = {
+        "box": BOX,
+        "occupancy": OCCUPANCY,
+        "robot_pose": ROBOT_POSE,
+        "costmap": PortInformation(data_type=Costmap2D, required=False,
+                                   description="navigation's costmap, where people stand"),
+        "rfid_history": PortInformation(data_type=RfidHistory, required=False,
+                                        description="where the robot was (its trail), to tell "
+                                                    "the guest in tow from the others"),
+    }
     OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "DropOffGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
 
-    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
+    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D,
+                costmap: Costmap2D | None, rfid_history: RfidHistory | None) -> Pose2D | None:
         doorways = doorways_near(occupancy, box)
-        plan = drop_off_goal(box, occupancy, robot_pose, doorways=doorways)
-        return _report_plan(self, plan, "drop-off goal", "no reachable drop-off goal")
+        people = None
+        if costmap is not None and rfid_history is not None:
+            centre_x, centre_y = box.centre
+            people = without_the_guest(
+                people_on_costmap(costmap, occupancy, x=centre_x, y=centre_y, reach=PEOPLE_REACH),
+                robot=robot_pose,
+                trail=recent_trail([(reading.x, reading.y) for reading in rfid_history]))
+        plan = drop_off_goal(box, occupancy, robot_pose, doorways=doorways, people=people)
+        goal = _report_plan(self, plan, "drop-off goal", "no reachable drop-off goal")
+        if people is not None:
+            self.feedback_message += f" ({_seen(people)})"
+        return goal
 
 
 class DropOffRepositionGoal(_Computation):

@@ -183,6 +183,28 @@ def test_drop_off_goal_leaves_the_trailing_guest_in_the_box(
     assert heading[0] * to_guest[0] + heading[1] * to_guest[1] > 0.0
 
 
+def test_drop_off_goal_keeps_clear_of_someone_standing_at_it_and_not_of_the_guest_in_tow(
+) -> None:
+    grid, box = open_room(), centred_box(3.0, 3.0)
+    robot = Pose2D(4.0, 7.0)
+    history = RfidHistory()
+    drive(history, [(1.0, 7.0), (robot.x, robot.y)], guest=(40.0, 40.0))
+    guest_in_tow = (robot.x - TRAIL, robot.y)
+    alone = output(run(DropOffGoal(), box=box, occupancy=grid, robot_pose=robot))
+    with_the_guest = run(DropOffGoal(), box=box, occupancy=grid, robot_pose=robot,
+                         costmap=costmap_of(grid, [guest_in_tow]), rfid_history=history)
+    assert output(with_the_guest) == alone  # the guest on the trail behind is left out
+    assert with_the_guest.feedback_message.endswith("(nobody near)")
+    someone = (alone.x, alone.y)
+    beside = run(DropOffGoal(), box=box, occupancy=grid, robot_pose=robot,
+                 costmap=costmap_of(grid, [guest_in_tow, someone]), rfid_history=history)
+    goal = output(beside)
+    assert beside.status == Status.SUCCESS, beside.feedback_message
+    assert math.dist((goal.x, goal.y), someone) >= 1.0
+    assert math.dist(trailing_spot(goal), someone) >= 1.0
+    assert "1 people near" in beside.feedback_message
+
+
 @pytest.mark.parametrize("robot", [Pose2D(3.0, 10.0), Pose2D(3.0, 1.0), Pose2D(2.0, 5.6)])
 def test_drop_off_goal_behind_a_door_is_approached_through_the_door(robot: Pose2D) -> None:
     grid, box = room_with_door(), Box(8.2, 6.2, 11.2, 9.2)  # 3x3 inside, at the door corner
@@ -456,11 +478,13 @@ BEHAVIOURS = [PickupGoal, DropOffGoal, DropOffRepositionGoal, ReturnGoal, Jitter
 def test_every_missing_input_fails_with_a_message_naming_it(kind: type) -> None:
     grid = open_room()
     everything = {**FULL_INPUTS, "occupancy": grid}
-    complete = run(kind(), **{port: everything[port] for port in kind.input_ports()})
+    required = [port for port, information in kind.input_ports().items()
+                if information.required]
+    complete = run(kind(), **{port: everything[port] for port in required})
     assert complete.status == Status.SUCCESS, complete.feedback_message
-    for missing in kind.input_ports():
+    for missing in required:
         Blackboard.clear()
-        inputs = {port: everything[port] for port in kind.input_ports() if port != missing}
+        inputs = {port: everything[port] for port in required if port != missing}
         behaviour = run(kind(), **inputs)
         assert behaviour.status == Status.FAILURE
         assert missing in behaviour.feedback_message

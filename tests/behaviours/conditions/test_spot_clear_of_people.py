@@ -13,6 +13,7 @@ import py_trees
 from bt_servicesim.behaviours.conditions.spot_clear_of_people import SpotClearOfPeople
 from bt_servicesim.behaviours.node import kind_of
 from bt_servicesim.planning.geometry import Pose2D
+from bt_servicesim.planning.guest_localisation import RfidHistory, RfidReading
 from tests.fakes.leaves import wire
 from tests.fakes.maps import costmap_of, open_room
 
@@ -70,3 +71,31 @@ def test_without_a_spot_it_fails_saying_so() -> None:
 
 def test_it_is_a_condition() -> None:
     assert kind_of(SpotClearOfPeople) == "Condition"
+
+
+def test_the_guest_in_tow_stopping_behind_the_robot_at_its_goal_is_left_out() -> None:
+    grid = open_room()
+    history = RfidHistory()
+    for t in range(11):  # the robot came along y = 7 to (7.4, 7); the guest stops 1.2 m back
+        history.add(RfidReading(stamp=float(t), x=2.4 + 0.5 * t, y=7.0, names=frozenset()))
+    robot = Pose2D(7.4, 7.0, 0.0)
+    costmap = costmap_of(grid, [(6.2, 7.0)])  # 0.8 m short of the spot (7, 7)
+    leading = check(spot=SPOT, occupancy=grid, costmap=costmap, guest_follows=True,
+                    robot_pose=robot, rfid_history=history)
+    assert leading.status == Status.SUCCESS
+    alone = check(spot=SPOT, occupancy=grid, costmap=costmap, guest_follows=False,
+                  robot_pose=robot, rfid_history=history)
+    assert alone.status == Status.FAILURE
+
+
+def test_with_the_guest_in_tow_someone_else_beside_the_spot_still_counts() -> None:
+    grid = open_room()
+    history = RfidHistory()
+    for t in range(11):
+        history.add(RfidReading(stamp=float(t), x=2.4 + 0.5 * t, y=7.0, names=frozenset()))
+    robot = Pose2D(7.4, 7.0, 0.0)
+    costmap = costmap_of(grid, [(6.2, 7.0), (7.2, 7.7)])
+    condition = check(spot=SPOT, occupancy=grid, costmap=costmap, guest_follows=True,
+                      robot_pose=robot, rfid_history=history)
+    assert condition.status == Status.FAILURE
+    assert condition.feedback_message == "1 people within 1.0 m of (7.0, 7.0): (7.2, 7.7)"
