@@ -371,36 +371,52 @@ class Pinged:
         return drains
 
     def close(self) -> None:
+        """Both executors shut down and both nodes destroyed, before the test's context is:
+        an executor left to the garbage collector warns once the context is gone."""
         self.executor.shutdown()
+        self.client_executor.shutdown()
         self.client_node.destroy_node()
         self.node.destroy_node()
 
 
-def test_one_drain_answers_every_waiting_request(ros_context: Context) -> None:
-    pinged = Pinged(ros_context, drain_budget_s=30.0)  # only "nothing left" ends a drain
-    pinged.flood(50)
-    assert pinged.drains_until(50) <= 5  # one, unless some were still on their way (was 50)
-    pinged.close()
+@pytest.fixture
+def pinged(ros_context: Context) -> Iterator[Callable[..., Pinged]]:
+    """Makes :class:`Pinged` nodes on the test's context; each is closed after the test, pass
+    or fail, before the context is shut down."""
+    made: list[Pinged] = []
+
+    def make(**kwargs: Any) -> Pinged:
+        made.append(Pinged(ros_context, **kwargs))
+        return made[-1]
+
+    yield make
+    for each in made:
+        each.close()
+
+
+def test_one_drain_answers_every_waiting_request(pinged: Callable[..., Pinged]) -> None:
+    drained = pinged(drain_budget_s=30.0)  # only "nothing left" ends a drain
+    drained.flood(50)
+    assert drained.drains_until(50) <= 5  # one, unless some were still on their way (was 50)
 
 
 def test_a_flood_is_served_over_several_drains_without_stopping_the_loop(
-        ros_context: Context) -> None:
-    pinged = Pinged(ros_context, drain_budget_s=0.05, answer=lambda: time.sleep(0.01))
-    pinged.flood(30)
-    pinged.executor.run_ready()
-    assert 1 <= pinged.calls < 30  # the budget ended the drain: the loop steps on
-    pinged.drains_until(30)
-    pinged.close()
+        pinged: Callable[..., Pinged]) -> None:
+    drained = pinged(drain_budget_s=0.05, answer=lambda: time.sleep(0.01))
+    drained.flood(30)
+    drained.executor.run_ready()
+    assert 1 <= drained.calls < 30  # the budget ended the drain: the loop steps on
+    drained.drains_until(30)
 
 
-def test_a_reply_dds_refuses_costs_that_reply_not_the_simulator(ros_context: Context) -> None:
+def test_a_reply_dds_refuses_costs_that_reply_not_the_simulator(
+        pinged: Callable[..., Pinged]) -> None:
     from servicesim_sim.process.executor import RCLError
 
     def refuse() -> None:
         raise RCLError("failed to send response: cannot publish data")
 
-    pinged = Pinged(ros_context, answer=refuse)
-    pinged.flood(3)
-    pinged.drains_until(3)  # the error was raised out of the loop before
-    assert pinged.executor.refused_sends == 3
-    pinged.close()
+    drained = pinged(answer=refuse)
+    drained.flood(3)
+    drained.drains_until(3)  # the error was raised out of the loop before
+    assert drained.executor.refused_sends == 3
