@@ -81,10 +81,14 @@ def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y
     if col0 >= col1 or row0 >= row1:
         return np.zeros((0, 2))
     window = costmap.values[row0:row1, col0:col1] >= LETHAL
+    if not window.any():  # nothing lethal here: nobody to label
+        return np.zeros((0, 2))
     centre_xs = costmap.origin_x + (np.arange(col0, col1) + 0.5) * res
     centre_ys = costmap.origin_y + (np.arange(row0, row1) + 0.5) * res
     grid_x, grid_y = np.meshgrid(centre_xs, centre_ys)
     window &= walls.clearances_at(grid_x, grid_y) > WALL_MARGIN
+    if not window.any():
+        return np.zeros((0, 2))
     from scipy import ndimage  # when computing, as planning.occupancy says why
 
     labels, count = ndimage.label(window)
