@@ -454,6 +454,62 @@ def test_a_guest_who_cannot_be_reacquired_ends_the_guiding_at_once() -> None:
     assert script.count("CallDropOffGuest") == 0
 
 
+GUEST_FOLLOWS = {"WatchGuestFollows": [(Status.SUCCESS, 100_000)] * 10}
+"""The guest follows as long as the guiding lasts."""
+
+
+def test_someone_seen_beside_the_drop_off_goal_on_the_way_has_the_goal_planned_again() -> None:
+    script = Script({
+        **GUEST_FOLLOWS,
+        "DropOffGoalClearOfPeople": [Status.SUCCESS] * 5 + [Status.FAILURE] + [Status.SUCCESS] * 99,
+        "DropOffGoalStillClear": [Status.FAILURE],  # taken: someone stands beside it
+        "GoToDropOffArea.NavigateToGoal": [(Status.SUCCESS, 200)] * 2,
+        **NOBODY_NEAR,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("ComputeDropOffGoal") == 1
+    assert script.count("RecomputeDropOffGoal") == 1
+    assert script.count("GoToDropOffArea.NavigateToGoal") == 2
+    first = next(c for c in script.calls if matches(c, "GoToDropOffArea.NavigateToGoal"))
+    assert Status.INVALID in script.terminated[first]  # the watch ended the first goal
+    assert script.count("GoToDropOffGoalBesidePeople.NavigateToGoal") == 0
+    assert script.count("CallDropOffGuest") == 1
+
+
+def test_a_drop_off_goal_still_beside_someone_after_two_plans_is_gone_to_all_the_same(
+) -> None:
+    script = Script({
+        **GUEST_FOLLOWS,
+        "DropOffGoalClearOfPeople": [Status.FAILURE] * 3,
+        "DropOffGoalStillClear": [Status.FAILURE] * 2,
+        "DropOffGoalClearAtLast": [Status.FAILURE],
+        "GoToDropOffGoalBesidePeople.NavigateToGoal": [(Status.SUCCESS, 200)],
+        **NOBODY_NEAR,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("RecomputeDropOffGoal") == 2
+    assert script.count("GoToDropOffGoalBesidePeople.NavigateToGoal") == 1
+    assert script.count("ComputeDropOffGoal") == 1  # one guiding, no guide retry
+    assert script.count("CallDropOffGuest") == 1
+
+
+def test_a_drop_off_navigation_that_fails_with_its_goal_clear_fails_the_guiding_as_before(
+) -> None:
+    script = Script({
+        **GUEST_FOLLOWS,
+        "GoToDropOffArea.NavigateToGoal": [Status.FAILURE] * 4 + [(Status.SUCCESS, 200)] * 10,
+        **NOT_BLOCKED,
+        **NOBODY_NEAR,
+    })
+    status, _ = run_mission(script)
+    assert status == Status.SUCCESS
+    assert script.count("RecomputeDropOffGoal") == 0
+    assert script.count("GoToDropOffGoalBesidePeople.NavigateToGoal") == 0
+    assert script.count("ComputeDropOffGoal") == 2  # the guiding failed and began again
+
+
 #: The guest drifts while led and stands in sight: the look sees them.
 LOST_GUEST_IN_SIGHT = {
     "WatchGuestFollows": [(Status.FAILURE, 20)],
