@@ -31,7 +31,8 @@ GUIDE = "GoToDropOffArea.NavigateToGoal"
 FOLLOWING = {"WatchGuestFollows": [(Status.FAILURE, 100_000)]}  # the guest follows throughout
 GUIDE_KEY = ("ServiceSimMission.MissionTimeLimit.Mission.DropOffPhaseRetry.DropOff.DeliverGuest."
              "DropOffRetry.GuideAndDropOff.GuideRetry.GuideGuest.LeadGuestToDropOff."
-             "GuideWhileGuestFollows.GoToDropOffArea.NavigateWithRecovery.NavigateRecovery."
+             "GuideWhileGuestFollows.GoToDropOffGoal.DropOffGoalRetry.GoWhileDropOffGoalClear."
+             "GoToDropOffArea.NavigateWithRecovery.NavigateRecovery."
              "StopStandoff.NavigateToGoal")
 
 
