@@ -7,6 +7,7 @@ from py_trees.ports import PortInformation
 from bt_servicesim.behaviours.node import Ports
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
+from bt_servicesim.planning.people import Costmap2D
 
 GUEST_IN_RANGE_INPUTS: Ports = {
     "guest_name": PortInformation(data_type=str, required=True),
@@ -19,3 +20,7 @@ OCCUPANCY = PortInformation(data_type=OccupancyGrid2D, description="the map")
 ROBOT_POSE = PortInformation(data_type=Pose2D, description="the robot's pose")
 GOAL_OUT = PortInformation(data_type=Pose2D, required=False)
 WAYPOINTS_OUT = PortInformation(data_type=list[Pose2D], required=False)
+COSTMAP = PortInformation(data_type=Costmap2D, required=False,
+                          description="navigation's costmap, where people stand")
+GUEST_FOLLOWS = PortInformation(data_type=bool, required=False, default_value=False,
+                                description="whether a guest follows the robot")

@@ -20,7 +20,15 @@ import py_trees
 from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ActionNode, Ports, Status
-from bt_servicesim.behaviours.ports import BOX, GOAL_OUT, OCCUPANCY, ROBOT_POSE, WAYPOINTS_OUT
+from bt_servicesim.behaviours.ports import (
+    BOX,
+    COSTMAP,
+    GOAL_OUT,
+    GUEST_FOLLOWS,
+    OCCUPANCY,
+    ROBOT_POSE,
+    WAYPOINTS_OUT,
+)
 from bt_servicesim.planning.entrances import doorways_near
 from bt_servicesim.planning.exploration import exploration_waypoints, guest_search_waypoints
 from bt_servicesim.planning.geometry import Box, Pose2D
@@ -128,8 +136,7 @@ class DropOffGoal(_Computation):
         "box": BOX,
         "occupancy": OCCUPANCY,
         "robot_pose": ROBOT_POSE,
-        "costmap": PortInformation(data_type=Costmap2D, required=False,
-                                   description="navigation's costmap, where people stand"),
+        "costmap": COSTMAP,
         "rfid_history": PortInformation(data_type=RfidHistory, required=False,
                                         description="where the robot was (its trail), to tell "
                                                     "the guest in tow from the others"),
@@ -254,10 +261,8 @@ class GiveWaySpot(_Computation):
         "occupancy": OCCUPANCY,
         "rfid_history": PortInformation(data_type=RfidHistory,
                                         description="where the robot was, reading by reading"),
-        "guest_follows": PortInformation(data_type=bool, required=False, default_value=False,
-                                         description="whether a guest follows the robot"),
-        "costmap": PortInformation(data_type=Costmap2D, required=False,
-                                   description="navigation's costmap, where people stand"),
+        "guest_follows": GUEST_FOLLOWS,
+        "costmap": COSTMAP,
     }
     OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
 
@@ -303,8 +308,7 @@ class NearestReachableSpot(_Computation):
         "target": PortInformation(data_type=Pose2D, description="the waypoint not reached"),
         "robot_pose": ROBOT_POSE,
         "occupancy": OCCUPANCY,
-        "costmap": PortInformation(data_type=Costmap2D, required=False,
-                                   description="navigation's costmap, where people stand"),
+        "costmap": COSTMAP,
     }
     OUTPUT_PORTS: Ports = {"spot": GOAL_OUT}
 

@@ -20,10 +20,9 @@ from typing import Any, Protocol
 from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ConditionNode, Ports
-from bt_servicesim.behaviours.ports import OCCUPANCY, ROBOT_POSE
+from bt_servicesim.behaviours.ports import COSTMAP, GUEST_FOLLOWS, OCCUPANCY, ROBOT_POSE
 from bt_servicesim.planning.give_way import HOLD_UP_REACH, held_up_on_costmap, recent_trail
 from bt_servicesim.planning.guest_localisation import RfidHistory
-from bt_servicesim.planning.people import Costmap2D
 
 __all__ = ["PeopleHeldUp", "held_up_near"]
 
@@ -40,10 +39,8 @@ class PeopleHeldUp(ConditionNode):
     INPUT_PORTS: Ports = {
         "robot_pose": ROBOT_POSE,
         "occupancy": OCCUPANCY,
-        "costmap": PortInformation(data_type=Costmap2D, required=False,
-                                   description="navigation's costmap, where people stand"),
-        "guest_follows": PortInformation(data_type=bool, required=False, default_value=False,
-                                         description="whether a guest follows the robot"),
+        "costmap": COSTMAP,
+        "guest_follows": GUEST_FOLLOWS,
         "rfid_history": PortInformation(data_type=RfidHistory, required=False,
                                         description="where the robot was (its trail), needed "
                                                     "when a guest follows"),

@@ -27,7 +27,7 @@ import numpy as np
 from py_trees.ports import NoDataAvailable, PortInformation
 
 from bt_servicesim.behaviours.node import ConditionNode, Ports
-from bt_servicesim.behaviours.ports import OCCUPANCY
+from bt_servicesim.behaviours.ports import COSTMAP, GUEST_FOLLOWS, OCCUPANCY
 from bt_servicesim.planning.geometry import Pose2D
 from bt_servicesim.planning.give_way import PEOPLE_REACH, guest_in_tow, recent_trail
 from bt_servicesim.planning.guest_localisation import RfidHistory
@@ -56,10 +56,8 @@ class SpotClearOfPeople(ConditionNode):
         "spot": PortInformation(data_type=Pose2D, required=True,
                                 description="where the robot is to stand"),
         "occupancy": OCCUPANCY,
-        "costmap": PortInformation(data_type=Costmap2D, required=False,
-                                   description="navigation's costmap, where people stand"),
-        "guest_follows": PortInformation(data_type=bool, required=False, default_value=False,
-                                         description="whether a guest follows the robot"),
+        "costmap": COSTMAP,
+        "guest_follows": GUEST_FOLLOWS,
         "robot_pose": PortInformation(data_type=Pose2D, required=False,
                                       description="the robot's pose, needed when a guest "
                                                   "follows"),
