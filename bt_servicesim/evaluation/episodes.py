@@ -395,27 +395,38 @@ def run_episodes(settings: EvaluationSettings, episodes: Iterable[Episode],
     return [row for _, row in sorted(rows, key=lambda pair: pair[0])]
 
 
+def _poll(under_way: set[Future[None]], collect: Callable[[], None],
+          stops: StopSignals) -> set[Future[None]]:
+    """Wait a poll, raise a stop that came meanwhile, and collect: the episodes still under way."""
+    time.sleep(POLL_S)
+    stops.raise_deferred()
+    still = {future for future in under_way if not future.done()}
+    collect()
+    return still
+
+
 def _run_all(settings: EvaluationSettings, episodes: Iterable[Episode], runner: EpisodeRunner,
              collect: Callable[[], None], stops: StopSignals) -> None:
     """Keep ``settings.jobs`` episodes under way until the plan is done or a stop signal comes;
     return once every episode process has ended, with ``stops`` held."""
     pool = ThreadPoolExecutor(max_workers=settings.jobs, thread_name_prefix="episode")
+    # A stop is raised between polls, never inside a lock: raised while the main thread held a
+    # future's lock (in done()), it left the lock taken, and the pool's shutdown waited for
+    # ever on the worker that set that future's result.
+    stops.defer()
     try:
         under_way: set[Future[None]] = set()
         for number, episode in enumerate(episodes):
             while len(under_way) >= settings.jobs:
-                time.sleep(POLL_S)
-                under_way = {future for future in under_way if not future.done()}
-                collect()
+                under_way = _poll(under_way, collect, stops)
             if settings.resume and (kept := runner.finished_row(episode)) is not None:
                 runner.finished.put((number, kept))  # no need of a worker to read a file
             else:
                 under_way.add(pool.submit(runner.run_numbered, number, episode))
             collect()
+            stops.raise_deferred()
         while under_way:
-            time.sleep(POLL_S)
-            under_way = {future for future in under_way if not future.done()}
-            collect()
+            under_way = _poll(under_way, collect, stops)
         stops.hold()
     except (KeyboardInterrupt, Terminated) as stop:
         stops.hold(stop)
