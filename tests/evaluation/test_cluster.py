@@ -36,6 +36,7 @@ from tests.evaluation.test_evaluate import (
     alive,
     fake,
     files_under,
+    no_evaluation_outlives_its_test,  # noqa: F401 (autouse here as there)
     settings,
     start_evaluation,
 )

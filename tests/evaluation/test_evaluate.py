@@ -18,6 +18,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -477,15 +478,33 @@ def test_settings_that_overload_the_machine_are_warned_about() -> None:
     assert load_warning(jobs=3, speed=0.0, cores=2) is None
 
 
+STARTED: list[subprocess.Popen[str]] = []
+"""The evaluations ``start_evaluation`` started, for ``no_evaluation_outlives_its_test``."""
+
+
+@pytest.fixture(autouse=True)
+def no_evaluation_outlives_its_test() -> Iterator[None]:
+    """An evaluation a test left running (its assertion failed, or ``communicate`` timed out) is
+    killed when the test ends: its episodes then get their parent-death signal."""
+    yield
+    while STARTED:
+        process = STARTED.pop()
+        if process.poll() is None:
+            process.kill()
+        process.communicate()
+
+
 def start_evaluation(tmp_path: Path, mode: str, *arguments: str) -> subprocess.Popen[str]:
     """``python -m bt_servicesim.evaluate`` on fake episodes, all in ``mode``, out in
     ``tmp_path / "evaluation"``."""
     fake_file = tmp_path / "fake_episode.py"
     fake_file.write_text(fake_code())
-    return subprocess.Popen(
+    process = subprocess.Popen(
         [sys.executable, "-c", DRIVER, str(fake_file), mode, "--out",
          str(tmp_path / "evaluation"), *arguments],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    STARTED.append(process)
+    return process
 
 
 def wait_for(paths: list[Path], process: subprocess.Popen[str], limit_s: float) -> None:
