@@ -171,7 +171,7 @@ class EpisodeRunner:
         """Each episode's plan number and row (None: not started), as they finish."""
         self.revision = source_revision()
         self._tree_digests = {executive: tree_digest(tree) for executive in settings.executives
-                              if (tree := settings.tree_of(executive)) is not None}
+                              if (tree := settings.played_tree(executive)) is not None}
         self._nav_params_digests = {
             executive: tree_digest(nav_params) for executive in settings.executives
             if (nav_params := settings.nav_params_of(executive)) is not None}
@@ -210,7 +210,7 @@ class EpisodeRunner:
         key = {"executive": episode.executive, "scenario": episode.scenario,
                "seed": episode.seed, "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args),
                "speed": self.settings.speed, "time_limit_s": self.settings.time_limit_s}
-        if episode.executive in self._tree_digests:  # the shipped tree: as before
+        if episode.executive in self._tree_digests:  # the baseline plays no tree
             key["tree_sha256"] = self._tree_digests[episode.executive]
         if episode.executive in self._nav_params_digests:  # else the servicebot's
             key["nav_params_sha256"] = self._nav_params_digests[episode.executive]

@@ -98,6 +98,14 @@ class EvaluationSettings:
             return self.trees[executive]
         return self.tree if executive == "bt" and self.own_tree else None
 
+    def played_tree(self, executive: str) -> Path | None:
+        """The tree file an episode of ``executive`` plays: its own, or the shipped one for
+        ``bt``; None for an executive without a tree (the baseline)."""
+        own = self.tree_of(executive)
+        if own is not None:
+            return own
+        return DEFAULT_TREE if executive_kind(executive) == "bt" else None
+
     def nav_params_of(self, executive: str) -> Path | None:
         """The navigation parameters file an episode of ``executive`` plays with; None: the
         servicebot's configuration, the simulator's default."""

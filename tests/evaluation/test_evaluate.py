@@ -648,6 +648,21 @@ def test_resume_reruns_the_trees_episodes_when_the_tree_changed(tmp_path: Path) 
     assert resumed == {"bt": False, "baseline": True}, "only the tree's episodes play again"
 
 
+def test_resume_reruns_the_shipped_trees_episodes_when_the_shipped_tree_changed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    shipped = own_tree(tmp_path)  # a copy standing in for trees/servicesim_mission.xml
+    monkeypatch.setattr("bt_servicesim.evaluation.settings.DEFAULT_TREE", shipped)
+    first = settings(tmp_path, episodes=1, scenarios=("random",), tree=shipped)
+    assert not first.own_tree
+    quietly(tmp_path, first, fake())
+    same = settings(tmp_path, episodes=1, scenarios=("random",), tree=shipped, resume=True)
+    assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
+    own_tree(tmp_path, comment="the shipped tree, edited since")
+    rows = quietly(tmp_path, same, fake())
+    resumed = {row["executive"]: bool(row.get("resumed")) for row in rows}
+    assert resumed == {"bt": False, "baseline": True}, "only the tree's episodes play again"
+
+
 def test_a_tree_that_cannot_play_is_one_line_before_anything_starts(tmp_path: Path) -> None:
     (tmp_path / "broken.xml").write_text("<root BTCPP_format='4'><BehaviorTree ID='x'>")
     for arguments, named in ((["--tree", "missing.xml"], "missing.xml: no such tree file"),
