@@ -180,15 +180,21 @@ class ClusterBatch:
 
     def run(self, episodes: Iterable[Episode], stops: StopSignals) -> None:
         """Keep the workers' threads busy until the plan is done or a stop signal comes."""
+        # A stop is raised between polls, never inside a lock: the client's calls wait on the
+        # threads of its event loop, as the local pool's futures do (episodes._run_all).
+        stops.defer()
         try:
             for number, episode in enumerate(episodes):
                 while not lost(self.client) and len(self.under_way) >= self.capacity():
                     self.collect(timeout=POLL_S)
+                    stops.raise_deferred()
                 if lost(self.client):
                     break  # the rest are not played: not_run in the summary
                 self.start(number, episode)
+                stops.raise_deferred()
             while self.under_way:
                 self.collect(timeout=POLL_S)
+                stops.raise_deferred()
             stops.hold()
         except (KeyboardInterrupt, Terminated) as stop:
             stops.hold(stop)
