@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import subprocess
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from itertools import combinations
 from pathlib import Path
 from typing import Any
@@ -169,18 +169,19 @@ def _success(summary: dict[str, Any]) -> str:
     return rate if interval is None else f"{rate} ({interval[0]:.0%}–{interval[1]:.0%})"
 
 
-def paired_table(settings: EvaluationSettings, rows: list[dict[str, Any]], *,
+def paired_table(scenarios: Sequence[str], rows: list[dict[str, Any]], *,
                  first: str = "bt", second: str = "baseline") -> list[str]:
-    """Each set, paired, over distinct missions: who completed, scores where both completed,
-    drop-off times where both dropped off; each comparison with its exact two-sided p-value.
-    ``first`` and ``second``: the executives compared (as the rows name them)."""
+    """Each set of ``scenarios``, paired, over distinct missions: who completed, scores where
+    both completed, drop-off times where both dropped off; each comparison with its exact
+    two-sided p-value. ``first`` and ``second``: the executives compared (as the rows name
+    them; the rows of one mission share their ``episode``)."""
     lines = [f"| set | completed by {first} only / {second} only (p) | both completed | "
              f"{first} mean score | {second} mean score | {first} lower on (p) | both dropped "
              f"off | {first} mean time to drop-off (s) | {second} mean time to drop-off (s) | "
              f"{first} faster on (p) |",
              "|" + "---|" * 10]
     missions = distinct_missions(rows)
-    for scenario in settings.scenarios:
+    for scenario in scenarios:
         tree, seed = paired_scores(missions, scenario, first, second)
         tree_time, seed_time = paired_drop_off_times(missions, scenario, first, second)
         only_tree, only_seed = completed_by_one(missions, scenario, first, second)
@@ -210,7 +211,7 @@ def paired_sections(settings: EvaluationSettings, rows: list[dict[str, Any]]) ->
     for first, second in pairs:
         if len(pairs) > 1:
             lines += [f"### {first} against {second}", ""]
-        lines += [*paired_table(settings, rows, first=first, second=second), ""]
+        lines += [*paired_table(settings.scenarios, rows, first=first, second=second), ""]
     return lines
 
 
