@@ -636,28 +636,18 @@ def test_results_name_the_tree_and_replay_its_failures_with_it(tmp_path: Path) -
     assert "plays `" not in (shipped.out / "results.md").read_text()  # the shipped tree: as ever
 
 
-def test_resume_reruns_the_trees_episodes_when_the_tree_changed(tmp_path: Path) -> None:
+@pytest.mark.parametrize("shipped", [False, True], ids=["own-tree", "shipped-tree"])
+def test_resume_reruns_the_trees_episodes_when_the_tree_changed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, shipped: bool) -> None:
     tree = own_tree(tmp_path)
+    if shipped:  # the copy stands in for trees/servicesim_mission.xml
+        monkeypatch.setattr("bt_servicesim.evaluation.settings.DEFAULT_TREE", tree)
     first = settings(tmp_path, episodes=1, scenarios=("random",), tree=tree)
+    assert first.own_tree is not shipped
     quietly(tmp_path, first, fake())
     same = settings(tmp_path, episodes=1, scenarios=("random",), tree=tree, resume=True)
     assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
     own_tree(tmp_path, comment="edited since")
-    rows = quietly(tmp_path, same, fake())
-    resumed = {row["executive"]: bool(row.get("resumed")) for row in rows}
-    assert resumed == {"bt": False, "baseline": True}, "only the tree's episodes play again"
-
-
-def test_resume_reruns_the_shipped_trees_episodes_when_the_shipped_tree_changed(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    shipped = own_tree(tmp_path)  # a copy standing in for trees/servicesim_mission.xml
-    monkeypatch.setattr("bt_servicesim.evaluation.settings.DEFAULT_TREE", shipped)
-    first = settings(tmp_path, episodes=1, scenarios=("random",), tree=shipped)
-    assert not first.own_tree
-    quietly(tmp_path, first, fake())
-    same = settings(tmp_path, episodes=1, scenarios=("random",), tree=shipped, resume=True)
-    assert all(row.get("resumed") for row in quietly(tmp_path, same, fake()))
-    own_tree(tmp_path, comment="the shipped tree, edited since")
     rows = quietly(tmp_path, same, fake())
     resumed = {row["executive"]: bool(row.get("resumed")) for row in rows}
     assert resumed == {"bt": False, "baseline": True}, "only the tree's episodes play again"
