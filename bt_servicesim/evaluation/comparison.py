@@ -28,6 +28,8 @@ from bt_servicesim.evaluation.summary import played
 PROG = "python -m bt_servicesim.evaluation.comparison"
 LABELS = ("before", "after")
 """How the two evaluations are named in the table."""
+ROW_KEYS = ("scenario", "episode_seed", "completed", "score", "checkpoints")
+"""What the pairing and the table read of each row."""
 
 
 class ComparisonError(ValueError):
@@ -49,7 +51,15 @@ def evaluation_rows(directory: Path, executive: str) -> tuple[list[dict[str, Any
         known = ", ".join(sorted(summary)) if isinstance(summary, dict) else "none"
         raise ComparisonError(f"{summary_file}: no rows of the {executive!r} executive "
                               f"(it has: {known})")
-    return played(entry["rows"]), entry
+    try:
+        rows = played(entry["rows"])
+        missing = next((key for row in rows for key in ROW_KEYS if key not in row), None)
+    except (TypeError, AttributeError) as error:
+        missing = f"a row at all ({error})"
+    if missing is not None:
+        raise ComparisonError(f"{summary_file}: {executive}'s rows are not as an evaluation "
+                              f"writes them (no {missing})")
+    return rows, entry
 
 
 def paired_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]

@@ -78,9 +78,13 @@ def test_a_directory_without_a_summary_or_the_executive_is_one_line_exit_2(
     good = evaluation(tmp_path / "good", [row("random", 0, 1.0)])
     (tmp_path / "broken").mkdir()
     (tmp_path / "broken" / "summary.json").write_text("{not json")
+    (tmp_path / "odd").mkdir()
+    (tmp_path / "odd" / "summary.json").write_text('{"bt": {"rows": [{"seed": 3}]}}')
     for arguments, named in (
             ([str(tmp_path / "missing"), str(good)], "missing/summary.json: cannot read it"),
             ([str(good), str(tmp_path / "broken")], "broken/summary.json: not JSON"),
+            ([str(tmp_path / "odd"), str(good)],
+             "odd/summary.json: bt's rows are not as an evaluation writes them (no scenario)"),
             ([str(good), str(good), "--executive", "bt:mine"],
              "no rows of the 'bt:mine' executive (it has: baseline, bt)"),
             ([str(good)], "the following arguments are required: after")):
