@@ -15,7 +15,6 @@ Pure reading: nothing is played, and both directories are left as they were.
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -23,45 +22,11 @@ from typing import Any
 
 from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, interruptible
 from bt_servicesim.evaluation.report import paired_table
-from bt_servicesim.evaluation.summary import played
+from bt_servicesim.evaluation.summary import SummaryFileError, summary_rows
 
 PROG = "python -m bt_servicesim.evaluation.comparison"
 LABELS = ("before", "after")
 """How the two evaluations are named in the table."""
-ROW_KEYS = ("scenario", "episode_seed", "completed", "score", "checkpoints")
-"""What the pairing and the table read of each row."""
-
-
-class ComparisonError(ValueError):
-    """An evaluation that cannot be compared: the one-line reason."""
-
-
-def evaluation_rows(directory: Path, executive: str) -> tuple[list[dict[str, Any]], dict[str, Any]]:
-    """``executive``'s played rows of the evaluation in ``directory``, and its summary entry."""
-    summary_file = directory / "summary.json"
-    try:
-        summary = json.loads(summary_file.read_text())
-    except OSError as error:
-        raise ComparisonError(f"{summary_file}: cannot read it ({error.strerror or error}); "
-                              "is it an evaluation's --out directory?") from None
-    except ValueError as error:
-        raise ComparisonError(f"{summary_file}: not JSON ({error})") from None
-    entry = summary.get(executive) if isinstance(summary, dict) else None
-    if not isinstance(entry, dict) or not isinstance(entry.get("rows"), list):
-        known = ", ".join(sorted(summary)) if isinstance(summary, dict) else "none"
-        raise ComparisonError(f"{summary_file}: no rows of the {executive!r} executive "
-                              f"(it has: {known})")
-    try:
-        rows = played(entry["rows"])
-        missing = next((key for row in rows for key in ROW_KEYS if key not in row), None)
-    except (TypeError, AttributeError) as error:
-        missing = f"a row at all ({error})"
-    if missing is not None:
-        raise ComparisonError(f"{summary_file}: {executive}'s rows are not as an evaluation "
-                              f"writes them (no {missing})")
-    return rows, entry
-
-
 def paired_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]
                 ) -> tuple[list[dict[str, Any]], list[str], int]:
     """Both evaluations' rows of the missions both played (same set, same seed), named
@@ -78,16 +43,17 @@ def paired_rows(before: list[dict[str, Any]], after: list[dict[str, Any]]
 
 
 def comparison_lines(before_dir: Path, after_dir: Path, executive: str = "bt") -> list[str]:
-    """The comparison as markdown lines; :class:`ComparisonError` if there is none to make."""
+    """The comparison as markdown lines; :class:`SummaryFileError` if there is none to make."""
     (before, before_entry), (after, after_entry) = (
-        evaluation_rows(directory, executive) for directory in (before_dir, after_dir))
+        summary_rows(directory, executive) for directory in (before_dir, after_dir))
     rows, scenarios, only_one = paired_rows(before, after)
     if not rows:
-        raise ComparisonError(f"{before_dir} and {after_dir} have no mission in common: "
+        raise SummaryFileError(f"{before_dir} and {after_dir} have no mission in common: "
                               f"no {executive} episode of the same set and seed in both")
     lines = [f"# {executive}: {before_dir} (before) against {after_dir} (after)", ""]
-    for label, directory, played_rows, entry in (
-            ("before", before_dir, before, before_entry), ("after", after_dir, after, after_entry)):
+    for label, directory, played_rows, entry in zip(
+            LABELS, (before_dir, after_dir), (before, after), (before_entry, after_entry),
+            strict=True):
         lines.append(f"- {label}: `{directory}`, {_played_with(played_rows, entry)}")
     skipped = f"; {only_one} missions only one of them played are left out" if only_one else ""
     lines += ["", f"Paired over {len(rows) // 2} missions (same set, same seed){skipped}.", "",
@@ -115,7 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         lines = comparison_lines(args.before, args.after, args.executive)
-    except ComparisonError as error:
+    except SummaryFileError as error:
         parser.error(str(error))
     print("\n".join(lines))
     return EXIT_OK

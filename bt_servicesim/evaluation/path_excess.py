@@ -21,7 +21,6 @@ is written. Bad input is one line on stderr and exit status 2.
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import sys
 from collections.abc import Iterable, Sequence
@@ -32,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, interruptible
+from bt_servicesim.evaluation.summary import SummaryFileError, summary_rows
 
 PROG = "python -m bt_servicesim.evaluation.path_excess"
 STANDING_M_S = 0.05
@@ -141,12 +141,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     summary_file = args.directory / "summary.json"
     try:
-        summary = json.loads(summary_file.read_text())
-        rows = summary[args.executive]["rows"]
-    except (OSError, ValueError) as error:
-        parser.error(f"{summary_file}: cannot read it ({error})")
-    except (KeyError, TypeError):
-        parser.error(f"{summary_file}: no rows of the {args.executive!r} executive")
+        rows, _ = summary_rows(args.directory, args.executive)
+    except SummaryFileError as error:
+        parser.error(str(error))
     figures = figures_of(row for row in rows if row.get("scenario") == args.scenario)
     if not figures:
         parser.error(f"{summary_file}: no completed {args.executive} episode of the "

@@ -21,9 +21,11 @@ replays of one task are one observation, not sixteen.
 
 from __future__ import annotations
 
+import json
 import math
 import statistics
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from bt_servicesim.evaluation.settings import PENALTY_KEYS, EvaluationSettings, tree_digest
@@ -229,3 +231,38 @@ def mean_or_none(values: list[float]) -> float | None:
 
 def episode_wall_s(row: dict[str, Any]) -> float:
     return float(row.get("episode_wall_time_s") or row.get("wall_time_s") or 0.0)
+
+
+# ------------------------------------------------------------------ reading an evaluation back
+class SummaryFileError(ValueError):
+    """An evaluation's summary that cannot be read back: the one-line reason."""
+
+
+ROW_KEYS = ("scenario", "episode_seed", "completed", "score", "checkpoints")
+"""What every played row of an evaluation holds, for the commands that read it back."""
+
+
+def summary_rows(directory: Path, executive: str) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """``executive``'s played rows of the evaluation in ``directory``, and its summary entry."""
+    summary_file = directory / "summary.json"
+    try:
+        summary = json.loads(summary_file.read_text())
+    except OSError as error:
+        raise SummaryFileError(f"{summary_file}: cannot read it ({error.strerror or error}); "
+                               "is it an evaluation's --out directory?") from None
+    except ValueError as error:
+        raise SummaryFileError(f"{summary_file}: not JSON ({error})") from None
+    entry = summary.get(executive) if isinstance(summary, dict) else None
+    if not isinstance(entry, dict) or not isinstance(entry.get("rows"), list):
+        known = ", ".join(sorted(summary)) if isinstance(summary, dict) else "none"
+        raise SummaryFileError(f"{summary_file}: no rows of the {executive!r} executive "
+                               f"(it has: {known})")
+    rows = entry["rows"]
+    if not all(isinstance(row, dict) for row in rows):
+        raise SummaryFileError(f"{summary_file}: {executive}'s rows are not all objects")
+    rows = played(rows)
+    missing = next((key for row in rows for key in ROW_KEYS if key not in row), None)
+    if missing is not None:
+        raise SummaryFileError(f"{summary_file}: {executive}'s rows are not as an evaluation "
+                               f"writes them (no {missing})")
+    return rows, entry
