@@ -34,6 +34,8 @@ MIN_CELLS = 3
 """A disc of fewer cells is noise, not a person (a person's is about 0.6 m across)."""
 PERSON_DISC_RADIUS = 0.3
 """Metres: half a person's disc of lethal cells."""
+_FOUR_CONNECTED = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
+"""scipy's default structure for labelling a plane, given rather than built at every call."""
 
 
 @dataclass(frozen=True)
@@ -71,7 +73,12 @@ class Costmap2D:
 def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
                       reach: float) -> np.ndarray:
     """Centres of the people's discs on ``costmap`` within ``reach`` metres (in x and in y) of
-    (x, y), nearest first; shape (n, 2). ``walls`` is the static map."""
+    (x, y), nearest first; shape (n, 2). ``walls`` is the static map.
+
+    A few dozen of the window's thousands of cells are lethal, so only those are looked at: their
+    centres, their clearance from the walls, and each disc's cell count and centre summed per
+    label (``np.bincount``, as scipy's ``ndimage.mean`` sums them, cell by cell in row order:
+    the same centres, bit for bit, for a tenth of the CPU)."""
     res = costmap.resolution
     rows, cols = costmap.values.shape
     col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
@@ -81,24 +88,22 @@ def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y
     if col0 >= col1 or row0 >= row1:
         return np.zeros((0, 2))
     window = costmap.values[row0:row1, col0:col1] >= LETHAL
-    if not window.any():  # nothing lethal here: nobody to label
+    lethal_rows, lethal_cols = np.nonzero(window)
+    xs = costmap.origin_x + ((lethal_cols + col0) + 0.5) * res
+    ys = costmap.origin_y + ((lethal_rows + row0) + 0.5) * res
+    open_floor = walls.clearances_at(xs, ys) > WALL_MARGIN
+    if not open_floor.any():  # nothing lethal here, or only the walls: nobody to label
         return np.zeros((0, 2))
-    centre_xs = costmap.origin_x + (np.arange(col0, col1) + 0.5) * res
-    centre_ys = costmap.origin_y + (np.arange(row0, row1) + 0.5) * res
-    grid_x, grid_y = np.meshgrid(centre_xs, centre_ys)
-    window &= walls.clearances_at(grid_x, grid_y) > WALL_MARGIN
-    if not window.any():
-        return np.zeros((0, 2))
+    window[lethal_rows[~open_floor], lethal_cols[~open_floor]] = False
     from scipy import ndimage  # when computing, as planning.occupancy says why
 
-    labels, count = ndimage.label(window)
-    if count == 0:
-        return np.zeros((0, 2))
-    index = np.arange(1, count + 1)
-    sizes = ndimage.sum_labels(window, labels, index)
-    xs = ndimage.mean(grid_x, labels, index)
-    ys = ndimage.mean(grid_y, labels, index)
-    centres = np.column_stack([xs, ys])[sizes >= MIN_CELLS]
+    labels, count = ndimage.label(window, structure=_FOUR_CONNECTED)
+    disc = labels[lethal_rows[open_floor], lethal_cols[open_floor]]
+    sizes = np.bincount(disc, minlength=count + 1)[1:]
+    centres = np.column_stack([
+        np.bincount(disc, weights=xs[open_floor], minlength=count + 1)[1:] / sizes,
+        np.bincount(disc, weights=ys[open_floor], minlength=count + 1)[1:] / sizes,
+    ])[sizes >= MIN_CELLS]
     order = np.argsort(np.hypot(centres[:, 0] - x, centres[:, 1] - y), kind="stable")
     return centres[order]
 

@@ -89,3 +89,44 @@ def test_a_costmaps_repr_is_one_short_line_without_its_cells() -> None:
     text = repr(costmap)
     assert "stamp_s=12.5" in text and "values" not in text and "\n" not in text
     assert len(text) < 100
+
+
+def _people_by_scipy(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
+                     reach: float) -> np.ndarray:
+    """The discs' centres as scipy's ``ndimage`` measures them over the whole window: the
+    reference :func:`people_on_costmap` must equal bit for bit."""
+    from scipy import ndimage
+
+    res = costmap.resolution
+    rows, cols = costmap.values.shape
+    col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
+    row0 = max(int(np.floor((y - reach - costmap.origin_y) / res)), 0)
+    col1 = min(int(np.ceil((x + reach - costmap.origin_x) / res)), cols)
+    row1 = min(int(np.ceil((y + reach - costmap.origin_y) / res)), rows)
+    if col0 >= col1 or row0 >= row1:
+        return np.zeros((0, 2))
+    grid_x, grid_y = np.meshgrid(costmap.origin_x + (np.arange(col0, col1) + 0.5) * res,
+                                 costmap.origin_y + (np.arange(row0, row1) + 0.5) * res)
+    window = ((costmap.values[row0:row1, col0:col1] >= 100)
+              & (walls.clearances_at(grid_x, grid_y) > 0.15))
+    labels, count = ndimage.label(window)
+    index = np.arange(1, count + 1)
+    sizes = ndimage.sum_labels(window, labels, index)
+    centres = np.column_stack([ndimage.mean(grid_x, labels, index),
+                               ndimage.mean(grid_y, labels, index)])[sizes >= 3]
+    order = np.argsort(np.hypot(centres[:, 0] - x, centres[:, 1] - y), kind="stable")
+    return centres[order].reshape(-1, 2)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_centres_are_scipys_measurements_bit_for_bit(seed: int) -> None:
+    random = np.random.default_rng(seed)
+    people = [(float(random.uniform(0.2, WIDTH - 0.2)), float(random.uniform(0.2, HEIGHT - 0.2)))
+              for _ in range(int(random.integers(0, 9)))]
+    everyone = costmap_of(walls(), people, stamp_s=1.0)
+    x, y = float(random.uniform(-1.0, WIDTH + 1.0)), float(random.uniform(-1.0, HEIGHT + 1.0))
+    reach = float(random.uniform(0.3, 6.0))
+    found = people_on_costmap(everyone, walls(), x=x, y=y, reach=reach)
+    expected = _people_by_scipy(everyone, walls(), x=x, y=y, reach=reach)
+    assert found.shape == expected.shape
+    assert found.tobytes() == expected.tobytes()
