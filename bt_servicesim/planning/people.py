@@ -73,7 +73,47 @@ class Costmap2D:
 def people_on_costmap(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
                       reach: float) -> np.ndarray:
     """Centres of the people's discs on ``costmap`` within ``reach`` metres (in x and in y) of
-    (x, y), nearest first; shape (n, 2). ``walls`` is the static map.
+    (x, y), nearest first; shape (n, 2), read-only. ``walls`` is the static map.
+
+    Navigation publishes its costmap once a sim second and the tree asks at every tick, mostly
+    the same question (is anyone at this spot, near this box): the answers on the latest
+    costmap are kept (:class:`_Answers`) and handed out again while it is the latest.
+    """
+    answers = _answers
+    if answers.costmap is not costmap or answers.walls is not walls:
+        answers.start(costmap, walls)
+    key = (x, y, reach)
+    found = answers.found.get(key)
+    if found is None:
+        if len(answers.found) >= _Answers.KEPT:
+            answers.found.clear()
+        found = answers.found[key] = _found_on(costmap, walls, x=x, y=y, reach=reach)
+        found.flags.writeable = False
+    return found
+
+
+class _Answers:
+    """The answers :func:`people_on_costmap` gave on one costmap over one map, by question."""
+
+    KEPT = 64
+    """Questions kept at most; the tree asks a handful between two costmaps."""
+
+    def __init__(self) -> None:
+        self.costmap: Costmap2D | None = None
+        self.walls: OccupancyGrid2D | None = None
+        self.found: dict[tuple[float, float, float], np.ndarray] = {}
+
+    def start(self, costmap: Costmap2D, walls: OccupancyGrid2D) -> None:
+        """Forget the answers on the last costmap: ``costmap`` is the one asked about now."""
+        self.costmap, self.walls, self.found = costmap, walls, {}
+
+
+_answers = _Answers()
+
+
+def _found_on(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
+              reach: float) -> np.ndarray:
+    """:func:`people_on_costmap`, worked out.
 
     A few dozen of the window's thousands of cells are lethal, so only those are looked at: their
     centres, their clearance from the walls, and each disc's cell count and centre summed per

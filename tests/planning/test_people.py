@@ -130,3 +130,15 @@ def test_the_centres_are_scipys_measurements_bit_for_bit(seed: int) -> None:
     expected = _people_by_scipy(everyone, walls(), x=x, y=y, reach=reach)
     assert found.shape == expected.shape
     assert found.tobytes() == expected.tobytes()
+
+
+def test_an_answer_on_the_latest_costmap_is_kept_until_another_costmap_comes() -> None:
+    room, first = walls(), costmap([(3.0, 3.0)])
+    found = people_on_costmap(first, room, x=2.0, y=3.0, reach=3.0)
+    assert people_on_costmap(first, room, x=2.0, y=3.0, reach=3.0) is found
+    assert not found.flags.writeable  # kept answers cannot be changed by whoever reads them
+    assert people_on_costmap(first, room, x=2.0, y=3.0, reach=0.5).shape == (0, 2)
+    moved = costmap([(4.0, 3.0)])  # the next costmap: the person walked on
+    assert people_on_costmap(moved, room, x=2.0, y=3.0, reach=3.0) == pytest.approx(
+        np.array([[4.0, 3.0]]), abs=0.06)
+    assert people_on_costmap(moved, walls(), x=2.0, y=3.0, reach=3.0) is not found
