@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from bt_servicesim.planning.geometry import Point
-from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree
+from bt_servicesim.planning.occupancy import OccupancyGrid2D, RouteTree, Window
 
 __all__ = ["GUEST_BODY", "PASSING_CLEARANCE", "WAY_BACK", "WAY_BACK_DETOUR", "WAY_OUT_REACH",
            "way_back_open", "way_back_point"]
@@ -69,7 +69,7 @@ def way_back_open(grid: OccupancyGrid2D, *, goal: Point, guest_spot: Point, back
         people, dtype=float).reshape(-1, 2)])
     bodies = [GUEST_BODY + guest_spread] + [GUEST_BODY] * (len(standing) - 1)
     for (px, py), body in zip(standing, bodies, strict=True):
-        values[np.hypot(around.xs[None, :] - px, around.ys[:, None] - py) <= body] = 100
+        _mark_body(values, around, centre=(px, py), radius=body, margin=grid.resolution)
     local = OccupancyGrid2D(values=values, resolution=grid.resolution,
                             origin_x=grid.origin_x + around.cols.start * grid.resolution,
                             origin_y=grid.origin_y + around.rows.start * grid.resolution)
@@ -78,3 +78,17 @@ def way_back_open(grid: OccupancyGrid2D, *, goal: Point, guest_spot: Point, back
         return False
     direct = math.dist(goal, guest_spot) + math.dist(guest_spot, back)
     return routes.distance_to(*back) <= direct + WAY_BACK_DETOUR
+
+
+def _mark_body(values: np.ndarray, around: Window, *, centre: Point, radius: float,
+               margin: float) -> None:
+    """Mark occupied (100) the cells of ``values`` (``around``'s) whose centres lie within
+    ``radius`` of ``centre``. Only the square of cells within ``radius`` plus ``margin`` along
+    each axis is measured: a cell farther along either axis is farther than ``radius`` whatever
+    the other, since a hypotenuse is never shorter than either side, so the cells marked are
+    those a measure of every cell marks, for a small part of the work."""
+    x, y = centre
+    cols = slice(*np.searchsorted(around.xs, (x - radius - margin, x + radius + margin)))
+    rows = slice(*np.searchsorted(around.ys, (y - radius - margin, y + radius + margin)))
+    square = values[rows, cols]
+    square[np.hypot(around.xs[cols][None, :] - x, around.ys[rows][:, None] - y) <= radius] = 100

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bt_servicesim.planning.geometry import Box, Pose2D
 from bt_servicesim.planning.goals import ROBOT_CLEARANCE, box_depth, drop_off_goal
@@ -91,3 +92,19 @@ def test_the_drop_off_goal_leaves_the_guest_where_the_robot_can_get_back_past_th
                          back=back)
     # the deepest spot, the box's middle, would have shut the corridor
     assert abs(plan.guest_spot[1] - sum(CORRIDOR) / 2.0) > 0.25
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_a_body_marks_the_cells_a_measure_of_every_cell_marks(seed: int) -> None:
+    from bt_servicesim.planning.way_out import _mark_body
+
+    random = np.random.default_rng(seed)
+    grid = corridor()
+    x, y = float(random.uniform(2.0, 18.0)), float(random.uniform(2.0, 10.0))
+    around = grid.window(x - 4.0, y - 4.0, x + 4.0, y + 4.0)
+    values = np.zeros((around.ys.size, around.xs.size), dtype=np.int16)
+    body = (float(random.uniform(x - 4.5, x + 4.5)), float(random.uniform(y - 4.5, y + 4.5)))
+    radius = float(random.uniform(0.05, 1.0))
+    _mark_body(values, around, centre=body, radius=radius, margin=grid.resolution)
+    every_cell = np.hypot(around.xs[None, :] - body[0], around.ys[:, None] - body[1]) <= radius
+    assert np.array_equal(values == 100, every_cell)
