@@ -16,10 +16,10 @@
 * missions: ``python -m bt_servicesim.run --headless --speed 0`` on each of ``--seeds``,
   ``--rounds`` times, through ``benchmarks/timed_run.py``: every tick of the real mission timed
   with what it records (the tree log and the tree topic, written after the lockstep done),
-  wall and the process's CPU time, and the executive's CPU (every thread) per sim second from
-  its first tick to its last; with ``--reference-code DIR`` the same missions are played on
-  another checkout too (``git worktree add DIR COMMIT``), interleaved seed by seed, so that
-  both meet the same load.
+  wall and the process's CPU time, the executive's CPU (every thread) per sim second from
+  its first tick to its last, and the leaves whose updates cost the most per sim second;
+  with ``--reference-code DIR`` the same missions are played on another checkout too (``git
+  worktree add DIR COMMIT``), interleaved seed by seed, so that both meet the same load.
 
 ``--parts`` picks the parts to run (default all four).
 
@@ -247,11 +247,18 @@ class MissionFigures:
     wall_us: list[float] = field(default_factory=list)
     cpu_us: list[float] = field(default_factory=list)
     per_sim_s: list[tuple[int, dict[str, float]]] = field(default_factory=list)
+    sim_s: float = 0.0
+    leaf_cpu_s: dict[str, float] = field(default_factory=dict)
+    leaf_calls: dict[str, int] = field(default_factory=dict)
 
     def add(self, seed: int, result: dict[str, Any]) -> None:
         self.wall_us += result["wall_us"]
         self.cpu_us += result["cpu_us"]
         sim_s = result["ticks"] * 0.1
+        self.sim_s += sim_s
+        for kind, (cpu_s, calls) in result.get("leaves", {}).items():
+            self.leaf_cpu_s[kind] = self.leaf_cpu_s.get(kind, 0.0) + cpu_s
+            self.leaf_calls[kind] = self.leaf_calls.get(kind, 0) + int(calls)
         shares = {"the executive (every thread)": result["process_cpu_s"],
                   "its ticking thread": result["thread_cpu_s"], **result["parts_cpu_s"]}
         self.per_sim_s.append((seed, {what: cpu_s * 1e3 / sim_s
@@ -297,6 +304,23 @@ def missions(seeds: Sequence[int], rounds: int, reference: Path | None) -> None:
             values = [shares["the executive (every thread)"]
                       for played, shares in figure.per_sim_s if played == seed]
             print(f"      the executive, seed {seed:<20} {statistics.median(values):6.2f} ms")
+        print_leaves(figure)
+
+
+def print_leaves(figure: MissionFigures, shown: int = 8) -> None:
+    """The leaves whose updates took the most CPU over all the missions, per sim second, and
+    their updates' share of the tick (the rest is py_trees' composites, decorators and the
+    leaves' lifecycle)."""
+    if not figure.leaf_cpu_s or figure.sim_s <= 0.0:
+        return
+    total = sum(figure.leaf_cpu_s.values())
+    print(f"    the leaves' updates, over all missions: {total * 1e3 / figure.sim_s:.2f} ms "
+          "per sim s; the most costly:")
+    for kind in sorted(figure.leaf_cpu_s, key=figure.leaf_cpu_s.__getitem__, reverse=True)[:shown]:
+        cpu_s, calls = figure.leaf_cpu_s[kind], figure.leaf_calls[kind]
+        each_us = cpu_s * 1e6 / max(calls, 1)
+        print(f"      {kind:34} {cpu_s * 1e3 / figure.sim_s:6.2f} ms "
+              f"({calls / figure.sim_s:5.1f} updates a sim s, {each_us:8.1f} µs each)")
 
 
 def commit_of(code: Path) -> str:

@@ -17,7 +17,10 @@ or another one first on ``PYTHONPATH``, for an A/B of two versions of the code),
   the whole period (handing on its messages, the tick, the done, the records) and each of
   them, and outside
   the periods taking the announcements; what the thread spent besides is rclpy's executor
-  and the arrivals it holds.
+  and the arrivals it holds;
+* ``leaves``: per kind of leaf (its class), the CPU its ``update`` took over the mission and
+  how many updates that was (:class:`LeafTimes`): which leaves the tick's time goes to, and
+  how much of it is py_trees' own machinery (the tick less its leaves' updates).
 
 The timing reads the clocks only into these figures, never into the mission. Only the
 benchmarks use it; its exit status is the run's.
@@ -77,6 +80,36 @@ class TickTimes:
                 "parts_cpu_s": {part: ns / 1e9 for part, ns in self.parts_ns.items()}}
 
 
+class LeafTimes:
+    """The thread CPU of every leaf's ``update``, summed by the leaf's class."""
+
+    def __init__(self) -> None:
+        self.cpu_ns: dict[str, int] = {}
+        self.calls: dict[str, int] = {}
+
+    def watch(self, root: Any) -> None:
+        """Time the ``update`` of every leaf under ``root`` from now on."""
+        for behaviour in root.iterate():
+            if not behaviour.children:
+                behaviour.update = self._timed(type(behaviour).__name__, behaviour.update)
+
+    def _timed(self, kind: str, update: Callable[[], Any]) -> Callable[[], Any]:
+        self.cpu_ns.setdefault(kind, 0)
+        self.calls.setdefault(kind, 0)
+
+        def timed_update() -> Any:
+            cpu = time.thread_time_ns()
+            try:
+                return update()
+            finally:
+                self.cpu_ns[kind] += time.thread_time_ns() - cpu
+                self.calls[kind] += 1
+        return timed_update
+
+    def figures(self) -> dict[str, list[float]]:
+        return {kind: [ns / 1e9, self.calls[kind]] for kind, ns in self.cpu_ns.items()}
+
+
 PARTS = {"_run_period": "the period", "_release": "handing on the period's messages",
          "_run_after_done": "records after the done", "_publish_done": "the done",
          "_on_period": "taking an announcement"}
@@ -107,6 +140,14 @@ def summed(times: TickTimes, part: str, method: Callable[..., Any]) -> Callable[
     return run
 
 
+def watched(leaves: LeafTimes, method: Callable[..., Any]) -> Callable[..., Any]:
+    """``MissionExecutive.setup``, then every leaf of its tree timed by ``leaves``."""
+    def setup(self: Any, **kwargs: Any) -> None:
+        method(self, **kwargs)
+        leaves.watch(self.tree.root)
+    return setup
+
+
 def main(argv: list[str]) -> int:
     if len(argv) < 2:
         print("benchmarks/timed_run.py: error: usage: python benchmarks/timed_run.py "
@@ -117,12 +158,14 @@ def main(argv: list[str]) -> int:
     from bt_servicesim.ros import lockstep
     from bt_servicesim.tree import executive
 
-    times = TickTimes()
+    times, leaves = TickTimes(), LeafTimes()
     mission, client = executive.MissionExecutive, lockstep.LockstepClient
     setattr(mission, "tick", timed(times, mission.tick))  # noqa: B010 (a method replaced)
+    setattr(mission, "setup", watched(leaves, mission.setup))  # noqa: B010
     for name, part in PARTS.items():
         setattr(client, name, summed(times, part, getattr(client, name)))
-    atexit.register(lambda: figures.write_text(json.dumps(times.figures())))
+    atexit.register(lambda: figures.write_text(json.dumps(
+        {**times.figures(), "leaves": leaves.figures()})))
     return run.main(argv[1:])
 
 
