@@ -816,8 +816,33 @@ def locate_reference(path: PolylinePath, x: float, y: float, *, near: float,
     gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
     best = int(np.argmin(gaps))
     if not math.isfinite(gaps[best]):
-        return near, float(np.hypot(*(path.point_at(near) - (x, y))))
+        return near, float(np.hypot(*(point_at_reference(path, near) - (x, y))))
     return float(arcs[best]), float(gaps[best])
+
+
+def point_at_reference(path: PolylinePath, s: float) -> np.ndarray:
+    """PolylinePath.point_at in numpy: the segment's start plus the fraction of its span."""
+    s = min(max(s, 0.0), path.total)
+    index = min(int(np.searchsorted(path.arc, s, side="right")) - 1, len(path.lengths) - 1)
+    if index < 0 or path.lengths[index] == 0.0:
+        start: np.ndarray = path.points[max(index, 0)].copy()
+        return start
+    fraction = (s - path.arc[index]) / path.lengths[index]
+    point: np.ndarray = path.points[index] + fraction * (path.points[index + 1]
+                                                         - path.points[index])
+    return point
+
+
+def test_a_point_along_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:
+    rng = np.random.default_rng(10)
+    for _ in range(500):
+        corners = np.cumsum(rng.uniform(-0.6, 0.6, size=(int(rng.integers(1, 6)), 2)), axis=0)
+        if rng.uniform() < 0.2:
+            corners = np.vstack([corners, corners[-1:]])  # a segment of no length
+        path = PolylinePath([tuple(point) for point in corners])
+        arcs = [*rng.uniform(-0.5, path.total + 0.5, size=20).tolist(), *path.arc.tolist()]
+        for s in arcs:
+            assert path.point_at(s) == tuple(point_at_reference(path, s).tolist())
 
 
 def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:

@@ -49,7 +49,6 @@ from enum import IntEnum
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from servicesim_sim.navigation.body_check import (
     STOP,
@@ -146,21 +145,23 @@ class PolylinePath:
         # floats, and arc lengths are searched with bisect (numpy's call overhead on the one or
         # two segments near the robot was most of the cost)
         self._arcs: list[float] = self.arc.tolist()
+        self._corners: list[tuple[float, float]] = [(x, y) for x, y in self.points.tolist()]
         self._segments: list[tuple[float, ...]] = list(zip(
             *self.points[:-1].T.tolist(), *segments.T.tolist(),
             np.maximum(self.lengths ** 2, 1e-12).tolist(), self.lengths.tolist(),
             self._arcs[:-1], strict=True))
 
-    def point_at(self, s: float) -> np.ndarray:
+    def point_at(self, s: float) -> tuple[float, float]:
+        """The path's point ``s`` metres along it (clamped to the path), in plain floats with
+        the arithmetic numpy's element-wise version used."""
         s = min(max(s, 0.0), self.total)
-        index = min(bisect.bisect_right(self._arcs, s) - 1, len(self.lengths) - 1)
-        if index < 0 or self.lengths[index] == 0.0:
-            start: NDArray[np.float64] = self.points[max(index, 0)].copy()
-            return start
-        fraction = (s - self.arc[index]) / self.lengths[index]
-        point: NDArray[np.float64] = self.points[index] + fraction * (
-            self.points[index + 1] - self.points[index])
-        return point
+        index = min(bisect.bisect_right(self._arcs, s) - 1, len(self._segments) - 1)
+        if index < 0 or self._segments[index][5] == 0.0:
+            x, y = self._corners[max(index, 0)]
+            return x, y
+        start_x, start_y, span_x, span_y, _, length, arc = self._segments[index]
+        fraction = (s - arc) / length
+        return start_x + fraction * span_x, start_y + fraction * span_y
 
     def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
         """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``.
@@ -186,7 +187,8 @@ class PolylinePath:
                 if gap < best_gap:
                     best_arc, best_gap = along, gap
         if not math.isfinite(best_gap):
-            return near, float(np.hypot(*(self.point_at(near) - (x, y))))
+            point_x, point_y = self.point_at(near)
+            return near, float(np.hypot(point_x - x, point_y - y))
         return best_arc, best_gap
 
     def samples(self, s: float, length: float, *, step: float = 0.1) -> np.ndarray:
@@ -507,7 +509,7 @@ class Navigator:
             return False
         tuning = self.tuning
         reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
-        start_x, start_y = self._track.point_at(self._s).tolist()
+        start_x, start_y = self._track.point_at(self._s)
         bound = (reach + tuning.person_across + 0.01) ** 2
         if all((x - start_x) ** 2 + (y - start_y) ** 2 >= bound for x, y in people):
             return False
