@@ -491,6 +491,15 @@ def lane_reach(below: Any) -> Any:
     return WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
 
 
+FLOOR_REACH = lane_reach(0.0)
+"""The :func:`lane_reach` of a person on the floor, as a walker is."""
+ROBOT_REACH = lane_reach(ROBOT_BELOW_WALKER)
+"""The :func:`lane_reach` of the robot."""
+BY_WALKERS = 3
+"""Where the other walkers come in the groups :meth:`Crowd.step` tests a walker's lane
+against (after the robot, the guest and the idlers near its leg)."""
+
+
 def standing_near_legs(route: NDArray[np.float64], standing: Sequence[tuple[float, float]]
                        ) -> list[tuple[tuple[float, float], ...]]:
     """For each leg of the polyline ``route``, the ``standing`` points that can be in the lane
@@ -583,19 +592,26 @@ class Walker:
         return self._leg
 
     def blocked(self, points: Iterable[tuple[float, float]], *, below: float = 0.0) -> bool:
-        """Whether any point lies in the lane ahead (:func:`in_stop_lane`, with its arithmetic;
-        plain floats, and the points farther along x than the stop distance passed over)."""
+        """Whether any point lies in the lane ahead (:func:`in_stop_lane`)."""
+        return self.first_blocking(((points, lane_reach(below)),)) is not None
+
+    def first_blocking(self, groups: Iterable[tuple[Iterable[tuple[float, float]], float]]
+                       ) -> int | None:
+        """The index of the first of ``groups`` (points, and the :func:`lane_reach` of their
+        height under the walker) with a point in the lane ahead, or None: :func:`in_stop_lane`
+        with its arithmetic, in plain floats, the points farther along x than the stop
+        distance passed over."""
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
-        reach = lane_reach(below)
-        for px, py in points:
-            dx = px - x
-            square = dx * dx
-            if square < reach:  # else dx * dx + dy * dy < reach cannot hold
-                dy = py - y
-                if (square + dy * dy < reach and dx * cos + dy * sin > 0.0
-                        and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
-                    return True
-        return False
+        for index, (points, reach) in enumerate(groups):
+            for px, py in points:
+                dx = px - x
+                square = dx * dx
+                if square < reach:  # else dx * dx + dy * dy < reach cannot hold
+                    dy = py - y
+                    if (square + dy * dy < reach and dx * cos + dy * sin > 0.0
+                            and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
+                        return index
+        return None
 
     def stops_for_good(self, still: NDArray[np.float64], *, after_m: float = 0.0
                        ) -> tuple[float, float, float] | None:
@@ -782,37 +798,29 @@ class Crowd:
         for walkers alone :attr:`standoff_s`; then it turns back.
 
         Each walker's lane is tested against the robot, ``others``, the idlers near the leg
-        it is on (:func:`standing_near_legs`, worked out once) and the other walkers."""
+        it is on (:func:`standing_near_legs`, worked out once) and the other walkers, in that
+        order (:meth:`Walker.first_blocking`)."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
         walkers = self._walkers
         if not walkers:
             return
-        robot_place = ((robot[0], robot[1]),)
-        places = [(walker.person.x, walker.person.y) for walker in walkers]
-        blocks = [self._blocks(walker, near_legs, robot_place, others, places)
+        robot_place = (((robot[0], robot[1]),), ROBOT_REACH)
+        others_near = (others, FLOOR_REACH)
+        # last, as BY_WALKERS says; a walker's own place never stops it
+        walking = ([(walker.person.x, walker.person.y) for walker in walkers], FLOOR_REACH)
+        blocks = [walker.first_blocking((robot_place, others_near,
+                                         (near_legs[walker.leg], FLOOR_REACH), walking))
                   for walker, near_legs in zip(walkers, self._standing_near, strict=True)]
-        for walker, (people, others_walking) in zip(walkers, blocks, strict=True):
-            if not (people or others_walking):
+        for walker, block in zip(walkers, blocks, strict=True):
+            if block is None:
                 walker.waited = 0.0
                 walker.advance(walker.direction * walker.speed * dt)
                 continue
             walker.waited += dt
-            patience = self.walker_patience_s if people else self.standoff_s
+            patience = self.standoff_s if block == BY_WALKERS else self.walker_patience_s
             if walker.waited >= patience:
                 walker.turn_back()
-
-    @staticmethod
-    def _blocks(walker: Walker, near_legs: list[tuple[tuple[float, float], ...]],
-                robot_place: tuple[tuple[float, float]], others: Sequence[tuple[float, float]],
-                places: list[tuple[float, float]]) -> tuple[bool, bool]:
-        """Whether anyone but walkers (the robot, ``others``, an idler near its leg) stops
-        ``walker`` where everyone stands now, and if not, whether walkers do (its own place
-        among ``places`` never stops it)."""
-        if (walker.blocked(robot_place, below=ROBOT_BELOW_WALKER) or walker.blocked(others)
-                or walker.blocked(near_legs[walker.leg])):
-            return True, False
-        return False, walker.blocked(places)
 
     def held_for_good(self, *, others: Sequence[tuple[float, float]] = ()
                       ) -> list[tuple[float, float]]:
