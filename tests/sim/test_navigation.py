@@ -28,6 +28,7 @@ from servicesim_sim.navigation.navigator import (
     NavigateToPoseError,
     Navigator,
     PolylinePath,
+    evenly_spaced,
 )
 from servicesim_sim.navigation.parameters import CostmapParameters, InflationLayer
 from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
@@ -859,3 +860,13 @@ def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> 
                         + rng.normal(0.0, 0.3, size=2)).tolist()
             near = float(rng.uniform(-0.5, path.total + 0.5))
             assert path.locate(x, y, near=near) == locate_reference(path, x, y, near=near)
+
+
+def test_evenly_spaced_arcs_are_numpys_linspace_bit_for_bit() -> None:
+    rng = np.random.default_rng(12)
+    for _ in range(3000):
+        start = float(rng.uniform(-5.0, 50.0))
+        stop = start + float(rng.choice([0.0, 1e-300, *rng.uniform(0.0, 6.0, size=3)]))
+        count = int(rng.integers(1, 70))
+        assert evenly_spaced(start, stop, count).tobytes() == np.linspace(start, stop,
+                                                                          count).tobytes()
