@@ -870,3 +870,19 @@ def test_evenly_spaced_arcs_are_numpys_linspace_bit_for_bit() -> None:
         count = int(rng.integers(1, 70))
         assert evenly_spaced(start, stop, count).tobytes() == np.linspace(start, stop,
                                                                           count).tobytes()
+
+
+def test_the_field_of_view_is_worked_out_target_by_target_bit_for_bit() -> None:
+    """A sweep looks at the people and the old marks in one go: each target's distance and
+    whether it is in view are the same as when it is looked at alone."""
+    costmap = Costmap(corridor_map(3.0))
+    rng = np.random.default_rng(14)
+    for _ in range(300):
+        robot = rng.uniform(0.0, 10.0, size=2)
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        targets = robot + rng.uniform(-8.0, 8.0, size=(int(rng.integers(1, 50)), 2))
+        distance, in_field = costmap._in_field(robot, yaw, targets)
+        for index, target in enumerate(targets):
+            alone_distance, alone_in_field = costmap._in_field(robot, yaw, target[None, :])
+            assert alone_distance.tobytes() == distance[index:index + 1].tobytes()
+            assert bool(alone_in_field[0]) == bool(in_field[index])

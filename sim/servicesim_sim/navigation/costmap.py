@@ -239,12 +239,14 @@ class Costmap:
         people = np.asarray(people_xy, dtype=np.float64).reshape(-1, 2)
         current = self.marks  # read once: a sweep works on one set of marks
         old = np.array([(mark.x, mark.y) for mark in current]).reshape(-1, 2)
-        old_in_field = (self._in_field(robot, robot_yaw, old) if old.size
-                        else np.zeros(0, dtype=bool))
-        surface = np.hypot(*(people - robot).T) - self.person_radius
+        count = len(people)
+        distance, in_field = self._in_field(robot, robot_yaw, np.concatenate((people, old)))
+        old_in_field = in_field[count:]
+        surface = distance[:count] - self.person_radius
         near_people = surface <= self.lidar.mark_range
-        in_sight = self._rayed_people(robot, robot_yaw, people, surface=surface,
-                                      near=near_people, old=old[old_in_field])
+        in_sight = self._rayed_people(robot, people, surface=surface, near=near_people,
+                                      in_field=in_field[:count],
+                                      old_distance=distance[count:][old_in_field])
         visible, near = people[in_sight], near_people[in_sight]
         seen = visible[near]
         keep = ~_near_any(old, seen, self.person_radius)  # a person seen there marks it anew
@@ -258,8 +260,9 @@ class Costmap:
         self.visible_people = tuple((float(x), float(y)) for x, y in seen)
         self._set_marks(marks)
 
-    def _rayed_people(self, robot: np.ndarray, yaw: float, people: np.ndarray, *,
-                      surface: np.ndarray, near: np.ndarray, old: np.ndarray) -> np.ndarray:
+    def _rayed_people(self, robot: np.ndarray, people: np.ndarray, *, surface: np.ndarray,
+                      near: np.ndarray, in_field: np.ndarray,
+                      old_distance: np.ndarray) -> np.ndarray:
         """Which people the lidar sees, among those whose visibility matters; False for the rest.
 
         A sweep needs to know whether a person is seen only when they are within the marking
@@ -267,11 +270,12 @@ class Costmap:
         and the mark stays) or nearer than such a mark (they may hide it). Farther people are
         left unrayed: a person can neither stand within the person radius of a mark nor hide it
         unless they are less than a metre farther than it (a generous margin over rounding).
-        Rays to far people behind walls were most of a sweep's cost.
+        Rays to far people behind walls were most of a sweep's cost. ``in_field``: whether
+        each person is in the field of view; ``old_distance``: how far each old mark in it is.
         """
-        reach = (np.hypot(*(old - robot).T).max() - self.person_radius + 1.0 if old.size
+        reach = (old_distance.max() - self.person_radius + 1.0 if old_distance.size
                  else -math.inf)
-        wanted = self._in_field(robot, yaw, people) & (near | (surface < reach))
+        wanted = in_field & (near | (surface < reach))
         in_sight = np.zeros(len(people), dtype=bool)
         if wanted.any():
             in_sight[wanted] = self._in_line_of_sight(robot, people[wanted], occluders=people)
@@ -318,8 +322,11 @@ class Costmap:
         return costs
 
     # ------------------------------------------------------------------ the lidar
-    def _in_field(self, robot: np.ndarray, yaw: float, targets: np.ndarray) -> np.ndarray:
-        """Which targets lie in the lidar's field of view and range (walls and people aside)."""
+    def _in_field(self, robot: np.ndarray, yaw: float,
+                  targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """How far each target's centre is, and whether it lies in the lidar's field of view
+        and range (walls and people aside); element by element, so the people and the old
+        marks are looked at in one go."""
         offsets = targets - robot
         distance = np.hypot(offsets[:, 0], offsets[:, 1])
         surface = distance - self.person_radius
@@ -328,7 +335,7 @@ class Costmap:
         in_field: NDArray[np.bool_] = ((np.abs(bearing) <= self.lidar.half_angle)
                                        & (surface >= self.lidar.min_range)
                                        & (surface <= self.lidar.max_range))
-        return in_field
+        return distance, in_field
 
     def _in_line_of_sight(self, robot: np.ndarray, targets: np.ndarray, *,
                           occluders: np.ndarray) -> np.ndarray:
