@@ -59,7 +59,13 @@ from servicesim_sim.navigation.body_check import (
     Pose,
     Twist,
 )
-from servicesim_sim.navigation.costmap import INSCRIBED, PERSON_RADIUS, Costmap, Lidar
+from servicesim_sim.navigation.costmap import (
+    INSCRIBED,
+    PERSON_RADIUS,
+    Costmap,
+    Lidar,
+    PersonMark,
+)
 from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.navigation.planner import (
     ComputePathToPoseError,
@@ -291,6 +297,7 @@ class Navigator:
         self.path: list[tuple[float, float]] = []
         self._observed_at = -math.inf
         self._people: list[tuple[float, float]] = []
+        self._listed_marks: tuple[tuple[PersonMark, ...], list[tuple[float, float]]] = ((), [])
         self.body_check = None if body is None else BodyCheck(
             body, marks=self._marks, horizon=self.tuning.body_horizon,
             margin=self.tuning.body_margin, person_body=self.tuning.person_body)
@@ -606,8 +613,12 @@ class Navigator:
 
     # ------------------------------------------------------------------ bookkeeping
     def _marks(self) -> list[tuple[float, float]]:
-        """Where the people marked in the costmap stand."""
-        return [(mark.x, mark.y) for mark in self.costmap.marks]
+        """Where the people marked in the costmap stand (the body check asks twice a control
+        step or more: listed again only when the marks changed; not to be altered)."""
+        marks = self.costmap.marks
+        if marks is not self._listed_marks[0]:
+            self._listed_marks = (marks, [(mark.x, mark.y) for mark in marks])
+        return self._listed_marks[1]
 
     def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
         if not force and not self.observation_due(now):

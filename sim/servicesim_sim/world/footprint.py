@@ -155,7 +155,11 @@ class Footprint:
         if not points:
             return math.inf
         x, y, _ = pose
-        nearest = min((px - x) * (px - x) + (py - y) * (py - y) for px, py in points)
+        nearest = math.inf
+        for px, py in points:
+            square = (px - x) * (px - x) + (py - y) * (py - y)
+            if square < nearest:
+                nearest = square
         near = math.sqrt(nearest) - CIRCUMSCRIBED_RADIUS - BOUND_SLACK
         if near > beyond:
             return near  # no point can be nearer the box than that
