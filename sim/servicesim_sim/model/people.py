@@ -67,6 +67,8 @@ WALKER_IDLER_CLEARANCE = 0.75  # ... and this far from idlers (beyond the lane's
 WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns back (ours: the
 # original's hand-drawn loops run one way and rarely meet head on; random loops do, and without
 # this every walker of the office stands deadlocked within about 100 s)
+LANE_WINDOW_M = WALKER_STOP_DISTANCE + 1e-9  # a point farther along x is never in the lane,
+# whatever the rounding of the bounds (far below a nanometre where walkers walk)
 STANDING_SLACK = 1e-6  # metres: a standing point this much beyond the stop distance of a leg
 # is still taken for near it (rounding of a walker's place on the leg is far below that)
 STOP_SEARCH_STEP = 0.05  # metres between the spots of a loop searched for a lasting stop
@@ -599,16 +601,15 @@ class Walker:
                        ) -> int | None:
         """The index of the first of ``groups`` (points, and the :func:`lane_reach` of their
         height under the walker) with a point in the lane ahead, or None: :func:`in_stop_lane`
-        with its arithmetic, in plain floats, the points farther along x than the stop
-        distance passed over."""
+        with its arithmetic, in plain floats, for the points within :data:`LANE_WINDOW_M`
+        along x (no farther one is within the stop distance)."""
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
+        low, high = x - LANE_WINDOW_M, x + LANE_WINDOW_M
         for index, (points, reach) in enumerate(groups):
             for px, py in points:
-                dx = px - x
-                square = dx * dx
-                if square < reach:  # else dx * dx + dy * dy < reach cannot hold
-                    dy = py - y
-                    if (square + dy * dy < reach and dx * cos + dy * sin > 0.0
+                if low < px < high:
+                    dx, dy = px - x, py - y
+                    if (dx * dx + dy * dy < reach and dx * cos + dy * sin > 0.0
                             and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
                         return index
         return None
