@@ -575,3 +575,23 @@ def test_the_depths_booked_are_the_element_wise_ones_over_everyone_bit_for_bit()
         assert approach.tobytes() == np.minimum(np.maximum(
             PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - np.hypot(xs - robot.x, ys - robot.y),
             0.0), PERSON_APPROXIMATION_M).tobytes()
+
+
+def test_rfid_names_everyone_the_plane_distance_puts_within_2_m_bit_for_bit() -> None:
+    sim = engine()
+    rng = np.random.default_rng(16)
+    people = [*sim.crowd.people, sim.guest]
+    for _ in range(200):
+        sim.robot.x, sim.robot.y = (float(value) for value in rng.uniform(-3.0, 3.0, 2))
+        bearings = rng.uniform(-math.pi, math.pi, size=len(people))
+        # many right at the range, and along the axes, where rounding decides
+        bearings[rng.uniform(size=len(people)) < 0.3] = rng.choice([0.0, math.pi / 2, math.pi])
+        distances = np.where(rng.uniform(size=len(people)) < 0.5,
+                             2.0 * (1.0 + rng.choice([-1e-16, 0.0, 1e-16], size=len(people))),
+                             rng.uniform(0.0, 4.0, size=len(people)))
+        for person, bearing, distance in zip(people, bearings, distances, strict=True):
+            person.x = sim.robot.x + float(distance) * math.cos(bearing)
+            person.y = sim.robot.y + float(distance) * math.sin(bearing)
+        expected = [name for name, _, x, y in sim.people_states()
+                    if math.hypot(x - sim.robot.x, y - sim.robot.y) <= 2.0]
+        assert sim.rfid_names() == (expected or None)
