@@ -189,8 +189,8 @@ class FrontCamera:
 
         A ray's wall spans the horizon (its top lies above it, its bottom below), so each
         ray's columns are three runs: ceiling, wall, floor. Every pixel is looked up at once
-        from a palette of the rays' three colours, each as wide as a ray, rather than drawn
-        run by run (a ray at a time, numpy's per-call costs were most of a frame).
+        from a palette of the rays' three colours, each as wide as a ray: drawn a run at a
+        time, a frame would pay numpy's per-call costs hundreds of times.
         """
         height, rays = self.height, depths.size
         fx, centre = self.focal_length, height / 2.0

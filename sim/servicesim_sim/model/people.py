@@ -476,7 +476,7 @@ def in_stop_lane(dx: Any, dy: Any, cos: Any, sin: Any, *, below: Any = 0.0) -> A
     walker's), ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
     walker's own position is never ahead of it). Floats or arrays, element by element (each
     product, sum and difference rounded alike by Python and numpy, so the same answers bit for
-    bit): the walking step (:meth:`Walker.blocked`) and the playability check
+    bit): the walking step (:meth:`Walker.first_blocking`) and the playability check
     (:meth:`Walker.stops_for_good`) share the rule."""
     reach = lane_reach(below)
     return ((dx * dx + dy * dy < reach) & (dx * cos + dy * sin > 0.0)

@@ -1,7 +1,7 @@
 """The front camera's frames as serialised ``sensor_msgs/Image`` messages.
 
 A 640 x 480 rgb8 frame is 921 600 bytes. Building an rclpy ``Image`` of it and letting
-``Publisher.publish`` convert it took about 1.6 ms of CPU a frame (the message's constructor and
+``Publisher.publish`` convert it costs about 1.6 ms of CPU a frame (the message's constructor and
 its copies of the pixels), 24 frames a sim second while the executive reads the camera: more
 than rendering the frame. An Image's layout is fixed once its frame, size and encoding are, so
 :class:`ImageBytes` lays it out once (:class:`~servicesim_sim.wire.cdr.CdrTemplate`) and each
