@@ -17,9 +17,17 @@ from scipy import ndimage
 from sensor_msgs.msg import Image
 
 from servicesim_sim.model.camera import (
+    CAMERA_HEIGHT,
     CEILING,
+    COLUMNS_PER_RAY,
     FLOOR,
+    HEAD,
     RATE_HZ,
+    SHIRT,
+    SKIN,
+    TROUSERS,
+    WALL,
+    WALL_HEIGHT,
     FrontCamera,
     outfit,
     render_front_camera,
@@ -223,3 +231,57 @@ def run_for(simulator: SimulatorNode, *, sim_seconds: float) -> list[float]:
         simulator.engine.step()
         simulator.camera.capture()
     return [when for when, _ in simulator.camera.frames]
+
+
+class RayByRayCamera(FrontCamera):
+    """The camera drawing walls a ray at a time and every part of every figure, with no
+    shortcut: the reference the frames must equal bit for bit."""
+
+    def _draw_room(self, image: np.ndarray, depths: np.ndarray, along_x: np.ndarray) -> None:
+        horizon = self.height // 2
+        image[:horizon] = CEILING
+        image[horizon:] = FLOOR
+        fx, centre = self.focal_length, self.height / 2.0
+        tops = np.clip(np.rint(centre - fx * (WALL_HEIGHT - CAMERA_HEIGHT) / depths), 0,
+                       self.height).astype(int)
+        bottoms = np.clip(np.rint(centre + fx * CAMERA_HEIGHT / depths), 0,
+                          self.height).astype(int)
+        shade = np.clip(1.0 - depths / 30.0, 0.35, 1.0) * np.where(along_x, 0.86, 1.0)
+        colours = shade[:, None] * np.asarray(WALL, dtype=float)
+        for ray, (top, bottom) in enumerate(zip(tops, bottoms, strict=True)):
+            first = ray * COLUMNS_PER_RAY
+            image[top:bottom, first:first + COLUMNS_PER_RAY] = colours[ray]
+
+    def _draw_figure(self, image: np.ndarray, column_depths: np.ndarray, *, depth: float,
+                     lateral: float, outfit: tuple[tuple[int, int, int],
+                                                   tuple[int, int, int]]) -> None:
+        shirt, trousers = outfit
+        for (_part, bottom, top, width), colour in ((TROUSERS, trousers), (SHIRT, shirt),
+                                                    (HEAD, SKIN)):
+            scale = self.focal_length / depth
+            middle = self.width / 2.0 - lateral * scale
+            left = max(0, round(middle - width / 2.0 * scale))
+            right = min(self.width, round(middle + width / 2.0 * scale))
+            upper = max(0, round(self.height / 2.0 - (top - CAMERA_HEIGHT) * scale))
+            lower = min(self.height, round(self.height / 2.0 - (bottom - CAMERA_HEIGHT) * scale))
+            if left >= right or upper >= lower:
+                continue
+            seen = column_depths[left:right] > depth
+            image[upper:lower, left:right][:, seen] = colour
+
+
+@pytest.mark.parametrize("width", [WIDTH, 62])
+def test_frames_equal_the_ray_by_ray_drawing_bit_for_bit(width: int) -> None:
+    office = load_world(DEFAULT_WORLD).map
+    camera, reference = FrontCamera(office, width=width), RayByRayCamera(office, width=width)
+    rng = np.random.default_rng(15)
+    free = np.argwhere(office.free_mask())
+    for _ in range(40):
+        row, col = free[rng.integers(len(free))]
+        x, y = office.cell_to_world(int(row), int(col))
+        robot = (x, y, float(rng.uniform(-math.pi, math.pi)))
+        people = [(f"human_{index:05d}", "idler", x + float(dx), y + float(dy))
+                  for index, (dx, dy) in enumerate(rng.uniform(-6.0, 6.0, size=(30, 2)))]
+        people.append((GUEST, "guest", x + 1.5 * math.cos(robot[2]), y + 1.5 * math.sin(robot[2])))
+        assert np.array_equal(camera.render(robot=robot, people=people, guest_name=GUEST),
+                              reference.render(robot=robot, people=people, guest_name=GUEST))

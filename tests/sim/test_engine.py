@@ -11,9 +11,11 @@ from functools import cache
 import numpy as np
 import pytest
 
+from servicesim_sim.model.contacts import PERSON_APPROXIMATION_M, PERSON_BODY_RADIUS
 from servicesim_sim.model.engine import TF_ERROR, SimEngine
 from servicesim_sim.model.scenario import Difficulty, make_scenario
 from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
+from servicesim_sim.world.footprint import Footprint
 from servicesim_sim.world.office import SHIPPED_DRIFT_TIMES
 
 
@@ -549,3 +551,47 @@ def test_the_depth_sums_are_what_ndarray_sum_gives_bit_for_bit() -> None:
         distances = rng.uniform(0.0, 3.0, size=int(rng.integers(0, 80)))
         depths = np.maximum(1.0 - distances, 0.0)
         assert float(np.add.reduce(depths, axis=None)).hex() == float(depths.sum()).hex()
+
+
+def test_the_depths_booked_are_the_element_wise_ones_over_everyone_bit_for_bit() -> None:
+    sim = engine()
+    rng = np.random.default_rng(13)
+    robot, people = sim.robot, [*sim.crowd.people, sim.guest]
+    for _ in range(300):
+        robot.x, robot.y, robot.yaw = (float(value) for value in rng.uniform(-3.0, 3.0, 3))
+        bearings = rng.uniform(-math.pi, math.pi, size=len(people))
+        # some right at the ghost cylinder's reach, where rounding decides
+        reach = (PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS) * (
+            1.0 + rng.choice([-1e-15, 0.0, 1e-15], size=len(people)))
+        distances = np.where(rng.uniform(size=len(people)) < 0.3, reach,
+                             rng.uniform(0.0, 1.6, size=len(people)))
+        for person, bearing, distance in zip(people, bearings, distances, strict=True):
+            person.x = robot.x + float(distance) * math.cos(bearing)
+            person.y = robot.y + float(distance) * math.sin(bearing)
+        touching, approach = sim.penalty_checker._person_depths()
+        xs, ys = np.array([p.x for p in people]), np.array([p.y for p in people])
+        assert touching.tobytes() == Footprint.person_depths(
+            robot.pose, xs, ys, radius=PERSON_BODY_RADIUS).tobytes()
+        assert approach.tobytes() == np.minimum(np.maximum(
+            PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - np.hypot(xs - robot.x, ys - robot.y),
+            0.0), PERSON_APPROXIMATION_M).tobytes()
+
+
+def test_rfid_names_everyone_the_plane_distance_puts_within_2_m_bit_for_bit() -> None:
+    sim = engine()
+    rng = np.random.default_rng(16)
+    people = [*sim.crowd.people, sim.guest]
+    for _ in range(200):
+        sim.robot.x, sim.robot.y = (float(value) for value in rng.uniform(-3.0, 3.0, 2))
+        bearings = rng.uniform(-math.pi, math.pi, size=len(people))
+        # many right at the range, and along the axes, where rounding decides
+        bearings[rng.uniform(size=len(people)) < 0.3] = rng.choice([0.0, math.pi / 2, math.pi])
+        distances = np.where(rng.uniform(size=len(people)) < 0.5,
+                             2.0 * (1.0 + rng.choice([-1e-16, 0.0, 1e-16], size=len(people))),
+                             rng.uniform(0.0, 4.0, size=len(people)))
+        for person, bearing, distance in zip(people, bearings, distances, strict=True):
+            person.x = sim.robot.x + float(distance) * math.cos(bearing)
+            person.y = sim.robot.y + float(distance) * math.sin(bearing)
+        expected = [name for name, _, x, y in sim.people_states()
+                    if math.hypot(x - sim.robot.x, y - sim.robot.y) <= 2.0]
+        assert sim.rfid_names() == (expected or None)

@@ -207,3 +207,20 @@ def test_the_nearest_gap_is_the_least_gap_or_a_bound_beyond_the_threshold() -> N
             bounded += 1
     assert exact > 300 and bounded > 300
     assert body.nearest_gap((0.0, 0.0, 0.0), []) == math.inf
+
+
+def test_the_centre_gap_reads_the_maps_distance_grid_cell_by_cell_bit_for_bit() -> None:
+    occupancy = office().map
+    footprint = Footprint(occupancy)
+    rng = np.random.default_rng(11)
+    (min_x, min_y, max_x, max_y) = occupancy.extent
+    xs = rng.uniform(min_x - 1.0, max_x + 1.0, size=4000)
+    ys = rng.uniform(min_y - 1.0, max_y + 1.0, size=4000)
+    xs[:1000] = np.round(xs[:1000] / occupancy.resolution) * occupancy.resolution  # cell edges
+    for x, y in zip(xs.tolist(), ys.tolist(), strict=True):
+        row, col = occupancy.world_to_cell(x, y)
+        inside = occupancy.in_bounds(row, col)
+        assert occupancy.flat_index(x, y) == (row * occupancy.width + col if inside else None)
+        expected = (float(occupancy.wall_distance[row, col]) - 1.5 * occupancy.resolution
+                    if inside else 0.0)
+        assert footprint._centre_gap(x, y) == expected

@@ -28,6 +28,7 @@ from servicesim_sim.navigation.navigator import (
     NavigateToPoseError,
     Navigator,
     PolylinePath,
+    evenly_spaced,
 )
 from servicesim_sim.navigation.parameters import CostmapParameters, InflationLayer
 from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
@@ -816,8 +817,33 @@ def locate_reference(path: PolylinePath, x: float, y: float, *, near: float,
     gaps[(arcs < near - 0.2) | (arcs > near + reach)] = np.inf
     best = int(np.argmin(gaps))
     if not math.isfinite(gaps[best]):
-        return near, float(np.hypot(*(path.point_at(near) - (x, y))))
+        return near, float(np.hypot(*(point_at_reference(path, near) - (x, y))))
     return float(arcs[best]), float(gaps[best])
+
+
+def point_at_reference(path: PolylinePath, s: float) -> np.ndarray:
+    """PolylinePath.point_at in numpy: the segment's start plus the fraction of its span."""
+    s = min(max(s, 0.0), path.total)
+    index = min(int(np.searchsorted(path.arc, s, side="right")) - 1, len(path.lengths) - 1)
+    if index < 0 or path.lengths[index] == 0.0:
+        start: np.ndarray = path.points[max(index, 0)].copy()
+        return start
+    fraction = (s - path.arc[index]) / path.lengths[index]
+    point: np.ndarray = path.points[index] + fraction * (path.points[index + 1]
+                                                         - path.points[index])
+    return point
+
+
+def test_a_point_along_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:
+    rng = np.random.default_rng(10)
+    for _ in range(500):
+        corners = np.cumsum(rng.uniform(-0.6, 0.6, size=(int(rng.integers(1, 6)), 2)), axis=0)
+        if rng.uniform() < 0.2:
+            corners = np.vstack([corners, corners[-1:]])  # a segment of no length
+        path = PolylinePath([tuple(point) for point in corners])
+        arcs = [*rng.uniform(-0.5, path.total + 0.5, size=20).tolist(), *path.arc.tolist()]
+        for s in arcs:
+            assert path.point_at(s) == tuple(point_at_reference(path, s).tolist())
 
 
 def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> None:
@@ -834,3 +860,29 @@ def test_locating_on_a_path_matches_the_element_wise_reference_bit_for_bit() -> 
                         + rng.normal(0.0, 0.3, size=2)).tolist()
             near = float(rng.uniform(-0.5, path.total + 0.5))
             assert path.locate(x, y, near=near) == locate_reference(path, x, y, near=near)
+
+
+def test_evenly_spaced_arcs_are_numpys_linspace_bit_for_bit() -> None:
+    rng = np.random.default_rng(12)
+    for _ in range(3000):
+        start = float(rng.uniform(-5.0, 50.0))
+        stop = start + float(rng.choice([0.0, 1e-300, *rng.uniform(0.0, 6.0, size=3)]))
+        count = int(rng.integers(1, 70))
+        assert evenly_spaced(start, stop, count).tobytes() == np.linspace(start, stop,
+                                                                          count).tobytes()
+
+
+def test_the_field_of_view_is_worked_out_target_by_target_bit_for_bit() -> None:
+    """A sweep looks at the people and the old marks in one go: each target's distance and
+    whether it is in view are the same as when it is looked at alone."""
+    costmap = Costmap(corridor_map(3.0))
+    rng = np.random.default_rng(14)
+    for _ in range(300):
+        robot = rng.uniform(0.0, 10.0, size=2)
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        targets = robot + rng.uniform(-8.0, 8.0, size=(int(rng.integers(1, 50)), 2))
+        distance, in_field = costmap._in_field(robot, yaw, targets)
+        for index, target in enumerate(targets):
+            alone_distance, alone_in_field = costmap._in_field(robot, yaw, target[None, :])
+            assert alone_distance.tobytes() == distance[index:index + 1].tobytes()
+            assert bool(alone_in_field[0]) == bool(in_field[index])

@@ -27,7 +27,7 @@ from servicesim_sim.model.people import (
     Person,
     Walker,
     in_stop_lane,
-    lane_blocks,
+    standing_near_legs,
 )
 from servicesim_sim.model.scenario import make_scenario
 from servicesim_sim.world.files import (
@@ -514,28 +514,51 @@ def test_walkers_stand_where_their_route_puts_them_bit_for_bit() -> None:
             assert (walker._cos, walker._sin) == (math.cos(yaw), math.sin(yaw))
 
 
-def test_the_lane_table_answers_as_the_lane_test_of_each_pair_bit_for_bit() -> None:
+def test_a_walkers_lane_test_answers_as_the_rule_for_each_point_bit_for_bit() -> None:
     rng = np.random.default_rng(6)
     for _ in range(200):
-        walkers = rng.uniform(0.0, 4.0, size=(int(rng.integers(1, 12)), 2))
-        yaws = rng.uniform(-math.pi, math.pi, size=len(walkers))
-        facings = np.column_stack([np.cos(yaws), np.sin(yaws)])
+        route = rng.uniform(0.0, 4.0, size=(int(rng.integers(2, 6)), 2))
+        person = Person(name="human_00001", role=WALKER, x=0.0, y=0.0, yaw=0.0)
+        walker = Walker.on(person, np.vstack([route, route[:1]]), speed=1.0,
+                           start=float(rng.uniform()))
+        x, y, (cos, sin) = person.x, person.y, walker.facing_unit
         points = rng.uniform(0.0, 4.0, size=(int(rng.integers(1, 50)), 2))
         # some points right at the edge of the reach and of the lane, where rounding decides
-        edge = rng.integers(len(walkers), size=len(points) // 2)
-        bearing = yaws[edge] + rng.uniform(-0.5, 0.5, size=edge.size)
-        reach = WALKER_STOP_DISTANCE * (1.0 + rng.choice([-1e-15, 0.0, 1e-15], size=edge.size))
-        points[:edge.size] = walkers[edge] + reach[:, None] * np.column_stack(
+        edge = len(points) // 2
+        bearing = person.yaw + rng.uniform(-0.5, 0.5, size=edge)
+        reach = WALKER_STOP_DISTANCE * (1.0 + rng.choice([-1e-15, 0.0, 1e-15], size=edge))
+        points[:edge] = (x, y) + reach[:, None] * np.column_stack(
             [np.cos(bearing), np.sin(bearing)])
-        points = np.vstack([points, walkers])  # their own places too
-        below = rng.choice([0.0, ROBOT_BELOW_WALKER], size=len(points))
-        table = lane_blocks(walkers, facings, points, below=below)
-        for i, ((x, y), (cos, sin)) in enumerate(zip(walkers.tolist(), facings.tolist(),
-                                                     strict=True)):
-            for j, (px, py) in enumerate(points.tolist()):
-                assert table[i, j] == in_stop_lane(px - x, py - y, cos, sin,
-                                                   below=float(below[j]))
-            assert not table[i, len(points) - len(walkers) + i]  # never ahead of itself
+        places = [*points.tolist(), (x, y)]  # its own place too
+        for below in (0.0, ROBOT_BELOW_WALKER):
+            for px, py in places:
+                assert walker.blocked([(px, py)], below=below) == in_stop_lane(
+                    px - x, py - y, cos, sin, below=below)
+            assert walker.blocked(places, below=below) == any(
+                in_stop_lane(px - x, py - y, cos, sin, below=below) for px, py in places)
+        assert not walker.blocked([(x, y)])  # never ahead of itself
+
+
+def test_the_standing_points_near_a_leg_are_all_that_can_stop_a_walker_on_it() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        corners = rng.uniform(0.0, 8.0, size=(int(rng.integers(2, 6)), 2))
+        route = np.vstack([corners, corners[:1]])
+        standing = [tuple(point) for point in rng.uniform(-2.0, 10.0, size=(30, 2)).tolist()]
+        near_legs = standing_near_legs(route, standing)
+        assert len(near_legs) == len(route) - 1
+        person = Person(name="human_00001", role=WALKER, x=0.0, y=0.0, yaw=0.0)
+        walker = Walker.on(person, route, speed=1.0, start=0.0)
+        for _ in range(400):
+            walker.advance(float(rng.uniform(0.0, 0.5)))
+            if rng.uniform() < 0.1:
+                walker.turn_back()
+            kept = near_legs[walker.leg]
+            assert set(kept) <= set(standing)
+            for point in standing:
+                if point not in kept:
+                    assert math.dist(point, (person.x, person.y)) > WALKER_STOP_DISTANCE
+                    assert not walker.blocked([point])
 
 
 def step_one_by_one(people: Crowd, dt: float, *, robot: tuple[float, float, float],
@@ -543,10 +566,15 @@ def step_one_by_one(people: Crowd, dt: float, *, robot: tuple[float, float, floa
     """The crowd's step as the rule says it, walker by walker, point by point."""
     standing = [(p.x, p.y) for p in idlers_of(people)]
     moving = [(w.person.x, w.person.y) for w in people.walkers]
+
+    def stops(walker: Walker, points: list[tuple[float, float]], below: float = 0.0) -> bool:
+        x, y, (cos, sin) = walker.person.x, walker.person.y, walker.facing_unit
+        return any(in_stop_lane(px - x, py - y, cos, sin, below=below) for px, py in points)
+
     for index, walker in enumerate(people.walkers):
-        by_people = (walker.blocked([robot[:2]], below=ROBOT_BELOW_WALKER)
-                     or walker.blocked(others + standing))
-        by_walkers = walker.blocked(moving[:index] + moving[index + 1:])
+        by_people = (stops(walker, [robot[:2]], below=ROBOT_BELOW_WALKER)
+                     or stops(walker, others + standing))
+        by_walkers = stops(walker, moving[:index] + moving[index + 1:])
         if not (by_people or by_walkers):
             walker.waited = 0.0
             walker.advance(walker.direction * walker.speed * dt)

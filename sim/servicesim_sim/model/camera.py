@@ -48,6 +48,7 @@ NEAREST_FIGURE = 0.2  # metres; nearer people are not drawn
 TROUSERS = ("trousers", 0.0, 0.8, 0.34)
 SHIRT = ("shirt", 0.8, 1.5, 0.46)
 HEAD = ("head", 1.52, 1.75, 0.2)
+WIDEST_PART = max(TROUSERS[3], SHIRT[3], HEAD[3])
 
 Colour = tuple[int, int, int]
 CEILING: Colour = (214, 212, 204)
@@ -85,6 +86,8 @@ class FrontCamera:
     height: int = HEIGHT
     hfov: float = HFOV
     _walls: np.ndarray = field(init=False, repr=False)
+    _walls_flat: np.ndarray = field(init=False, repr=False)
+    _focal_length: float = field(init=False, repr=False)
     _ray_angles: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -93,13 +96,15 @@ class FrontCamera:
                              "needs at least 4x2 pixels and 0 < hfov < pi")
         blocked = np.asarray(self.occupancy_map.blocked_mask(), dtype=bool)
         self._walls = np.pad(blocked, 1, constant_values=True)  # the map's edge is a wall
+        self._walls_flat = self._walls.ravel()  # one flat lookup costs a third of a 2-D one
+        self._focal_length = (self.width / 2.0) / math.tan(self.hfov / 2.0)
         centres = np.arange(0, self.width, COLUMNS_PER_RAY) + COLUMNS_PER_RAY / 2.0
         self._ray_angles = np.arctan((self.width / 2.0 - centres) / self.focal_length)
 
     @property
     def focal_length(self) -> float:
-        """fx = fy in pixels."""
-        return (self.width / 2.0) / math.tan(self.hfov / 2.0)
+        """fx = fy in pixels (worked out once, with the rays)."""
+        return self._focal_length
 
     def render(self, *, robot: Pose, people: Sequence[PersonState],
                guest_name: str) -> np.ndarray:
@@ -133,7 +138,7 @@ class FrontCamera:
             along = done + np.arange(1, MARCH_CHUNK + 1, dtype=float)  # cells; one per sample
             rows = self._cells(start_row + sin[pending, None] * along, self._walls.shape[0])
             cols = self._cells(start_col + cos[pending, None] * along, self._walls.shape[1])
-            hits = self._walls[rows, cols]
+            hits = self._walls_flat[rows * self._walls.shape[1] + cols]  # as _walls[rows, cols]
             found = np.flatnonzero(hits.any(axis=1))
             first = hits[found].argmax(axis=1)
             rays = pending[found]
@@ -179,19 +184,35 @@ class FrontCamera:
         return cells
 
     def _draw_room(self, image: np.ndarray, depths: np.ndarray, along_x: np.ndarray) -> None:
-        horizon = self.height // 2
-        image[:horizon] = CEILING
-        image[horizon:] = FLOOR
-        fx, centre = self.focal_length, self.height / 2.0
+        """Ceiling above the horizon, floor below, and each ray's wall over both, from its
+        top to its bottom row.
+
+        A ray's wall spans the horizon (its top lies above it, its bottom below), so each
+        ray's columns are three runs: ceiling, wall, floor. Every pixel is looked up at once
+        from a palette of the rays' three colours, each as wide as a ray: drawn a run at a
+        time, a frame would pay numpy's per-call costs hundreds of times.
+        """
+        height, rays = self.height, depths.size
+        fx, centre = self.focal_length, height / 2.0
         tops = np.clip(np.rint(centre - fx * (WALL_HEIGHT - CAMERA_HEIGHT) / depths), 0,
-                       self.height).astype(int)
+                       height).astype(int)
         bottoms = np.clip(np.rint(centre + fx * CAMERA_HEIGHT / depths), 0,
-                          self.height).astype(int)
+                          height).astype(int)
         shade = np.clip(1.0 - depths / 30.0, 0.35, 1.0) * np.where(along_x, 0.86, 1.0)
         colours = shade[:, None] * np.asarray(WALL, dtype=float)
-        for ray, (top, bottom) in enumerate(zip(tops, bottoms, strict=True)):
-            first = ray * COLUMNS_PER_RAY
-            image[top:bottom, first:first + COLUMNS_PER_RAY] = colours[ray]
+        palette = np.empty((rays, 3, COLUMNS_PER_RAY, 3), dtype=np.uint8)
+        palette[:, 0] = CEILING
+        palette[:, 1] = colours[:, None, :]  # cast to uint8 as drawing a ray's run casts it
+        palette[:, 2] = FLOOR
+        rows = np.arange(height)[:, None]
+        runs = (rows >= tops).astype(np.intp) + (rows >= bottoms)  # 0, 1, 2: which run
+        runs += np.arange(rays) * 3
+        drawn = image if rays * COLUMNS_PER_RAY == self.width else np.empty(
+            (height, rays * COLUMNS_PER_RAY, 3), dtype=np.uint8)
+        np.take(palette.reshape(rays * 3, -1), runs, axis=0,
+                out=drawn.reshape(height, rays, -1))
+        if drawn is not image:
+            image[...] = drawn[:, :self.width]
 
     # ------------------------------------------------------------------ people
     @staticmethod
@@ -210,19 +231,30 @@ class FrontCamera:
 
     def _draw_figure(self, image: np.ndarray, column_depths: np.ndarray, *, depth: float,
                      lateral: float, outfit: tuple[Colour, Colour]) -> None:
+        """The figure's parts, each in the columns where its wall lies behind it; nothing
+        when no column of its widest part does (the others' columns lie within those)."""
         shirt, trousers = outfit
-        for (_part, bottom, top, width), colour in ((TROUSERS, trousers), (SHIRT, shirt),
-                                                    (HEAD, SKIN)):
-            self._draw_part(image, column_depths, depth=depth, lateral=lateral,
-                            span=(bottom, top, width), colour=colour)
-
-    def _draw_part(self, image: np.ndarray, column_depths: np.ndarray, *, depth: float,
-                   lateral: float, span: tuple[float, float, float], colour: Colour) -> None:
-        bottom, top, width = span
         scale = self.focal_length / depth
         middle = self.width / 2.0 - lateral * scale
-        left = max(0, round(middle - width / 2.0 * scale))
-        right = min(self.width, round(middle + width / 2.0 * scale))
+        left, right = self._columns(middle=middle, scale=scale, width=WIDEST_PART)
+        if left >= right or not (column_depths[left:right] > depth).any():
+            return
+        for (_part, bottom, top, width), colour in ((TROUSERS, trousers), (SHIRT, shirt),
+                                                    (HEAD, SKIN)):
+            self._draw_part(image, column_depths, depth=depth, middle=middle, scale=scale,
+                            span=(bottom, top, width), colour=colour)
+
+    def _columns(self, *, middle: float, scale: float, width: float) -> tuple[int, int]:
+        """The image columns [left, right) of a part ``width`` metres wide centred on column
+        ``middle``, ``scale`` pixels to the metre."""
+        return (max(0, round(middle - width / 2.0 * scale)),
+                min(self.width, round(middle + width / 2.0 * scale)))
+
+    def _draw_part(self, image: np.ndarray, column_depths: np.ndarray, *, depth: float,
+                   middle: float, scale: float, span: tuple[float, float, float],
+                   colour: Colour) -> None:
+        bottom, top, width = span
+        left, right = self._columns(middle=middle, scale=scale, width=width)
         upper = max(0, round(self.height / 2.0 - (top - CAMERA_HEIGHT) * scale))
         lower = min(self.height, round(self.height / 2.0 - (bottom - CAMERA_HEIGHT) * scale))
         if left >= right or upper >= lower:

@@ -29,6 +29,11 @@ PERSON_BODY_RADIUS = 0.25  # a person's collision box (0.44 x 0.60 m) as a disc
 PERSON_APPROXIMATION_M = 0.75  # ghost cylinder radius, centred on the base (servicebot.urdf)
 OBJECT_APPROXIMATION_M = 0.35  # ghost cylinder radius, centred on the base (servicebot.urdf)
 CLOSING_SPEED_BOUND = 3.0  # m/s, with a margin: walkers 1.2 at most, the robot 0.5
+APPROACH_REACH_M = PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS
+"""How far from the robot's origin a person's origin reaches its people's ghost cylinder (and
+farther than its box reaches, 0.32 m, and a body's 0.25 m)."""
+APPROACH_REACH_SQUARED = APPROACH_REACH_M * APPROACH_REACH_M * (1.0 + 1e-9)
+"""Its square, with a margin over the rounding of squares against ``np.hypot``."""
 
 
 class PenaltyChecker:
@@ -47,27 +52,54 @@ class PenaltyChecker:
         if (clearance >= OBJECT_APPROXIMATION_M and robot.wall_depth == 0.0
                 and not self._anyone_may_be_near(now)):
             return  # nobody and nothing near: the common case, nothing to book
-        xs, ys = self._person_positions()
-        distances = np.hypot(xs - robot.x, ys - robot.y)
-        # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0 from a
-        # constant minus a distance), without np.clip's wrappers, every step someone is near;
-        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
-        touching = robot.footprint.person_depths(robot.pose, xs, ys, radius=PERSON_BODY_RADIUS)
+        touching, approach = self._person_depths()
         causes = self._person_causes()
+        # np.add.reduce is what ndarray.sum runs (the same pairwise sum), without its wrapper
         self.referee.contact(person_depth=float(np.add.reduce(touching, axis=None)),
                              object_depth=robot.wall_depth, dt=dt,
                              people=list(zip(causes, touching.tolist(), strict=True)))
-        approach = np.minimum(
-            np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
-            PERSON_APPROXIMATION_M)
         self.referee.approximation(
             person_depth=float(np.add.reduce(approach, axis=None)),
             object_depth=min(OBJECT_APPROXIMATION_M, max(0.0, OBJECT_APPROXIMATION_M - clearance)),
             dt=dt, people=list(zip(causes, approach.tolist(), strict=True)))
 
+    def _person_depths(self) -> tuple[np.ndarray, np.ndarray]:
+        """How deep the robot's box reaches into each person's body, and its people's ghost
+        cylinder, everyone in :meth:`_person_causes`' order (the guest last).
+
+        Worked out, with numpy's element-wise arithmetic, for the people whose origin may lie
+        within :data:`APPROACH_REACH_M` of the robot's; the rest reach neither, and are the
+        0.0 that arithmetic makes them, so the sums over everyone are the same bit for bit.
+        """
+        robot = self.robot
+        x, y = robot.x, robot.y
+        near: list[int] = []
+        near_xs: list[float] = []
+        near_ys: list[float] = []
+        places = [(person.x, person.y) for person in self.crowd.people]
+        for index, (px, py) in enumerate([*places, (self.guest.x, self.guest.y)]):
+            dx, dy = px - x, py - y
+            if dx * dx + dy * dy <= APPROACH_REACH_SQUARED:
+                near.append(index)
+                near_xs.append(px)
+                near_ys.append(py)
+        count = len(self.crowd.people) + 1
+        touching, approach = np.zeros(count), np.zeros(count)
+        if near:
+            xs, ys = np.array(near_xs), np.array(near_ys)
+            # np.maximum and np.minimum, not np.clip: the same values (no NaN, and no -0.0
+            # from a constant minus a distance), without np.clip's wrappers
+            touching[near] = robot.footprint.person_depths(robot.pose, xs, ys,
+                                                           radius=PERSON_BODY_RADIUS)
+            distances = np.hypot(xs - x, ys - y)
+            approach[near] = np.minimum(
+                np.maximum(PERSON_APPROXIMATION_M + PERSON_BODY_RADIUS - distances, 0.0),
+                PERSON_APPROXIMATION_M)
+        return touching, approach
+
     def _person_causes(self) -> list[str]:
         """Each person's cause key for the referee's books by cause (``ROLE/NAME``), in
-        :meth:`_person_positions`' order; worked out again only when the number of people
+        :meth:`_person_depths`' order; worked out again only when the number of people
         changed (names and roles never do)."""
         if len(self._causes) != len(self.crowd.people) + 1:
             self._causes = [*(f"{person.role}/{person.name}" for person in self.crowd.people),
@@ -90,16 +122,13 @@ class PenaltyChecker:
 
     def _nearest_person_distance(self) -> float:
         """Distance from the robot's origin to the nearest person's origin (plain floats:
-        this runs every step)."""
+        this runs every few steps)."""
         x, y = self.robot.x, self.robot.y
-        nearest = min(((person.x - x) ** 2 + (person.y - y) ** 2
-                       for person in self.crowd.people),
-                      default=math.inf)
-        nearest = min(nearest, (self.guest.x - x) ** 2 + (self.guest.y - y) ** 2)
+        dx, dy = self.guest.x - x, self.guest.y - y
+        nearest = dx * dx + dy * dy
+        for person in self.crowd.people:
+            dx, dy = person.x - x, person.y - y
+            square = dx * dx + dy * dy
+            if square < nearest:
+                nearest = square
         return math.sqrt(nearest)
-
-    def _person_positions(self) -> tuple[np.ndarray, np.ndarray]:
-        """Everyone's origin, the guest last."""
-        xs = [person.x for person in self.crowd.people] + [self.guest.x]
-        ys = [person.y for person in self.crowd.people] + [self.guest.y]
-        return np.asarray(xs), np.asarray(ys)

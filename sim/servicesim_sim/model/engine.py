@@ -38,7 +38,7 @@ from servicesim_sim.model.localisation import (
     between,
     compose,
 )
-from servicesim_sim.model.people import Crowd
+from servicesim_sim.model.people import Crowd, Person
 from servicesim_sim.model.referee import Referee, RefereeReport
 from servicesim_sim.model.robot import Robot, WallClearance
 from servicesim_sim.model.scan import Scanner, surface_clearance
@@ -51,6 +51,8 @@ from servicesim_sim.world.footprint import CIRCUMSCRIBED_RADIUS
 
 PHYSICS_STEP_S = 0.02  # 50 Hz: the score topic's rate
 RFID_RANGE_M = 2.0
+RFID_WINDOW_M = RFID_RANGE_M + 1e-9  # a person farther along x or y is out of range, however
+# the bounds round: only those within are measured
 CONTROLLER_PERIOD_S = 0.05  # navigation's controller runs at 20 Hz, as Nav2's does by default
 CROWD_PERIOD_STEPS = 2  # walkers move at 25 Hz: 5 cm a step at their fastest
 TF_ERROR = 9002  # Nav2 NavigateToPose: no transform map -> base_link, i.e. not localised
@@ -322,8 +324,12 @@ class SimEngine:
         original's world file lists its actors and ``VicinityPlugin.cc`` reports them); None
         (nothing published) when nobody is, or a reading is lost."""
         x, y = self.robot.x, self.robot.y
-        names = [name for name, _, px, py in self.people_states()
-                 if math.hypot(px - x, py - y) <= RFID_RANGE_M]
+        low_x, high_x = x - RFID_WINDOW_M, x + RFID_WINDOW_M
+        low_y, high_y = y - RFID_WINDOW_M, y + RFID_WINDOW_M
+        everyone: list[Person | Guest] = [*self.crowd.people, self.guest]
+        names = [person.name for person in everyone
+                 if low_x < person.x < high_x and low_y < person.y < high_y
+                 and math.hypot(person.x - x, person.y - y) <= RFID_RANGE_M]
         if not names or self._knobs.random() < self.scenario.difficulty.rfid_dropout:
             return None
         return names

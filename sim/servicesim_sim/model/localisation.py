@@ -124,7 +124,7 @@ class AmclModel:
         self.map_to_odom: Pose | None = None
         self.estimate: Estimate | None = None
         self._converges = False
-        self._updated_at: Pose = IDENTITY
+        self._since_update: Pose = inverse(IDENTITY)  # undoes the odometry of the last update
 
     @property
     def localised(self) -> bool:
@@ -146,7 +146,7 @@ class AmclModel:
         """A filter update if odometry moved far enough since the last one; whether it ran."""
         if self.map_to_odom is None:
             return False
-        dx, dy, dyaw = between(self._updated_at, odom)
+        dx, dy, dyaw = compose(self._since_update, odom)  # between(last update's odom, odom)
         if math.hypot(dx, dy) < self.update_min_d and abs(dyaw) < self.update_min_a:
             return False
         if not self._converges:
@@ -164,7 +164,7 @@ class AmclModel:
     def _publish(self, pose: Pose, odom: Pose, estimate: Estimate) -> None:
         self.map_to_odom = compose(pose, inverse(odom))
         self.estimate = estimate
-        self._updated_at = odom
+        self._since_update = inverse(odom)
 
 
 def initial_pose_problem(*, frame_id: str, global_frame: str,

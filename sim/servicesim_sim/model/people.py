@@ -40,7 +40,7 @@ import bisect
 import itertools
 import math
 import weakref
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, overload
 
@@ -67,6 +67,10 @@ WALKER_IDLER_CLEARANCE = 0.75  # ... and this far from idlers (beyond the lane's
 WALKER_STANDOFF_S = 5.0  # a walker blocked by walkers alone this long turns back (ours: the
 # original's hand-drawn loops run one way and rarely meet head on; random loops do, and without
 # this every walker of the office stands deadlocked within about 100 s)
+LANE_WINDOW_M = WALKER_STOP_DISTANCE + 1e-9  # a point farther along x is never in the lane,
+# whatever the rounding of the bounds (far below a nanometre where walkers walk)
+STANDING_SLACK = 1e-6  # metres: a standing point this much beyond the stop distance of a leg
+# is still taken for near it (rounding of a walker's place on the leg is far below that)
 STOP_SEARCH_STEP = 0.05  # metres between the spots of a loop searched for a lasting stop
 ROUTE_DRAWS = 50  # loops drawn per walker before giving up on one clear of standing people
 FIRST_WAYPOINT_DRAW = 21  # the original draws a walker's first waypoint as rand(0..20)
@@ -472,22 +476,49 @@ def in_stop_lane(dx: Any, dy: Any, cos: Any, sin: Any, *, below: Any = 0.0) -> A
     walker's), ahead of the walker and within :data:`WALKER_LANE_HALF_WIDTH` of its line (the
     walker's own position is never ahead of it). Floats or arrays, element by element (each
     product, sum and difference rounded alike by Python and numpy, so the same answers bit for
-    bit): the walking step (:func:`lane_blocks`) and the playability check
+    bit): the walking step (:meth:`Walker.first_blocking`) and the playability check
     (:meth:`Walker.stops_for_good`) share the rule."""
-    reach = WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
+    reach = lane_reach(below)
     return ((dx * dx + dy * dy < reach) & (dx * cos + dy * sin > 0.0)
             & (abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH))
 
 
-def lane_blocks(walkers: NDArray[np.float64], facings: NDArray[np.float64],
-                points: NDArray[np.float64], *, below: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Which of ``points`` (n, 2) stop each walker (``walkers`` (m, 2) where they stand,
-    ``facings`` (m, 2) the (cos, sin) of the way they face): an (m, n) table of
-    :func:`in_stop_lane`, point ``j``'s origin ``below[j]`` metres under the walkers'. A walker's
-    own place among the points never stops it (it is not ahead of itself)."""
-    dx = points[None, :, 0] - walkers[:, 0, None]
-    dy = points[None, :, 1] - walkers[:, 1, None]
-    return in_stop_lane(dx, dy, facings[:, 0, None], facings[:, 1, None], below=below[None, :])
+@overload
+def lane_reach(below: float) -> float: ...
+@overload
+def lane_reach(below: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def lane_reach(below: Any) -> Any:
+    """The square of the stop distance in the plane for a point whose origin lies ``below``
+    metres under the walker's (:func:`in_stop_lane`)."""
+    return WALKER_STOP_DISTANCE * WALKER_STOP_DISTANCE - below * below
+
+
+FLOOR_REACH = lane_reach(0.0)
+"""The :func:`lane_reach` of a person on the floor, as a walker is."""
+ROBOT_REACH = lane_reach(ROBOT_BELOW_WALKER)
+"""The :func:`lane_reach` of the robot."""
+BY_WALKERS = 3
+"""Where the other walkers come in the groups :meth:`Crowd.step` tests a walker's lane
+against (after the robot, the guest and the idlers near its leg)."""
+
+
+def standing_near_legs(route: NDArray[np.float64], standing: Sequence[tuple[float, float]]
+                       ) -> list[tuple[tuple[float, float], ...]]:
+    """For each leg of the polyline ``route``, the ``standing`` points that can be in the lane
+    of a walker somewhere on that leg: those within :data:`WALKER_STOP_DISTANCE` of the leg,
+    and a margin over rounding (a walker stands on its leg, and a farther point is never
+    within its stop distance)."""
+    legs = len(route) - 1
+    if not standing:
+        return [() for _ in range(legs)]
+    points = np.asarray(standing, dtype=np.float64)
+    starts, spans = route[:-1], np.diff(route, axis=0)
+    squares = np.maximum(np.einsum("ld,ld->l", spans, spans), 1e-300)
+    offsets = points[None, :, :] - starts[:, None, :]
+    along = np.clip(np.einsum("lnd,ld->ln", offsets, spans) / squares[:, None], 0.0, 1.0)
+    gaps = np.hypot(*np.moveaxis(offsets - along[:, :, None] * spans[:, None, :], 2, 0))
+    near = gaps < WALKER_STOP_DISTANCE + STANDING_SLACK
+    return [tuple(standing[index] for index in np.flatnonzero(row).tolist()) for row in near]
 
 
 def facing(heading: float, *, forwards: bool) -> tuple[float, float, float]:
@@ -557,10 +588,31 @@ class Walker:
         self.waited = 0.0
         self.advance(0.0)
 
-    def blocked(self, points: Sequence[tuple[float, float]], *, below: float = 0.0) -> bool:
+    @property
+    def leg(self) -> int:
+        """The leg of the route it stands on (route points ``leg`` to ``leg + 1``)."""
+        return self._leg
+
+    def blocked(self, points: Iterable[tuple[float, float]], *, below: float = 0.0) -> bool:
         """Whether any point lies in the lane ahead (:func:`in_stop_lane`)."""
+        return self.first_blocking(((points, lane_reach(below)),)) is not None
+
+    def first_blocking(self, groups: Iterable[tuple[Iterable[tuple[float, float]], float]]
+                       ) -> int | None:
+        """The index of the first of ``groups`` (points, and the :func:`lane_reach` of their
+        height under the walker) with a point in the lane ahead, or None: :func:`in_stop_lane`
+        with its arithmetic, in plain floats, for the points within :data:`LANE_WINDOW_M`
+        along x (no farther one is within the stop distance)."""
         x, y, cos, sin = self.person.x, self.person.y, self._cos, self._sin
-        return any(in_stop_lane(px - x, py - y, cos, sin, below=below) for px, py in points)
+        low, high = x - LANE_WINDOW_M, x + LANE_WINDOW_M
+        for index, (points, reach) in enumerate(groups):
+            for px, py in points:
+                if low < px < high:
+                    dx, dy = px - x, py - y
+                    if (dx * dx + dy * dy < reach and dx * cos + dy * sin > 0.0
+                            and abs(dy * cos - dx * sin) < WALKER_LANE_HALF_WIDTH):
+                        return index
+        return None
 
     def stops_for_good(self, still: NDArray[np.float64], *, after_m: float = 0.0
                        ) -> tuple[float, float, float] | None:
@@ -718,8 +770,8 @@ class Crowd:
             self._walkers = [self._walker(name, grid, rng, still.reshape(-1, 2))
                              for name in names[:walkers]]
         self.people: list[Person] = [w.person for w in self._walkers] + standing
-        self._points = np.zeros((0, 2))  # where everyone who may stop a walker stands
-        self._below = np.zeros(0)  # how far under a walker's origin each point's origin lies
+        self._standing_near = [standing_near_legs(walker.route, self._standing)
+                               for walker in self._walkers]
 
     @staticmethod
     def _walker(name: str, grid: RouteGrid, rng: np.random.Generator,
@@ -746,48 +798,30 @@ class Crowd:
         another walker. A walker waits for the first three for :attr:`walker_patience_s`, and
         for walkers alone :attr:`standoff_s`; then it turns back.
 
-        Every walker's lane is tested against everyone at once (:func:`lane_blocks`)."""
+        Each walker's lane is tested against the robot, ``others``, the idlers near the leg
+        it is on (:func:`standing_near_legs`, worked out once) and the other walkers, in that
+        order (:meth:`Walker.first_blocking`)."""
         if dt < 0.0:
             raise ValueError(f"dt {dt}: must be 0 or more")
         walkers = self._walkers
         if not walkers:
             return
-        points = self._stand_points(robot, others)
-        first_walker = len(points) - len(walkers)
-        blocks = lane_blocks(points[first_walker:],
-                             np.array([walker.facing_unit for walker in walkers]),
-                             points, below=self._below)
-        by_people = np.logical_or.reduce(blocks[:, :first_walker], axis=1).tolist()
-        by_walkers = np.logical_or.reduce(blocks[:, first_walker:], axis=1).tolist()
-        for walker, people, others_walking in zip(walkers, by_people, by_walkers, strict=True):
-            if not (people or others_walking):
+        robot_place = (((robot[0], robot[1]),), ROBOT_REACH)
+        others_near = (others, FLOOR_REACH)
+        # last, as BY_WALKERS says; a walker's own place never stops it
+        walking = ([(walker.person.x, walker.person.y) for walker in walkers], FLOOR_REACH)
+        blocks = [walker.first_blocking((robot_place, others_near,
+                                         (near_legs[walker.leg], FLOOR_REACH), walking))
+                  for walker, near_legs in zip(walkers, self._standing_near, strict=True)]
+        for walker, block in zip(walkers, blocks, strict=True):
+            if block is None:
                 walker.waited = 0.0
                 walker.advance(walker.direction * walker.speed * dt)
                 continue
             walker.waited += dt
-            patience = self.walker_patience_s if people else self.standoff_s
+            patience = self.standoff_s if block == BY_WALKERS else self.walker_patience_s
             if walker.waited >= patience:
                 walker.turn_back()
-
-    def _stand_points(self, robot: tuple[float, float, float],
-                      others: Sequence[tuple[float, float]]) -> NDArray[np.float64]:
-        """Everyone who may stop a walker, as an (n, 2) array: the robot (on the floor),
-        ``others``, the idlers that stand in lanes (on the world's routes; random ones keep
-        them out) and the walkers, last, as they stand now."""
-        count = 1 + len(others) + len(self._standing) + len(self._walkers)
-        points = self._points
-        if len(points) != count:
-            points = self._points = np.zeros((count, 2))
-            points[1 + len(others):count - len(self._walkers)] = np.reshape(
-                self._standing, (-1, 2))
-            self._below = np.zeros(count)
-            self._below[0] = ROBOT_BELOW_WALKER
-        points[0] = robot[0], robot[1]
-        if others:
-            points[1:1 + len(others)] = others
-        points[count - len(self._walkers):] = [(walker.person.x, walker.person.y)
-                                               for walker in self._walkers]
-        return points
 
     def held_for_good(self, *, others: Sequence[tuple[float, float]] = ()
                       ) -> list[tuple[float, float]]:

@@ -35,14 +35,13 @@ class WallClearance:
     def __init__(self, occupancy_map: OccupancyMap) -> None:
         self.map = occupancy_map
         self.grid = occupancy_map.wall_distance.astype(np.float32)
-        self._cols = self.grid.shape[1]
         self._cells = self.grid.data.cast("B").cast("f")
 
     def at(self, x: float, y: float) -> float:
-        row, col = self.map.world_to_cell(x, y)
-        if not self.map.in_bounds(row, col):
+        index = self.map.flat_index(x, y)
+        if index is None:
             return 0.0
-        distance: float = self._cells[row * self._cols + col]
+        distance: float = self._cells[index]
         return distance
 
 
@@ -55,7 +54,8 @@ class Robot:
         self.v = self.w = 0.0
         self.walls = walls
         self.footprint = footprint or Footprint(walls.map)
-        self.wall_depth = self.footprint.wall_depth(self.pose)
+        self._probed: tuple[tuple[float, float, float] | None, float] = (None, 0.0)
+        self.wall_depth = self._depth(self.pose)
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -80,14 +80,21 @@ class Robot:
                 pose = _between(start, end, share)
                 self.x, self.y, self.yaw = pose
                 self.v, self.w = twist[0] * share, twist[1] * share
-                self.wall_depth = self.footprint.wall_depth(pose)
+                self.wall_depth = self._depth(pose)
                 return
         self.v = self.w = 0.0  # held by the wall: neither the step nor the turn alone fits
 
     def _fits(self, pose: tuple[float, float, float]) -> bool:
         """The body at ``pose`` is no deeper in a wall than the surface layer, or than now."""
-        depth = self.footprint.wall_depth(pose)
+        depth = self._depth(pose)
         return depth <= CONTACT_SURFACE_LAYER or depth <= self.wall_depth
+
+    def _depth(self, pose: tuple[float, float, float]) -> float:
+        """How deep the body is in a wall at ``pose``; the last pose measured is remembered,
+        as the pose a step ends at is mostly the one it was checked at."""
+        if pose != self._probed[0]:
+            self._probed = (pose, self.footprint.wall_depth(pose))
+        return self._probed[1]
 
     def _share_that_fits(self, start: tuple[float, float, float],
                          end: tuple[float, float, float]) -> float:

@@ -59,7 +59,13 @@ from servicesim_sim.navigation.body_check import (
     Pose,
     Twist,
 )
-from servicesim_sim.navigation.costmap import INSCRIBED, PERSON_RADIUS, Costmap, Lidar
+from servicesim_sim.navigation.costmap import (
+    INSCRIBED,
+    PERSON_RADIUS,
+    Costmap,
+    Lidar,
+    PersonMark,
+)
 from servicesim_sim.navigation.parameters import SERVICEBOT, NavigationParameters
 from servicesim_sim.navigation.planner import (
     ComputePathToPoseError,
@@ -146,21 +152,23 @@ class PolylinePath:
         # floats, and arc lengths are searched with bisect (numpy's call overhead on the one or
         # two segments near the robot was most of the cost)
         self._arcs: list[float] = self.arc.tolist()
+        self._corners: list[tuple[float, float]] = [(x, y) for x, y in self.points.tolist()]
         self._segments: list[tuple[float, ...]] = list(zip(
             *self.points[:-1].T.tolist(), *segments.T.tolist(),
             np.maximum(self.lengths ** 2, 1e-12).tolist(), self.lengths.tolist(),
             self._arcs[:-1], strict=True))
 
-    def point_at(self, s: float) -> np.ndarray:
+    def point_at(self, s: float) -> tuple[float, float]:
+        """The path's point ``s`` metres along it (clamped to the path), in plain floats with
+        the arithmetic numpy's element-wise version used."""
         s = min(max(s, 0.0), self.total)
-        index = min(bisect.bisect_right(self._arcs, s) - 1, len(self.lengths) - 1)
-        if index < 0 or self.lengths[index] == 0.0:
-            start: NDArray[np.float64] = self.points[max(index, 0)].copy()
-            return start
-        fraction = (s - self.arc[index]) / self.lengths[index]
-        point: NDArray[np.float64] = self.points[index] + fraction * (
-            self.points[index + 1] - self.points[index])
-        return point
+        index = min(bisect.bisect_right(self._arcs, s) - 1, len(self._segments) - 1)
+        if index < 0 or self._segments[index][5] == 0.0:
+            x, y = self._corners[max(index, 0)]
+            return x, y
+        start_x, start_y, span_x, span_y, _, length, arc = self._segments[index]
+        fraction = (s - arc) / length
+        return start_x + fraction * span_x, start_y + fraction * span_y
 
     def locate(self, x: float, y: float, *, near: float, reach: float = 1.5) -> tuple[float, float]:
         """(arc length, distance) of the path point nearest (x, y), ``reach`` past ``near``.
@@ -186,15 +194,38 @@ class PolylinePath:
                 if gap < best_gap:
                     best_arc, best_gap = along, gap
         if not math.isfinite(best_gap):
-            return near, float(np.hypot(*(self.point_at(near) - (x, y))))
+            point_x, point_y = self.point_at(near)
+            return near, float(np.hypot(point_x - x, point_y - y))
         return best_arc, best_gap
 
     def samples(self, s: float, length: float, *, step: float = 0.1) -> np.ndarray:
         """Points every ``step`` (or closer) along the path from ``s`` for ``length`` metres."""
         end = min(s + length, self.total)
-        arcs = np.linspace(s, end, max(math.ceil((end - s) / step), 0) + 1)
+        arcs = evenly_spaced(s, end, max(math.ceil((end - s) / step), 0) + 1)
         return np.column_stack((np.interp(arcs, self.arc, self.points[:, 0]),
                                 np.interp(arcs, self.arc, self.points[:, 1])))
+
+
+def evenly_spaced(start: float, stop: float, count: int) -> NDArray[np.float64]:
+    """``np.linspace(start, stop, count)`` of floats, ``count`` at least 1: its arithmetic
+    (multiples of the step from ``start``, ``stop`` last) without its wrappers, which cost
+    more than the work on the path's few samples."""
+    values = np.arange(count, dtype=np.float64)
+    span = stop - start
+    divisions = count - 1
+    if divisions > 0:
+        step = span / divisions
+        if step == 0.0:
+            values /= divisions
+            values *= span
+        else:
+            values *= step
+    else:
+        values *= span
+    values += start
+    if divisions > 0:
+        values[-1] = stop
+    return values
 
 
 def wrapped(angle: float) -> float:
@@ -266,6 +297,7 @@ class Navigator:
         self.path: list[tuple[float, float]] = []
         self._observed_at = -math.inf
         self._people: list[tuple[float, float]] = []
+        self._listed_marks: tuple[tuple[PersonMark, ...], list[tuple[float, float]]] = ((), [])
         self.body_check = None if body is None else BodyCheck(
             body, marks=self._marks, horizon=self.tuning.body_horizon,
             margin=self.tuning.body_margin, person_body=self.tuning.person_body)
@@ -507,7 +539,7 @@ class Navigator:
             return False
         tuning = self.tuning
         reach = tuning.robot_front + tuning.person_gap + tuning.person_radius
-        start_x, start_y = self._track.point_at(self._s).tolist()
+        start_x, start_y = self._track.point_at(self._s)
         bound = (reach + tuning.person_across + 0.01) ** 2
         if all((x - start_x) ** 2 + (y - start_y) ** 2 >= bound for x, y in people):
             return False
@@ -581,8 +613,12 @@ class Navigator:
 
     # ------------------------------------------------------------------ bookkeeping
     def _marks(self) -> list[tuple[float, float]]:
-        """Where the people marked in the costmap stand."""
-        return [(mark.x, mark.y) for mark in self.costmap.marks]
+        """Where the people marked in the costmap stand (the body check asks twice a control
+        step or more: listed again only when the marks changed; not to be altered)."""
+        marks = self.costmap.marks
+        if marks is not self._listed_marks[0]:
+            self._listed_marks = (marks, [(mark.x, mark.y) for mark in marks])
+        return self._listed_marks[1]
 
     def _observe(self, pose: Pose, now: float, *, force: bool = False) -> None:
         if not force and not self.observation_due(now):

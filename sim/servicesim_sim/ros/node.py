@@ -100,7 +100,7 @@ class SimulatorNode:
         while rclpy.ok(context=self.node.context):
             started = ended
             self._check_reset()
-            scores = self._step()
+            task_ran, scores = self._step(scoring=self.world_topics.scores_read())
             stepped = now()
             period += 1
             self.world_topics.publish_scores(scores)
@@ -110,22 +110,26 @@ class SimulatorNode:
             self._wait_for_wall_clock(pacer, executor)
             self.lockstep.hold(executor)
             ended = now()
-            if scores:  # a task ran in this period
+            if task_ran:
                 costs.add(started=started, stepped=stepped, published=published, ended=ended)
             self._had_client = self._had_client or self.lockstep.active
             if self._had_client and not self.lockstep.active and self._resets_used():
                 self._idle(executor)
 
-    def _step(self) -> list[float]:
-        """The period's physics steps, each followed by the camera's frame if one is due; the
-        score after each step of a running task."""
+    def _step(self, *, scoring: bool) -> tuple[bool, list[float]]:
+        """The period's physics steps, each followed by the camera's frame if one is due;
+        whether a task ran in any of them, and the score after each step of a running task
+        when ``scoring`` (someone reads the score topic)."""
+        task_ran = False
         scores: list[float] = []
         for _ in range(self.steps_per_io):
             self.engine.step()
             self.camera.capture()
             if self.engine.task_running():
-                scores.append(float(self.engine.score()))
-        return scores
+                task_ran = True
+                if scoring:
+                    scores.append(float(self.engine.score()))
+        return task_ran, scores
 
     def _publish_io(self) -> None:
         self.robot_topics.publish()

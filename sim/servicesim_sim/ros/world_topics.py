@@ -65,16 +65,19 @@ class WorldTopics:
         if io_count % COSTMAP_PERIOD_STEPS == 0:
             self._publish_costmap()
 
+    def scores_read(self) -> bool:
+        """Whether anyone subscribes to the score: the loop works the scores out only then
+        (the run records the referee's state, which carries the score)."""
+        return bool(self._score.get_subscription_count() > 0)
+
     def publish_scores(self, scores: list[float]) -> None:
-        """The period's score messages, one per physics step (50 Hz sim), sent together.
+        """The period's score messages, one per physics step (50 Hz sim) of a running task,
+        sent together (none when nobody read the score as the period began).
 
         Sent with the period's /clock rather than as each step ends: a client's clock moves
         only with /clock, so it cannot tell the difference, and a burst wakes it once where
-        five messages spread over the period woke it up to five times. Nobody subscribing
-        (the run records the referee's state, which carries the score), nothing is sent.
+        five messages spread over the period woke it up to five times.
         """
-        if not scores or self._score.get_subscription_count() == 0:
-            return
         for score in scores:
             self._score_message.score = score
             self._send(self._score, self._score_message)

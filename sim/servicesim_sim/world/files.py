@@ -103,11 +103,11 @@ class OccupancyMap:
     origin_y: float
     origin_yaw: float = 0.0
 
-    @property
+    @cached_property
     def width(self) -> int:
         return int(self.grid.shape[1])
 
-    @property
+    @cached_property
     def height(self) -> int:
         return int(self.grid.shape[0])
 
@@ -115,6 +115,17 @@ class OccupancyMap:
         """The ``(row, col)`` of the cell holding ``(x, y)``; it may be out of bounds."""
         return (math.floor((y - self.origin_y) / self.resolution),
                 math.floor((x - self.origin_x) / self.resolution))
+
+    def flat_index(self, x: float, y: float) -> int | None:
+        """The index in ``grid.ravel()`` of the cell holding ``(x, y)`` (the cell
+        :meth:`world_to_cell` gives), None off the map: for readers of a grid of the map's
+        shape through a flat memoryview, which hands out Python floats without numpy scalars."""
+        row = math.floor((y - self.origin_y) / self.resolution)
+        col = math.floor((x - self.origin_x) / self.resolution)
+        width = self.width
+        if 0 <= row < self.height and 0 <= col < width:
+            return row * width + col
+        return None
 
     def cell_to_world(self, row: int, col: int) -> tuple[float, float]:
         """The world position of the centre of cell ``(row, col)``."""

@@ -110,6 +110,9 @@ class Footprint:
         self.map = occupancy_map
         self.walls = wall_distance(occupancy_map)
         self._outline_x, self._outline_y = _outline()
+        centre_distance = np.ascontiguousarray(occupancy_map.wall_distance, dtype=np.float64)
+        self._centre_distance = centre_distance.data.cast("B").cast("d")
+        self._centre_slack = 1.5 * occupancy_map.resolution
 
     def wall_depth(self, pose: Pose) -> float:
         """Metres the box reaches into walls or furniture at ``pose`` (0 when clear)."""
@@ -135,12 +138,13 @@ class Footprint:
 
     def _centre_gap(self, x: float, y: float) -> float:
         """A lower bound of the metres from (x, y) to the nearest obstacle's boundary, read
-        from the map's own distance grid (cheap: this runs every physics step)."""
-        occupancy = self.map
-        row, col = occupancy.world_to_cell(x, y)
-        if not occupancy.in_bounds(row, col):
+        from the map's own distance grid (cheap: this runs every physics step, through a flat
+        memoryview that hands out Python floats)."""
+        index = self.map.flat_index(x, y)
+        if index is None:
             return 0.0
-        return float(occupancy.wall_distance[row, col]) - 1.5 * occupancy.resolution
+        distance: float = self._centre_distance[index]
+        return distance - self._centre_slack
 
     def nearest_gap(self, pose: Pose, points: Sequence[tuple[float, float]], *,
                     beyond: float = 0.0) -> float:
@@ -151,7 +155,11 @@ class Footprint:
         if not points:
             return math.inf
         x, y, _ = pose
-        nearest = min((px - x) * (px - x) + (py - y) * (py - y) for px, py in points)
+        nearest = math.inf
+        for px, py in points:
+            square = (px - x) * (px - x) + (py - y) * (py - y)
+            if square < nearest:
+                nearest = square
         near = math.sqrt(nearest) - CIRCUMSCRIBED_RADIUS - BOUND_SLACK
         if near > beyond:
             return near  # no point can be nearer the box than that
