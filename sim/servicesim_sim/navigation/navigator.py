@@ -159,8 +159,8 @@ class PolylinePath:
             self._arcs[:-1], strict=True))
 
     def point_at(self, s: float) -> tuple[float, float]:
-        """The path's point ``s`` metres along it (clamped to the path), in plain floats with
-        the arithmetic numpy's element-wise version used."""
+        """The path's point ``s`` metres along it (clamped to the path), in plain floats, with
+        the same arithmetic as an element-wise numpy interpolation (so the same values)."""
         s = min(max(s, 0.0), self.total)
         index = min(bisect.bisect_right(self._arcs, s) - 1, len(self._segments) - 1)
         if index < 0 or self._segments[index][5] == 0.0:
