@@ -118,7 +118,7 @@ def _found_on(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
     A few dozen of the window's thousands of cells are lethal, so only those are looked at: their
     centres, their clearance from the walls, and each disc's cell count and centre summed per
     label (``np.bincount``, as scipy's ``ndimage.mean`` sums them, cell by cell in row order:
-    the same centres, bit for bit, for a tenth of the CPU)."""
+    the same centres, bit for bit, for half the CPU)."""
     res = costmap.resolution
     rows, cols = costmap.values.shape
     col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
