@@ -16,7 +16,9 @@ Design intent:
 * Depth into the map comes from a signed distance field worked out once per map: metres from
   each cell centre to the boundary between free and blocked cells, negative inside obstacles,
   read between cell centres by bilinear interpolation so that it varies smoothly with the pose
-  (a 0.05 m map read cell by cell would make depths jump by whole cells).
+  (a 0.05 m map read cell by cell would make depths jump by whole cells). Depths are worked out
+  up to :data:`DEPTH_REACH` from the free space and read as that beyond it: no body the physics
+  stops at the walls, and no pose navigation looks ahead to, lies that deep.
 * The box is sampled along its outline every 2.5 cm; its depth is the deepest sample. Walls are
   at least 5 cm thick, so none slips between two samples.
 * A body pressed against a wall rests :data:`CONTACT_SURFACE_LAYER` deep in it, as ODE leaves
@@ -31,9 +33,8 @@ import weakref
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import ndimage
 
-from servicesim_sim.world.distance import distance_to_blocked
+from servicesim_sim.world.distance import depth_in_blocked, distance_to_blocked
 from servicesim_sim.world.files import OccupancyMap
 
 Pose = tuple[float, float, float]
@@ -45,18 +46,21 @@ INSCRIBED_RADIUS = min(HALF_LENGTH, HALF_WIDTH)  # 0.2 m
 CONTACT_SURFACE_LAYER = 0.01  # m: ODE's allowed penetration in the original world
 OUTLINE_SPACING = 0.025  # m between the outline's samples
 BOUND_SLACK = 1e-9  # m: a bound is trusted only this far beyond a threshold (rounding)
+DEPTH_REACH = 2.0  # m into obstacles from the free space that depths are worked out for
 
 
 class WallDistance:
     """Signed metres from any point to the nearest boundary of the map's obstacles (free and
-    blocked cells; outside the map counts as blocked), negative inside them."""
+    blocked cells; outside the map counts as blocked), negative inside them; points more than
+    :data:`DEPTH_REACH` deep may read about that deep (see the module docstring)."""
 
     def __init__(self, occupancy_map: OccupancyMap) -> None:
         self.map = occupancy_map
         blocked = np.pad(occupancy_map.blocked_mask(), 1, constant_values=True)
         half = occupancy_map.resolution / 2.0
         outside = distance_to_blocked(~blocked) * occupancy_map.resolution - half
-        inside = ndimage.distance_transform_edt(blocked) * occupancy_map.resolution - half
+        reach = math.ceil(DEPTH_REACH / occupancy_map.resolution)
+        inside = depth_in_blocked(blocked, reach=reach) * occupancy_map.resolution - half
         self.grid = np.where(blocked, -inside, outside).astype(np.float64)
         self.grid.setflags(write=False)
 
