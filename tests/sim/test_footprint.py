@@ -17,6 +17,7 @@ from servicesim_sim.model.engine import SimEngine
 from servicesim_sim.model.people import IDLER, Person
 from servicesim_sim.model.referee import CONTACT_REPORT_RATE_HZ, OBJECT_CONTACT_WEIGHT
 from servicesim_sim.model.scenario import make_scenario
+from servicesim_sim.navigation.body_check import BodyCheck, arc_end, check_times
 from servicesim_sim.world.files import DEFAULT_WORLD, World, load_world
 from servicesim_sim.world.footprint import (
     CIRCUMSCRIBED_RADIUS,
@@ -224,3 +225,34 @@ def test_the_centre_gap_reads_the_maps_distance_grid_cell_by_cell_bit_for_bit() 
         expected = (float(occupancy.wall_distance[row, col]) - 1.5 * occupancy.resolution
                     if inside else 0.0)
         assert footprint._centre_gap(x, y) == expected
+
+
+def test_a_turn_whose_corner_grazes_a_wall_between_two_checks_far_apart_is_refused() -> None:
+    """Hard seed 72 at 156.5 sim s: beside a door post, an arc of 0.3 m/s at 1 rad/s keeps the
+    box over 1 cm off the wall 0.15 and 0.3 s ahead, yet its corner is 2 mm into the wall
+    0.06 s ahead. Checked every 0.025 rad of the turn, as TrajectoryPlanner checked its
+    trajectories, it is refused."""
+    footprint = Footprint(office().map)
+    pose, twist = (-12.361, 17.881, 0.48), (0.3, 1.0)
+    assert all(footprint.clearance(arc_end(pose, twist, seconds)) > 0.01
+               for seconds in (0.15, 0.3))
+    assert min(footprint.clearance(arc_end(pose, twist, step * 0.01))
+               for step in range(1, 31)) < 0.0
+    check = BodyCheck(footprint, marks=list, horizon=0.3, margin=0.01, person_body=0.25)
+    assert not check.keeps_clear(pose, twist, None)
+    assert check.keeps_clear(pose, (0.0, -1.0), None), "turning away keeps clear"
+    given = check.command(pose, twist, now=0.0)
+    assert min(footprint.clearance(arc_end(pose, given, step * 0.01))
+               for step in range(1, 31)) > 0.0, f"{given} keeps off the wall throughout"
+
+
+@pytest.mark.parametrize(("twist", "count"), [
+    ((0.5, 0.0), 6),  # 0.15 m driven: 0.025 m apart
+    ((0.3, 1.0), 12),  # 0.3 rad turned: 0.025 rad apart
+    ((0.1, 0.0), 2),  # slow: halfway and at the end
+])
+def test_commands_are_checked_every_0_025_m_or_rad_of_the_way(twist: tuple[float, float],
+                                                               count: int) -> None:
+    times = check_times(twist, 0.3)
+    assert len(times) == count and times[-1] == pytest.approx(0.3)
+    assert times == tuple(sorted(times)) and times[0] == pytest.approx(0.3 / count)

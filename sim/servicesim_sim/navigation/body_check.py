@@ -7,9 +7,14 @@ box stays clear over a short horizon, else gives way to a sample of its own.
 
 Design intent:
 
-* A twist keeps clear when the 0.4 x 0.5 m box, where the twist takes it 0.15 and 0.3 s ahead,
-  is 1 cm off walls and off the bodies of the people marked in the costmap, or no nearer to
-  either than it is now (a box already within the margin may still move away).
+* A twist keeps clear when the 0.4 x 0.5 m box, at every pose the twist takes it through over
+  the horizon (0.3 s), is 1 cm off walls and off the bodies of the people marked in the
+  costmap, or no nearer to either than it is now (a box already within the margin may still
+  move away). The poses are :data:`SIM_GRANULARITY` apart, in metres driven or radians
+  turned, whichever is more, as TrajectoryPlanner checked the footprint along each sampled
+  trajectory (``sim_granularity`` and ``angular_sim_granularity``, whose 0.025 default the
+  servicebot's configuration kept): a turning box's corner can reach into a wall between two
+  poses farther apart and be out of it again at both.
 * A refused twist gives way to the nearest clear sample of :data:`BODY_SAMPLES` (turn first,
   then speed): setting off beside someone, the robot drives straight on until its turn clears.
 * A refused turn on the spot is the case where the nearest sample does not help: beside a wall
@@ -49,6 +54,9 @@ BODY_SAMPLES: tuple[Twist, ...] = (
 """The twists tried, as a sampling local planner would, when the follower's own would bring
 the body against a wall or a marked person: forward arcs, turns on the spot, backing off
 straight or in an arc; gentle turns (0.2 rad/s) too, whose corners swing out least."""
+SIM_GRANULARITY = 0.025
+"""Metres driven, or radians turned, between the poses at which a command is checked over the
+horizon (TrajectoryPlanner's default ``sim_granularity`` and ``angular_sim_granularity``)."""
 ESCAPE_STEP = 0.15
 """Seconds between the poses at which a held sample or a turn is checked."""
 ESCAPE_HOLD = 1.5
@@ -92,6 +100,14 @@ def arc_end(pose: Pose, twist: Twist, seconds: float) -> Pose:
         return (x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
                 y - radius * (math.cos(yaw + turn) - math.cos(yaw)), yaw + turn)
     return x + v * seconds * math.cos(yaw), y + v * seconds * math.sin(yaw), yaw
+
+
+def check_times(twist: Twist, horizon: float) -> tuple[float, ...]:
+    """Seconds ahead at which ``twist`` is checked: evenly over ``horizon``, at most
+    :data:`SIM_GRANULARITY` metres or radians apart, and at least halfway and at the end."""
+    v, w = twist
+    steps = max(2, math.ceil(max(abs(v), abs(w)) * horizon / SIM_GRANULARITY - 1e-9))
+    return tuple(horizon * step / steps for step in range(1, steps + 1))
 
 
 @dataclass(frozen=True)
@@ -143,10 +159,10 @@ class BodyCheck:
         self._manoeuvre = None
 
     def keeps_clear(self, pose: Pose, twist: Twist, now: Clearances | None) -> bool:
-        """Whether ``twist`` keeps the body off walls and marked people over the horizon
-        (halfway and at its end), or, given its clearances ``now``, brings it no nearer to
+        """Whether ``twist`` keeps the body off walls and marked people at every pose over the
+        horizon (:func:`check_times`), or, given its clearances ``now``, brings it no nearer to
         either that it is within the margin of."""
-        return self._holds_clear(pose, twist, (0.5 * self.horizon, self.horizon), now)
+        return self._holds_clear(pose, twist, check_times(twist, self.horizon), now)
 
     def clearances(self, pose: Pose) -> Clearances:
         """Metres from the body at ``pose`` to the nearest wall and to the nearest marked

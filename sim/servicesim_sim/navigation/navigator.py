@@ -23,8 +23,9 @@ Design intent:
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
   other time. Each wait is a recovery. Blocked for 20 s in all, navigation aborts.
-* Every command is checked for the robot's 0.4 x 0.5 m box 0.15 and 0.3 s ahead, as
-  move_base's local planner checked the footprint of each trajectory against its costmap: the
+* Every command is checked for the robot's 0.4 x 0.5 m box over the 0.3 s ahead, every
+  0.025 m or 0.025 rad of the way, as move_base's local planner checked the footprint of each
+  trajectory against its costmap (its ``sim_granularity``): the
   box must keep 1 cm off walls and off the bodies of the people marked in the costmap (or come
   no nearer than it is), else the nearest sampled twist that does is taken, else it stops. So
   the corners do not sweep into a person beside the robot as it turns or sets off. A refused
