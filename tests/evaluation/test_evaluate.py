@@ -43,6 +43,7 @@ from bt_servicesim.evaluation.settings import (
 )
 from bt_servicesim.evaluation.summary import summarise, summary_of
 from bt_servicesim.tree.files import DEFAULT_NAV_PARAMS, SERVICEBOT
+from tests.evaluation.bound_fakes import FAKE_BOUND_COMMAND
 from tests.fakes.commands import run_module
 
 FAKE_EPISODE = r"""
@@ -117,16 +118,20 @@ with open(os.path.join(sys.argv[1], "report.json"), "w") as f:
 """
 
 DRIVER = r"""
-import sys
+import os, sys
 from bt_servicesim.evaluate import main
+from bt_servicesim.evaluation import kinematic_bound
+kinematic_bound.BOUND_COMMAND = (sys.executable, "-c", FAKE_BOUND_COMMAND, os.devnull)
 fake, mode = sys.argv[1:3]
 code = open(fake).read()
 def command(episode, settings):
     return [sys.executable, "-c", code, str(episode.out), episode.executive, str(episode.seed),
             episode.scenario, mode, episode.run_id]
 sys.exit(main(sys.argv[3:], command=command))
-"""
-"""``python -m bt_servicesim.evaluate`` with the fake episodes: ``DRIVER fake.py mode args``."""
+""".replace("FAKE_BOUND_COMMAND", repr(FAKE_BOUND_COMMAND), 1)
+"""``python -m bt_servicesim.evaluate`` with the fake episodes: ``DRIVER fake.py mode args``.
+Its kinematic bounds come from the stand-in, as in-process evaluations' do (``conftest.py``):
+the real bound command would spend seconds of CPU on tasks the fakes never played."""
 
 SUMMARY_KEYS = {"episodes", "success_rate", "success_interval", "mean_score", "median_score",
                 "mean_sim_time_s",
