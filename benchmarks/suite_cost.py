@@ -40,8 +40,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from suite_under_load import REPO, wait_for_suite
 
-REPO = Path(__file__).resolve().parents[1]
 PLUGIN = Path(__file__).stem
 OUT_VARIABLE = "BT_SERVICESIM_SUITE_COST_OUT"
 """Where the plugin, loaded in each test process, appends one JSON line per test."""
@@ -115,12 +115,7 @@ def run_suite(*, jobs: str, pytest_args: Sequence[str]) -> SuiteCost:
         before, started = _cpu_s(resource.RUSAGE_CHILDREN), time.monotonic()
         suite = subprocess.Popen(command, cwd=REPO, env=environment, start_new_session=True,
                                  stdout=sys.stderr)  # pytest's own lines; the report on stdout
-        try:
-            exit_code = suite.wait()
-        except KeyboardInterrupt:
-            os.killpg(suite.pid, signal.SIGINT)
-            suite.wait()
-            raise
+        exit_code = wait_for_suite(suite)
         wall_s, cpu_s = time.monotonic() - started, _cpu_s(resource.RUSAGE_CHILDREN) - before
         tests = read_tests(lines.read_text(encoding="utf-8") if lines.exists() else "")
     return SuiteCost(exit_code=exit_code, wall_s=wall_s, cpu_s=cpu_s, tests=tests)

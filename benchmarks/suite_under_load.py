@@ -96,14 +96,20 @@ def run_suite(*, number: int, jobs: str, pytest_args: Sequence[str], log: Path) 
         suite = subprocess.Popen(command, cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
                                  start_new_session=True,  # bytecode written, as make test
                                  env={**os.environ, "PYTHONDONTWRITEBYTECODE": ""})
-        try:
-            exit_code = suite.wait()
-        except KeyboardInterrupt:
-            os.killpg(suite.pid, signal.SIGINT)
-            suite.wait()
-            raise
+        exit_code = wait_for_suite(suite)
     return parse_output(number=number, wall_s=time.monotonic() - start, exit_code=exit_code,
                         output=log.read_text(errors="replace"))
+
+
+def wait_for_suite(suite: subprocess.Popen[bytes]) -> int:
+    """The exit status of a pytest run started in a session of its own; Ctrl-C stops it (its
+    whole process group, workers and what they started) and is raised again."""
+    try:
+        return suite.wait()
+    except KeyboardInterrupt:
+        os.killpg(suite.pid, signal.SIGINT)
+        suite.wait()
+        raise
 
 
 def report(runs: Sequence[SuiteRun], *, hogs: int) -> None:

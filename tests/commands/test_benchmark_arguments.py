@@ -136,33 +136,47 @@ def test_sigterm_stops_the_suite_under_load_benchmark_its_run_and_its_hogs(
         tmp_path: Path) -> None:
     test_file = tmp_path / "test_sleeping.py"
     test_file.write_text(SLEEPING_TEST)
-    benchmark = subprocess.Popen(
+    code, stdout, stderr, started = stopped_by_sigterm(
         [sys.executable, str(SIM_RTF.with_name("suite_under_load.py")), "--runs", "2", "--jobs",
          "1", "--log-dir", str(tmp_path / "logs"), "--", str(test_file), "-p", "no:randomly"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        started_file=test_file.with_suffix(".started"))
+    assert len(started) >= 3  # the hog, pytest and its worker
+    assert code == 130, stderr
+    assert "interrupted: the run under way is stopped" in stderr
+    assert "0 run(s) of the suite" in stdout
+    assert all_gone(started), "the run and the hog are gone"
+
+
+def stopped_by_sigterm(command: list[str], *, started_file: Path,
+                       ) -> tuple[int, str, str, list[int]]:
+    """``command`` stopped by SIGTERM once ``started_file`` exists (a test it runs wrote it):
+    its exit status, stdout, stderr, and the processes it had started by then. Whatever it
+    leaves running is killed afterwards, so a failing check leaves nothing behind."""
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
     started: list[int] = []
     try:
         deadline = time.monotonic() + 60.0
-        while not test_file.with_suffix(".started").exists():
-            assert benchmark.poll() is None and time.monotonic() < deadline, \
-                benchmark.communicate()
+        while not started_file.exists():
+            assert process.poll() is None and time.monotonic() < deadline, process.communicate()
             time.sleep(0.1)
-        started = descendants(benchmark.pid)
-        assert len(started) >= 3  # the hog, pytest and its worker
-        benchmark.send_signal(signal.SIGTERM)
-        stdout, stderr = benchmark.communicate(timeout=60)
+        started = descendants(process.pid)
+        process.send_signal(signal.SIGTERM)
+        stdout, stderr = process.communicate(timeout=60)
     finally:
-        for pid in [benchmark.pid, *started]:  # whatever the benchmark left, this test ends
+        for pid in [process.pid, *started]:  # whatever the command left, this test ends
             if alive(pid):
                 os.kill(pid, signal.SIGKILL)
-        benchmark.wait()
-    assert benchmark.returncode == 130, stderr
-    assert "interrupted: the run under way is stopped" in stderr
-    assert "0 run(s) of the suite" in stdout
-    deadline = time.monotonic() + 30.0
-    while any(alive(pid) for pid in started) and time.monotonic() < deadline:
+        process.wait()
+    return process.returncode, stdout, stderr, started
+
+
+def all_gone(pids: list[int], *, limit_s: float = 30.0) -> bool:
+    """Whether every one of ``pids`` has ended (or is a zombie) within ``limit_s``."""
+    deadline = time.monotonic() + limit_s
+    while any(alive(pid) for pid in pids) and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert not any(alive(pid) for pid in started), "the run and the hog are gone"
+    return not any(alive(pid) for pid in pids)
 
 
 def alive(pid: int) -> bool:

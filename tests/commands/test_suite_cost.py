@@ -4,17 +4,18 @@ that test and its file; bad arguments are one line and exit status 2."""
 from __future__ import annotations
 
 import json
-import os
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
-from bt_servicesim.evaluation.episodes import descendants
-from tests.commands.test_benchmark_arguments import SLEEPING_TEST, alive, refused_in_one_line
+from tests.commands.test_benchmark_arguments import (
+    SLEEPING_TEST,
+    all_gone,
+    refused_in_one_line,
+    stopped_by_sigterm,
+)
 
 SUITE_COST = Path(__file__).resolve().parents[2] / "benchmarks" / "suite_cost.py"
 TINY_SUITE = '''
@@ -73,30 +74,12 @@ def test_each_tests_cpu_is_put_down_to_it_in_its_process_or_in_the_ones_it_start
 def test_sigterm_stops_the_suite_and_leaves_no_process(tmp_path: Path) -> None:
     test_file = tmp_path / "test_sleeping.py"
     test_file.write_text(SLEEPING_TEST)
-    benchmark = subprocess.Popen(
+    code, stdout, stderr, started = stopped_by_sigterm(
         [sys.executable, str(SUITE_COST), "--jobs", "1", "--", str(test_file),
          "--rootdir", str(tmp_path)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    started: list[int] = []
-    try:
-        deadline = time.monotonic() + 60.0
-        while not test_file.with_suffix(".started").exists():
-            assert benchmark.poll() is None and time.monotonic() < deadline, \
-                benchmark.communicate()
-            time.sleep(0.1)
-        started = descendants(benchmark.pid)
-        assert len(started) >= 2  # pytest and its worker
-        benchmark.send_signal(signal.SIGTERM)
-        stdout, stderr = benchmark.communicate(timeout=60)
-    finally:
-        for pid in [benchmark.pid, *started]:  # whatever the benchmark left, this test ends
-            if alive(pid):
-                os.kill(pid, signal.SIGKILL)
-        benchmark.wait()
-    assert benchmark.returncode == 130, stderr
+        started_file=test_file.with_suffix(".started"))
+    assert len(started) >= 2  # pytest and its worker
+    assert code == 130, stderr
     assert "interrupted: the suite is stopped" in stderr
     assert stdout == ""
-    deadline = time.monotonic() + 30.0
-    while any(alive(pid) for pid in started) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert not any(alive(pid) for pid in started), "pytest and its worker are gone"
+    assert all_gone(started), "pytest and its worker are gone"
