@@ -67,6 +67,7 @@ from bt_servicesim.evaluation.reproducibility import load_reproducibility
 from bt_servicesim.evaluation.scenarios import SCENARIO_SETS
 from bt_servicesim.evaluation.settings import (
     DEFAULT_SPEED,
+    EVALUATION_TRAJECTORIES,
     MAX_EPISODE_TIMEOUT_S,
     MAX_JOBS,
     MAX_TIME_LIMIT_S,
@@ -138,6 +139,11 @@ def build_parser() -> argparse.ArgumentParser:
                              "episode's simulator is given, whatever the executive (default: "
                              "the shipped tree's trees/servicesim_nav2_params.yaml for bt and "
                              "bt:FILE, servicebot for baseline)")
+    parser.add_argument("--trajectory", choices=EVALUATION_TRAJECTORIES, default="failed",
+                        help="draw trajectory.png for each episode whose mission did not "
+                             "complete (failed, the default) or for none (never: about a CPU "
+                             "second saved per failed episode; python -m bt_servicesim.trajectory "
+                             "DIR draws any episode's later)")
     parser.add_argument("--cluster", metavar="ADDRESS",
                         help="run the episodes on the Dask scheduler at tcp://HOST:PORT, each "
                              "worker as many at once as it has threads (needs the 'cluster' "
@@ -177,6 +183,7 @@ def settings_from(args: argparse.Namespace, argv: Sequence[str]) -> EvaluationSe
         command_line=" ".join([PROG, *(shlex.quote(arg) for arg in argv)]),
         resume=args.resume, cold=args.cold, reproducibility=reproducibility,
         throughput=throughput, tree=tree, trees=trees, nav_params=nav_params,
+        trajectory=args.trajectory,
     )
 
 

@@ -38,7 +38,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from bt_servicesim.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, OneLineArgumentParser
-from bt_servicesim.mission.settings import DEFAULT_TIME_LIMIT_S, STARTUP_LIMIT_S, RunSettings
+from bt_servicesim.mission.settings import (
+    DEFAULT_TIME_LIMIT_S,
+    STARTUP_LIMIT_S,
+    TRAJECTORY_POLICIES,
+    RunSettings,
+)
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
 from bt_servicesim.ros.environment import apply_localhost_defaults
@@ -74,6 +79,8 @@ class WarmEpisode:
     tree: Path = DEFAULT_TREE
     nav_params: Path | None = None
     """The robot's navigation parameters file, as the run's ``--nav-params``."""
+    trajectory: str = "failed"
+    """When the run draws ``trajectory.png``, as the run's ``--trajectory``."""
 
     @classmethod
     def from_line(cls, line: str) -> WarmEpisode:
@@ -91,10 +98,14 @@ class WarmEpisode:
                           sim_args=tuple(str(arg) for arg in fields.get("sim_args", ())),
                           tree=Path(fields.get("tree") or DEFAULT_TREE),
                           nav_params=nav_params_for(str(fields["executive"]),
-                                                    fields.get("nav_params")))
+                                                    fields.get("nav_params")),
+                          trajectory=str(fields.get("trajectory", "failed")))
         except (KeyError, TypeError) as error:
             raise ValueError(f"an episode needs out, run_id, executive and speed: {error}") \
                 from error
+        if episode.trajectory not in TRAJECTORY_POLICIES:
+            raise ValueError(f"trajectory {episode.trajectory!r}: one of "
+                             f"{', '.join(TRAJECTORY_POLICIES)}")
         return episode
 
     def reset_arguments(self) -> list[str]:
@@ -108,7 +119,8 @@ class WarmEpisode:
     def run_settings(self) -> RunSettings:
         return RunSettings(world=None, seed=self.seed, speed=self.speed, tree=self.tree,
                            out=self.out, time_limit_s=self.time_limit_s, headless=True,
-                           executive=self.executive, run_id=self.run_id, trajectory="failed",
+                           executive=self.executive, run_id=self.run_id,
+                          trajectory=self.trajectory,
                            nav_params=self.nav_params)
 
 

@@ -117,7 +117,8 @@ def warm_line(episode: Episode, settings: EvaluationSettings) -> str:
     fields = {"out": str(episode.out), "run_id": episode.run_id,
               "executive": executive_kind(episode.executive), "seed": episode.seed,
               "speed": settings.speed, "time_limit_s": settings.time_limit_s,
-              "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args)}
+              "sim_args": list(SCENARIO_SETS[episode.scenario].sim_args),
+              "trajectory": settings.trajectory}
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the worker's own shipped tree
         fields["tree"] = str(tree)
@@ -136,7 +137,7 @@ def run_command(episode: Episode, settings: EvaluationSettings) -> list[str]:
                "--out", str(episode.out), "--overwrite", "--run-id", episode.run_id,
                "--executive", executive_kind(episode.executive),
                "--speed", repr(settings.speed), "--time-limit", repr(settings.time_limit_s),
-               "--trajectory", "failed"]
+               "--trajectory", settings.trajectory]
     tree = settings.tree_of(episode.executive)
     if tree is not None:  # else the run's own shipped tree
         command += ["--tree", str(tree)]

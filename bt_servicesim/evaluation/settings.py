@@ -49,6 +49,10 @@ the machine has."""
 EPISODE_NAME = "episode.json"  # the episode's row, kept for --resume
 
 
+EVALUATION_TRAJECTORIES = ("failed", "never")
+"""When an evaluation's episodes draw ``trajectory.png`` (``evaluate --trajectory``)."""
+
+
 INTERRUPTED = "evaluation interrupted"
 """The failure of an episode the evaluation stopped because it was stopped itself."""
 
@@ -85,6 +89,9 @@ class EvaluationSettings:
     """``--nav-params`` as given: a file every episode's simulator is given, whatever the
     executive (absolute, checked), or ``servicebot``; None: each executive's default
     (:func:`~bt_servicesim.tree.files.nav_params_for`)."""
+    trajectory: str = "failed"
+    """When an episode draws its ``trajectory.png``: ``failed`` (a mission that did not
+    complete) or ``never`` (an evaluation whose figures are all that is wanted)."""
 
     @property
     def own_tree(self) -> bool:

@@ -207,8 +207,9 @@ def statistics(summary: dict[str, Any]) -> dict[str, Any]:
 def test_a_cluster_of_two_workers_gives_the_local_pools_results(
         tmp_path: Path, shared_cluster: Cluster) -> None:
     # random seeds 7 and 8: seed 7 has its guest picked up by 17 sim s, seed 8 nothing yet
+    # no picture drawn (--trajectory never), though neither mission completes in 25 s
     common = ("--episodes", "2", "--scenarios", "random", "--executive", "bt", "--seed", "7",
-              "--speed", "0", "--time-limit", "25")
+              "--speed", "0", "--time-limit", "25", "--trajectory", "never")
     local = bounded_evaluation(tmp_path / "local", *common, "--jobs", "2")
     assert local.returncode == 0, local.stderr
     remote = bounded_evaluation(tmp_path / "remote", *common, "--cluster",
@@ -227,6 +228,9 @@ def test_a_cluster_of_two_workers_gives_the_local_pools_results(
         assert json.loads((out / "report.json").read_text())["run_id"] == row["run_id"]
         assert json.loads((out / "episode.json").read_text())["out"] == str(out)
         assert (out / "run.log").is_file() and (out / "sim.log").is_file()
+    for summary in summaries:
+        for row in summary["bt"]["rows"]:
+            assert not row["completed"] and not (Path(row["out"]) / "trajectory.png").exists()
     assert "2/2 episodes" in remote.stderr and "results:" in remote.stderr
 
 

@@ -426,6 +426,7 @@ def alive(pid: int) -> bool:
         (["--time-limit", "1e7"], "--time-limit"),
         (["--frobnicate"], "--frobnicate"),
         (["--docs", "/proc/no-such-place"], "--docs /proc/no-such-place: cannot make it"),
+        (["--trajectory", "always"], "--trajectory"),
     ],
 )
 def test_bad_arguments_get_one_line_and_exit_2(tmp_path: Path, arguments: list[str],
@@ -712,6 +713,28 @@ def test_every_executives_episodes_get_the_navigation_parameters_cold_or_warm(
         own = DEFAULT_NAV_PARAMS if episode.executive.startswith("bt") else None
         assert command[command.index("--nav-params") + 1] == str(own or SERVICEBOT)
         assert WarmEpisode.from_line(line).run_settings().nav_params == own
+
+
+@pytest.mark.parametrize("trajectory", ["failed", "never"])
+def test_every_episode_draws_its_picture_as_the_evaluation_says_cold_or_warm(
+        tmp_path: Path, trajectory: str) -> None:
+    from bt_servicesim.evaluation.episodes import warm_line
+    from bt_servicesim.warm_worker import WarmEpisode
+
+    chosen = settings(tmp_path, executives=("bt", "baseline"), trajectory=trajectory)
+    for episode in plan_episodes(chosen):
+        command, line = run_command(episode, chosen), warm_line(episode, chosen)
+        assert command[command.index("--trajectory") + 1] == trajectory
+        assert WarmEpisode.from_line(line).run_settings().trajectory == trajectory
+
+
+def test_a_warm_episode_with_an_unknown_picture_policy_is_refused_in_one_line() -> None:
+    from bt_servicesim.warm_worker import WarmEpisode
+
+    line = json.dumps({"out": "/tmp/e", "run_id": "r", "executive": "bt", "seed": 1,
+                       "speed": 0.0, "trajectory": "sometimes"})
+    with pytest.raises(ValueError, match="trajectory 'sometimes': one of always, failed, never"):
+        WarmEpisode.from_line(line)
 
 
 def test_the_summary_and_results_name_the_navigation_parameters_and_their_digest(
