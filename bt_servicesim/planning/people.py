@@ -22,7 +22,7 @@ import numpy as np
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 
-__all__ = ["LETHAL", "WALL_MARGIN", "Costmap2D", "people_on_costmap", "people_within"]
+__all__ = ["LETHAL", "WALL_MARGIN", "Costmap2D", "people_on_costmap", "people_within", "window_of"]
 
 LETHAL = 100
 """The ``OccupancyGrid`` value of an obstacle's own cells, as Nav2's publisher translates its
@@ -111,6 +111,21 @@ class _Answers:
 _answers = _Answers()
 
 
+def window_of(costmap: Costmap2D, *, x: float, y: float,
+              reach: float) -> tuple[int, int, int, int] | None:
+    """The costmap's cells within ``reach`` of (x, y) along each axis, as ``(row0, row1, col0,
+    col1)`` slice bounds, clipped to the costmap; None when nothing of it is that near."""
+    res = costmap.resolution
+    rows, cols = costmap.values.shape
+    col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
+    row0 = max(int(np.floor((y - reach - costmap.origin_y) / res)), 0)
+    col1 = min(int(np.ceil((x + reach - costmap.origin_x) / res)), cols)
+    row1 = min(int(np.ceil((y + reach - costmap.origin_y) / res)), rows)
+    if col0 >= col1 or row0 >= row1:
+        return None
+    return row0, row1, col0, col1
+
+
 def _found_on(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
               reach: float) -> np.ndarray:
     """:func:`people_on_costmap`, worked out.
@@ -119,14 +134,11 @@ def _found_on(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y: float,
     centres, their clearance from the walls, and each disc's cell count and centre summed per
     label (``np.bincount``, as scipy's ``ndimage.mean`` sums them, cell by cell in row order:
     the same centres, bit for bit, for half the CPU)."""
-    res = costmap.resolution
-    rows, cols = costmap.values.shape
-    col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
-    row0 = max(int(np.floor((y - reach - costmap.origin_y) / res)), 0)
-    col1 = min(int(np.ceil((x + reach - costmap.origin_x) / res)), cols)
-    row1 = min(int(np.ceil((y + reach - costmap.origin_y) / res)), rows)
-    if col0 >= col1 or row0 >= row1:
+    bounds = window_of(costmap, x=x, y=y, reach=reach)
+    if bounds is None:
         return np.zeros((0, 2))
+    row0, row1, col0, col1 = bounds
+    res = costmap.resolution
     window = costmap.values[row0:row1, col0:col1] >= LETHAL
     lethal_rows, lethal_cols = np.nonzero(window)
     xs = costmap.origin_x + ((lethal_cols + col0) + 0.5) * res

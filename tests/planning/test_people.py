@@ -11,7 +11,12 @@ import numpy as np
 import pytest
 
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
-from bt_servicesim.planning.people import Costmap2D, people_on_costmap, people_within
+from bt_servicesim.planning.people import (
+    Costmap2D,
+    people_on_costmap,
+    people_within,
+    window_of,
+)
 from tests.fakes.maps import costmap_of, grid_message
 
 WIDTH, HEIGHT, RESOLUTION = 10.0, 6.0, 0.1
@@ -97,14 +102,11 @@ def _people_by_scipy(costmap: Costmap2D, walls: OccupancyGrid2D, *, x: float, y:
     reference :func:`people_on_costmap` must equal bit for bit."""
     from scipy import ndimage
 
-    res = costmap.resolution
-    rows, cols = costmap.values.shape
-    col0 = max(int(np.floor((x - reach - costmap.origin_x) / res)), 0)
-    row0 = max(int(np.floor((y - reach - costmap.origin_y) / res)), 0)
-    col1 = min(int(np.ceil((x + reach - costmap.origin_x) / res)), cols)
-    row1 = min(int(np.ceil((y + reach - costmap.origin_y) / res)), rows)
-    if col0 >= col1 or row0 >= row1:
+    bounds = window_of(costmap, x=x, y=y, reach=reach)  # the same window, measured by scipy
+    if bounds is None:
         return np.zeros((0, 2))
+    row0, row1, col0, col1 = bounds
+    res = costmap.resolution
     grid_x, grid_y = np.meshgrid(costmap.origin_x + (np.arange(col0, col1) + 0.5) * res,
                                  costmap.origin_y + (np.arange(row0, row1) + 0.5) * res)
     window = ((costmap.values[row0:row1, col0:col1] >= 100)
