@@ -1,9 +1,9 @@
 """Where the test suite's CPU goes: every test's CPU, its own and its processes', by file.
 
 ``python benchmarks/suite_cost.py [--jobs J] [--top N] [--json FILE] [-- PYTEST_ARGS...]`` runs
-``make test``'s pytest command (``pytest -n J --dist loadgroup tests``, ``J`` one more than the
-machine's cores unless given; ``--jobs 0`` runs without pytest-xdist) with this file as a
-pytest plugin, and prints:
+``make test``'s pytest command (``pytest -n J --dist loadgroup tests``, ``J`` the Makefile's
+``JOBS`` unless given; ``--jobs 0`` runs without pytest-xdist) with this file as a pytest
+plugin, and prints:
 
 * the whole run: wall time, and the CPU (user + system) of pytest and of every process it
   reaped, which on a CPU-bound suite is what sets the wall time on two cores;
@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from suite_under_load import REPO, wait_for_suite
+from suite_under_load import REPO, make_test_jobs, wait_for_suite
 
 PLUGIN = Path(__file__).stem
 OUT_VARIABLE = "BT_SERVICESIM_SUITE_COST_OUT"
@@ -178,20 +178,20 @@ def arguments(argv: Sequence[str]) -> tuple[str, int, Path | None, list[str]]:
 
     parser = OneLineArgumentParser(prog="benchmarks/suite_cost.py",
                                    description=__doc__.split("\n")[0])
-    parser.add_argument("--jobs", default=str((os.cpu_count() or 1) + 1),
-                        help="pytest-xdist workers (default: as make test, one more than the "
-                        "machine's cores; 0: no pytest-xdist)")
+    parser.add_argument("--jobs", help="pytest-xdist workers (default: make test's, the "
+                        "Makefile's JOBS; 0: no pytest-xdist)")
     parser.add_argument("--top", type=int, default=15, help="files and tests listed (15)")
     parser.add_argument("--json", type=Path, metavar="FILE", help="every test's figures")
     parser.add_argument("pytest_args", nargs="*", help="after --: pytest's arguments (tests)")
     args = parser.parse_args(argv)
-    if not (args.jobs == "auto" or args.jobs.isdigit()):
+    if not (args.jobs is None or args.jobs == "auto" or args.jobs.isdigit()):
         parser.error(f"--jobs {args.jobs}: give a number of workers or 'auto'")
     if args.top < 1:
         parser.error(f"--top {args.top}: give at least 1")
     if args.json is not None and not args.json.parent.is_dir():
         parser.error(f"--json {args.json}: its folder does not exist")
-    return args.jobs, args.top, args.json, args.pytest_args or ["tests"]
+    jobs = make_test_jobs() if args.jobs is None else args.jobs
+    return jobs, args.top, args.json, args.pytest_args or ["tests"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -2,7 +2,7 @@
 
 ``python benchmarks/suite_under_load.py [--runs N] [--hogs H] [--jobs J] [--log-dir DIR]
 [-- PYTEST_ARGS...]`` runs ``make test``'s pytest command (``pytest -n J --dist loadgroup
-tests``, ``J`` one more than the machine's cores unless given) ``N`` times one after the other
+tests``, ``J`` the Makefile's ``JOBS`` unless given) ``N`` times one after the other
 (default 10) while ``H`` busy-loop processes (default one: a CPU hog on one core, as a shared
 machine or a CI runner has) spin beside it, and prints,
 for each run, its wall time, how many tests passed and failed, and the failing tests by name;
@@ -101,6 +101,21 @@ def run_suite(*, number: int, jobs: str, pytest_args: Sequence[str], log: Path) 
                         output=log.read_text(errors="replace"))
 
 
+def make_test_jobs() -> str:
+    """``make test``'s pytest-xdist workers: the Makefile's ``JOBS``, their one source."""
+    try:
+        done = subprocess.run(["make", "-s", "--no-print-directory", "-C", str(REPO), "--eval",
+                               "print-test-jobs: ; @echo $(JOBS)", "print-test-jobs"],
+                              capture_output=True, text=True, timeout=60, check=False)
+    except OSError as error:
+        raise SystemExit(f"the Makefile's JOBS: make did not start ({error})") from error
+    jobs = done.stdout.strip()
+    if done.returncode != 0 or not jobs.isdigit():
+        raise SystemExit(f"the Makefile's JOBS: make printed {jobs!r} "
+                         f"({done.stderr.strip() or f'exit {done.returncode}'})")
+    return jobs
+
+
 def wait_for_suite(suite: subprocess.Popen[bytes]) -> int:
     """The exit status of a pytest run started in a session of its own; Ctrl-C stops it (its
     whole process group, workers and what they started) and is raised again."""
@@ -131,9 +146,8 @@ def arguments(argv: Sequence[str]) -> tuple[int, int, str, Path | None, list[str
                                    description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=10, help="runs of the suite (10)")
     parser.add_argument("--hogs", type=int, default=1, help="busy-loop processes beside it (1)")
-    parser.add_argument("--jobs", default=str((os.cpu_count() or 1) + 1),
-                        help="pytest-xdist workers (default: as make test, one more than the "
-                        "machine's cores)")
+    parser.add_argument("--jobs", help="pytest-xdist workers (default: make test's, the "
+                        "Makefile's JOBS)")
     parser.add_argument("--log-dir", type=Path, help="keep each run's output here")
     parser.add_argument("pytest_args", nargs="*", help="after --: pytest's arguments (tests)")
     args = parser.parse_args(argv)
@@ -141,9 +155,10 @@ def arguments(argv: Sequence[str]) -> tuple[int, int, str, Path | None, list[str
         parser.error(f"--runs {args.runs}: give at least one run")
     if args.hogs < 0:
         parser.error(f"--hogs {args.hogs}: give zero or more hogs")
-    if not (args.jobs == "auto" or args.jobs.isdigit()):
+    if not (args.jobs is None or args.jobs == "auto" or args.jobs.isdigit()):
         parser.error(f"--jobs {args.jobs}: give a number of workers or 'auto'")
-    return args.runs, args.hogs, args.jobs, args.log_dir, args.pytest_args or ["tests"]
+    jobs = make_test_jobs() if args.jobs is None else args.jobs
+    return args.runs, args.hogs, jobs, args.log_dir, args.pytest_args or ["tests"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -103,13 +104,34 @@ def test_the_suite_under_load_benchmark_refuses_bad_arguments_in_one_line(
     refused_in_one_line(SIM_RTF.with_name("suite_under_load.py"), arguments, named)
 
 
-def test_the_suite_under_load_benchmark_names_each_failing_test_and_the_counts() -> None:
+def suite_under_load() -> Any:
     spec = importlib.util.spec_from_file_location(
         "suite_under_load", SIM_RTF.with_name("suite_under_load.py"))
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # a dataclass looks its module up there
     spec.loader.exec_module(module)
+    return module
+
+
+def test_the_suite_benchmarks_run_as_many_workers_as_make_test(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Their default is the Makefile's ``JOBS``, read from make: what ``make test`` runs, as
+    its dry run prints it, and what a user sets for it."""
+    module = suite_under_load()
+    monkeypatch.delenv("JOBS", raising=False)
+    dry_run = subprocess.run(["make", "-n", "--no-print-directory", "-C",
+                              str(SIM_RTF.parents[1]), "test"],
+                             capture_output=True, text=True, timeout=60, check=True)
+    pytest_line = dry_run.stdout.strip().splitlines()[-1]
+    assert f" -m pytest -n {module.arguments([])[2]} --dist loadgroup " in pytest_line
+    monkeypatch.setenv("JOBS", "7")
+    assert module.arguments([])[2] == "7"
+    assert module.arguments(["--jobs", "2"])[2] == "2"
+
+
+def test_the_suite_under_load_benchmark_names_each_failing_test_and_the_counts() -> None:
+    module = suite_under_load()
     output = "\n".join([
         "........F.", "=========================== short test summary info ============",
         "FAILED tests/sim/test_x.py::test_y[1] - AssertionError: 998 of 1000",
