@@ -26,6 +26,7 @@ from bt_servicesim.behaviours import node_registry
 from bt_servicesim.tree.files import DEFAULT_TREE
 from bt_servicesim.tree.shape import short_label
 from bt_servicesim.tree.structure import MissionTreeError, checked_tree_file, main_tree_id
+from bt_servicesim.tree.type_hints import hints_per_class
 from bt_servicesim.tree.validation import tree_file_problems
 
 PHASES_ATTRIBUTE = "phases"
@@ -52,10 +53,11 @@ def load_mission_tree(
         raise MissionTreeError(f"{tree_file}: {problem}")
     overrides = None if time_limit_s is None else {"time_limit": repr(float(time_limit_s))}
     try:
-        root = parse_behaviour_tree_xml(
-            str(tree_file), main_tree_id=main_tree_id(top, main_tree),
-            node_registry=registry, input_mappings=overrides,
-        )
+        with hints_per_class():
+            root = parse_behaviour_tree_xml(
+                str(tree_file), main_tree_id=main_tree_id(top, main_tree),
+                node_registry=registry, input_mappings=overrides,
+            )
     except Exception as error:  # the parser raises many kinds; the user needs one line
         raise MissionTreeError(f"{tree_file}: {_one_line(error)}") from error
     _check_phases(tree_file, root, main_tree)
