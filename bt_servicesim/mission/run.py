@@ -32,7 +32,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import rclpy
 from rclpy.action import ActionClient
@@ -64,7 +64,6 @@ from bt_servicesim.mission.stopping import (
     exit_code_for,
     stop_for,
 )
-from bt_servicesim.monitor.groot2_server import Groot2Server
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.records.html_report import HTML_NAME, write_run_report
 from bt_servicesim.records.profile import PROFILE_NAME, penalties_explained
@@ -80,6 +79,9 @@ from bt_servicesim.ros.sim_clock import clock_now_ns, sim_now_s
 from bt_servicesim.ros.spinning import Spinner
 from bt_servicesim.tree.executive import Executive
 from bt_servicesim.tree.files import shown_path
+
+if TYPE_CHECKING:  # a run starts Groot2's server only when asked to (run --groot)
+    from bt_servicesim.monitor.groot2_server import Groot2Server
 
 TRACEBACK_NAME = "traceback.txt"  # what a tick, a callback or the run raised
 DISCOVERY_LIMIT_S = 10.0  # wall seconds the backend may take to discover the readers set up

@@ -12,12 +12,11 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 from rclpy.node import Node
 
-from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
 from bt_servicesim.monitor.live_server import LiveServer
 from bt_servicesim.records.mcap import (
     MCAP_NAME,
@@ -41,7 +40,18 @@ from bt_servicesim.ros.sim_clock import sim_now_s
 from bt_servicesim.tree.executive import Executive
 from bt_servicesim.tree.shape import ShadowTree
 
+if TYPE_CHECKING:
+    from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
+
 FINAL_TREE_NAME = "final_tree.txt"
+
+
+def _foxglove_bridge(node: Node, server: LiveServer) -> FoxgloveBridge:
+    """The bridge to a Foxglove server, with the Foxglove SDK it loads: only a run that serves
+    one (run --foxglove) needs them."""
+    from bt_servicesim.monitor.foxglove_bridge import FoxgloveBridge
+
+    return FoxgloveBridge(node=node, server=server)
 
 
 class RunRecords:
@@ -56,7 +66,7 @@ class RunRecords:
         self.mcap = McapRecorder(node=node, path=out / MCAP_NAME,
                                  own_topics=(TASK_TOPIC, TREE_TOPIC))
         self.task = TaskTopic(node=node, recorder=self.mcap)
-        self.live = None if live_server is None else FoxgloveBridge(node=node, server=live_server)
+        self.live = None if live_server is None else _foxglove_bridge(node, live_server)
         # the picture is drawn from the recording after the run: decoding the people's
         # positions as they come would cost the executive a tenth of its time
         self.phases: list[tuple[float, str]] = []

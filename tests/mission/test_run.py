@@ -7,6 +7,8 @@ import dataclasses
 import hashlib
 import os
 import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -207,3 +209,14 @@ def test_the_reproduce_command_names_the_checkout_s_own_files_from_the_repositor
     words = mission_run.reproduce_command(dataclasses.replace(settings, tree=elsewhere),
                                           ()).split()
     assert words[words.index("--tree") + 1] == str(elsewhere)
+
+
+def test_a_run_loads_the_monitors_libraries_only_when_it_serves_them() -> None:
+    """Groot2's server (ZeroMQ) and the Foxglove bridge (the Foxglove SDK) come with ``--groot``
+    and ``--foxglove``: a run that serves neither does not load them."""
+    program = ("import sys, bt_servicesim.run, bt_servicesim.mission.run, "
+               "bt_servicesim.mission.run_records; print(sorted({name.split('.')[0] for name "
+               "in sys.modules} & {'foxglove', 'zmq'}))")
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.strip() == "[]"
