@@ -122,11 +122,14 @@ def task_bound(world: World, scenario: Scenario, *,
     if start.size == 0:
         raise TaskBoundError(f"the start ({task.start_x:g}, {task.start_y:g}) is not where the "
                              "robot fits")
-    searches = [lattice.search(start, np.zeros(start.size))]
-    for name, region in zip(CHECKPOINT_NAMES[:2], regions[:2], strict=True):
-        searches.append(lattice.search(*_seeds([(searches[-1], region)], name)))
+    # each search needs to settle only where the next one starts (walked_in is part of the
+    # pick-up's region), the last the start area
+    searches = [lattice.search(start, np.zeros(start.size), targets=regions[0])]
+    for name, region, targets in zip(CHECKPOINT_NAMES[:2], regions[:2], (regions[1], robot_in),
+                                     strict=True):
+        searches.append(lattice.search(*_seeds([(searches[-1], region)], name), targets=targets))
     searches.append(lattice.search(*_seeds([(searches[2], robot_in), (searches[1], walked_in)],
-                                           CHECKPOINT_NAMES[2])))
+                                           CHECKPOINT_NAMES[2]), targets=regions[3]))
     route = _route(searches, regions[3])
     return _bound(lattice, route, _junctions(route, regions))
 

@@ -30,7 +30,12 @@ feasible path, and its result is shrunk by the staircase's known worst-case exce
 
 Searches are Dijkstra's algorithm from ``scipy.sparse.csgraph`` from a virtual source joined
 to seed nodes by edges of the seeds' starting values, so one search continues where another
-left off (reach an area, then the next one). No ROS here.
+left off (reach an area, then the next one). A search told its *targets* (the nodes whose
+distances the next step needs) settles only the nodes no farther than the farthest target it
+can reach: Dijkstra's algorithm settles nodes in order of distance, so cut at any limit it has
+given every node within the limit the distance and the way of the whole search. The limit
+starts at a guess from the straight-line distances and grows until every target the seeds
+can reach (the graph's connected components say which) is settled. No ROS here.
 """
 
 from __future__ import annotations
@@ -47,11 +52,17 @@ from scipy.sparse import csgraph
 
 DEFAULT_MAX_STEP = 3
 SEED_OFFSET = 1.0  # added to every seed edge (scipy drops explicit zero weights), taken off after
+FIRST_LIMIT_MARGIN = 1.25
+"""The first limit of a search with targets: this times the farthest target's straight-line
+reach (paths round walls are longer; most of a building's are within a quarter)."""
+LIMIT_GROWTH = 1.5
+"""How much a limit grows when a target it can reach lay beyond it."""
 
 
 @dataclass(frozen=True)
 class Search:
-    """One seeded search: each node's graph distance (inf if unreachable) and predecessor."""
+    """One seeded search: each node's graph distance and predecessor (inf and -9999 where it is
+    unreachable, or farther than a search with targets needed to go)."""
 
     distances: np.ndarray
     predecessors: np.ndarray
@@ -114,6 +125,7 @@ class LatticeGraph:
         self.x = self._x0 + node_cols * resolution
         self.y = self._y0 + node_rows * resolution
         self._indptr, self._data, self._indices = self._edges(max_step)
+        self._labels: np.ndarray | None = None
 
     def junction_slack(self, junctions: int) -> float:
         """Metres the graph's copy may add for ``junctions`` points of a path that are no
@@ -133,9 +145,15 @@ class LatticeGraph:
                  and self.index[r, c] >= 0]
         return np.array(found, dtype=np.int64)
 
-    def search(self, seeds: np.ndarray, values: np.ndarray) -> Search:
+    def search(self, seeds: np.ndarray, values: np.ndarray, *,
+               targets: np.ndarray | None = None) -> Search:
         """Graph distances from the seeds, each starting at its value (metres). The seeds are
-        written into the room the lattice keeps for them: one search at a time."""
+        written into the room the lattice keeps for them: one search at a time.
+
+        Given ``targets`` (a mask over the nodes), the search goes only as far as it must to
+        settle every target the seeds can reach: those, and every node no farther, get the
+        distance and the predecessor the whole search gives them; farther nodes may be left
+        unreached."""
         if seeds.size == 0:
             raise ValueError("a search needs at least one seed node")
         if seeds.size > self.nodes:
@@ -148,10 +166,44 @@ class LatticeGraph:
         graph = sparse.csr_matrix(  # views of the edges and this search's seed edges after them
             (self._data[:edges + seeds.size], self._indices[:edges + seeds.size], indptr),
             shape=(self.nodes + 1, self.nodes + 1), copy=False)
+        if targets is None:
+            return self._dijkstra(graph, limit=np.inf)
+        reached = targets & np.isin(self._components(), self._components()[seeds])
+        if not reached.any():
+            return self._dijkstra(graph, limit=0.0)  # the seeds alone: no target to settle
+        limit = self._first_limit(seeds, values, reached)
+        while True:
+            search = self._dijkstra(graph, limit=limit)
+            if np.isfinite(search.distances[reached]).all():
+                return search
+            limit *= LIMIT_GROWTH
+
+    def _dijkstra(self, graph: sparse.csr_matrix, *, limit: float) -> Search:
         distances, predecessors = csgraph.dijkstra(  # a 0-d index: 1-d results
-            graph, directed=True, indices=np.asarray(self.source), return_predecessors=True)
+            graph, directed=True, indices=np.asarray(self.source), return_predecessors=True,
+            limit=limit + SEED_OFFSET)
         return Search(distances=distances[:self.nodes] - SEED_OFFSET,
                       predecessors=predecessors[:self.nodes], source=self.source)
+
+    def _first_limit(self, seeds: np.ndarray, values: np.ndarray, targets: np.ndarray) -> float:
+        """A first guess at how far the farthest target lies: the least seed value, plus
+        :data:`FIRST_LIMIT_MARGIN` times the straight-line gap from the farthest target to the
+        seeds' bounding box (or one lattice step, if the targets lie within it)."""
+        xs, ys = self.x[seeds], self.y[seeds]
+        gap_x = np.maximum(np.maximum(xs.min() - self.x[targets], self.x[targets] - xs.max()), 0.0)
+        gap_y = np.maximum(np.maximum(ys.min() - self.y[targets], self.y[targets] - ys.max()), 0.0)
+        reach = max(float(np.hypot(gap_x, gap_y).max()), self.resolution)
+        return float(values.min()) + FIRST_LIMIT_MARGIN * reach
+
+    def _components(self) -> np.ndarray:
+        """Each node's connected component (the steps go both ways), worked out once."""
+        if self._labels is None:
+            edges = int(self._indptr[-1])
+            indptr = self._indptr[:self.nodes + 1]
+            graph = sparse.csr_matrix((self._data[:edges], self._indices[:edges], indptr),
+                                      shape=(self.nodes, self.nodes), copy=False)
+            self._labels = csgraph.connected_components(graph, directed=False)[1]
+        return self._labels
 
     def _edges(self, max_step: int) -> tuple[NDArray[np.int32], NDArray[np.float64],
                                               NDArray[np.int32]]:
