@@ -389,7 +389,9 @@ def _success_bars(axes: Any, settings: EvaluationSettings, rows: list[dict[str, 
     axes.set_xticks(range(len(settings.scenarios)), settings.scenarios)
     axes.set_ylabel("completed (%)")
     axes.set_ylim(0, 110)
-    axes.legend()
+    # beside the bars, not over them: matplotlib's "best" place searches the bars for the
+    # emptiest corner, a search it warns can be slow, and full bars leave none
+    axes.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8)
 
 
 def write_results(settings: EvaluationSettings, rows: list[dict[str, Any]]) -> None:
