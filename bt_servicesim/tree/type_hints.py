@@ -5,7 +5,7 @@ constructor declares (``py_trees.ports_utils.apply_type_hints``). To find that t
 the hints of every ``__init__`` in the class's method resolution order, for every node it builds
 (``py_trees.ports_utils.collect_type_hints``), and ``inspect.signature`` of ``object.__init__``,
 at the end of every such order, parses its text signature with Python's tokenizer each time.
-That is about three quarters of the time it takes to load the mission tree (a couple of hundred
+That is half or more of the time it takes to load the mission tree (a couple of hundred
 nodes), which every run and every warm episode of an evaluation does.
 
 A class's constructor, and so its hints, do not change while the process runs. While
