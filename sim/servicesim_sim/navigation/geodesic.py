@@ -33,9 +33,10 @@ to seed nodes by edges of the seeds' starting values, so one search continues wh
 left off (reach an area, then the next one). A search told its *targets* (the nodes whose
 distances the next step needs) settles only the nodes no farther than the farthest target it
 can reach: Dijkstra's algorithm settles nodes in order of distance, so cut at any limit it has
-given every node within the limit the distance and the way of the whole search. The limit
-starts at a guess from the straight-line distances and grows until every target the seeds
-can reach (the graph's connected components say which) is settled. No ROS here.
+given every node within the limit the distance of the whole search, and a way as short (the
+same way where no two are exactly as short; the tests compare the ways too). The limit starts
+at a guess from the straight-line distances and grows until every target the seeds can reach
+(the graph's connected components say which) is settled. No ROS here.
 """
 
 from __future__ import annotations
@@ -152,7 +153,7 @@ class LatticeGraph:
 
         Given ``targets`` (a mask over the nodes), the search goes only as far as it must to
         settle every target the seeds can reach: those, and every node no farther, get the
-        distance and the predecessor the whole search gives them; farther nodes may be left
+        distance the whole search gives them (and a way as short); farther nodes may be left
         unreached."""
         if seeds.size == 0:
             raise ValueError("a search needs at least one seed node")
