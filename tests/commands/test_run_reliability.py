@@ -174,16 +174,19 @@ def test_a_run_whose_shutdown_hangs_ends_at_its_limit_with_the_missions_status(
         tmp_path: Path) -> None:
     """A deadlock after the report (here an exit handler that never returns, where rclpy or
     Fast DDS would hang) cannot hold the run's caller: the process ends at its limit, its report
-    complete, its simulator gone, the stacks in its output for a bug report."""
+    complete, its simulator gone, the stacks in its output for a bug report. The limit is
+    generous: on a machine a CPU hog shares, the run's own work after its report (closing its
+    records, stopping its simulator) once took more than 1 s, and the limit fell before the
+    hang, the stacks showing that work instead."""
     command = [sys.executable, "-c", "import atexit, sys, threading\n"
                "atexit.register(threading.Event().wait)\n"
                "from bt_servicesim.run import main\n"
-               "sys.exit(main(sys.argv[1:], shutdown_limit_s=1.0))", *RUN_ARGUMENTS]
+               "sys.exit(main(sys.argv[1:], shutdown_limit_s=10.0))", *RUN_ARGUMENTS]
     process = start_run(tmp_path / "run", "--speed", "0", "--seed", "3",
                         "--time-limit", SHORT_MISSION_S, command=command)
     _, stderr = process.communicate(timeout=WALL_LIMIT_S)
     assert process.returncode == 1, stderr[-2000:]
-    assert "did not end within 1 s of its report: ending the process with exit status 1" \
+    assert "did not end within 10 s of its report: ending the process with exit status 1" \
         in stderr
     assert re.search(r'threading\.py", line \d+ in wait\n', stderr), "the stack of the hang"
     assert_played_to_its_time_limit(report_of(tmp_path / "run"))
