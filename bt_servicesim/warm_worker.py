@@ -46,7 +46,10 @@ from bt_servicesim.mission.settings import (
 )
 from bt_servicesim.mission.stopping import StopSignals, Terminated, exit_code_for
 from bt_servicesim.ros.domain import NoFreeDomainError, claim_domain
-from bt_servicesim.ros.environment import apply_localhost_defaults
+from bt_servicesim.ros.environment import (
+    apply_localhost_defaults,
+    end_keeping_the_participant,
+)
 from bt_servicesim.tree.files import DEFAULT_TREE, nav_params_for
 from bt_servicesim.tree.loading import MissionTreeError
 
@@ -206,6 +209,8 @@ class WarmWorker:
                 return code
             if self.lost is not None:
                 print(f"{PROG}: error: {self.lost}", file=sys.stderr)
+                if self.simulator.killed():  # deleting the participant could crash the worker
+                    end_keeping_the_participant(EXIT_FAILED)
                 return EXIT_FAILED
         return EXIT_OK
 

@@ -74,6 +74,7 @@ from bt_servicesim.ros.discovery import (
     SYSTEM_CLOCK_PROBE,
     await_backend_discovery,
 )
+from bt_servicesim.ros.environment import end_keeping_the_participant
 from bt_servicesim.ros.node import ExecutiveNode, stop_behind
 from bt_servicesim.ros.sim_clock import clock_now_ns, sim_now_s
 from bt_servicesim.ros.spinning import Spinner
@@ -119,7 +120,9 @@ class MissionRun:
 
         ``shutdown_limit_s``: the process ends that many wall seconds after the run's report is
         written, whatever its shut-down still does (:mod:`bt_servicesim.mission.shutdown_limit`);
-        only for the ``run`` command's own process.
+        only for the ``run`` command's own process. That process also ends at once, its
+        participant kept, when its own simulator was killed
+        (:func:`~bt_servicesim.ros.environment.end_keeping_the_participant`).
         """
         self.settings = settings
         self.shutdown_limit_s = shutdown_limit_s
@@ -285,6 +288,9 @@ class MissionRun:
             bound_the_shutdown(exit_status=code, limit_s=self.shutdown_limit_s)
         self._leave_lockstep()  # a kept simulator held still until the run's end is written
         executor.shutdown()
+        if self.shutdown_limit_s is not None and self.simulator is not None \
+                and self.simulator.killed():  # deleting the participant could crash the run
+            end_keeping_the_participant(stops.exit_status(code))
         node.destroy_node()
         return code
 

@@ -152,6 +152,12 @@ class SimulatorProcess:
         """None while it runs."""
         return None if self._process is None else self._process.poll()
 
+    def killed(self) -> bool:
+        """Whether it ended by a signal it did not handle (SIGKILL, a crash): it then ended
+        without deleting its DDS participant, whatever it was doing with its peers."""
+        code = self.exit_code()
+        return code is not None and code < 0
+
     def last_error(self) -> str:
         """The simulator's last non-empty output line (its one-line error when it refused)."""
         try:

@@ -28,6 +28,13 @@ deleting it leaves it there for good. Called for this process (no ``environment`
   exit): rclpy leaves that to the garbage collector, which at interpreter exit does not always
   get to it, so a run that ended cleanly could leave its segment behind.
 
+One process keeps its participant on purpose: one whose peer was killed outright
+(:func:`end_keeping_the_participant`). A peer killed while it wrote into this process's
+segment can leave it so that Fast DDS crashes deleting the participant: about one run in a
+hundred whose simulator was SIGKILLed then died by SIGSEGV in
+``SharedMemChannelResource::release`` (from ``rcl_node_fini``), after it had written its report.
+Its segment is then left for the next process to remove, like the killed peer's own.
+
 (``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` would avoid the segments altogether, but rmw_fastrtps
 replaces Fast DDS's builtin transports with its own, shared memory included, whenever discovery
 is ``LOCALHOST``: see docs/reference/evaluation.md, "Leaks".)
@@ -46,13 +53,13 @@ import sys
 import time
 from collections.abc import MutableMapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, NoReturn, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from rclpy.context import Context
 
-__all__ = ["apply_localhost_defaults", "delete_participant", "remove_dead_segments",
-           "shut_ros_down_at_exit", "uses_the_projects_profile"]
+__all__ = ["apply_localhost_defaults", "delete_participant", "end_keeping_the_participant",
+           "remove_dead_segments", "shut_ros_down_at_exit", "uses_the_projects_profile"]
 
 DISCOVERY_RANGE_VARIABLE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
 LOCALHOST = "LOCALHOST"
@@ -205,6 +212,20 @@ def delete_participant(context: Context, *, every_node: bool = False) -> None:
         with contextlib.suppress(Exception):
             node.destroy_node()
     context.destroy()
+
+
+def end_keeping_the_participant(exit_status: int) -> NoReturn:
+    """End this process now with ``exit_status``, without deleting its DDS participant.
+
+    For a process that has said everything (its report, its reply) and whose peer was killed
+    outright: deleting the participant could then crash it (see the module's introduction).
+    Standard output and error are flushed; no exit handler runs. The segment it leaves is
+    removed by the next process (:func:`remove_dead_segments`).
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):  # closed, or a reader that went away
+            stream.flush()
+    os._exit(exit_status)
 
 
 @runtime_checkable

@@ -69,6 +69,51 @@ def test_a_participant_kept_alive_to_the_end_is_deleted_at_exit(program: str) ->
     assert not (Path("/dev/shm") / f"{segment}_el").exists()
 
 
+# A process that ends on purpose without deleting its participant (its peer was killed): its
+# output so far is flushed, no exit handler runs, and its segment is left for the next process.
+KEPT_ON_PURPOSE = r"""
+import atexit, os, re
+from bt_servicesim.ros.environment import apply_localhost_defaults, end_keeping_the_participant
+apply_localhost_defaults()
+import rclpy
+from rclpy.node import Node
+rclpy.init()
+node = Node("kept_on_purpose")
+for descriptor in os.listdir("/proc/self/fd"):
+    try:
+        target = os.readlink(f"/proc/self/fd/{descriptor}")
+    except OSError:
+        continue
+    found = re.search(r"/dev/shm/(fastdds_[0-9a-f]{16})_el$", target)
+    if found:
+        print(found.group(1))
+atexit.register(print, "an exit handler ran")
+print("said", end="")
+end_keeping_the_participant(3)
+"""
+
+
+def test_a_participant_kept_on_purpose_is_left_for_the_next_process_to_remove() -> None:
+    result = subprocess.run([sys.executable, "-c", KEPT_ON_PURPOSE], capture_output=True,
+                            text=True, timeout=60, env=dict(os.environ))
+    assert result.returncode == 3, result.stderr
+    *segments, said = result.stdout.split("\n")
+    assert said == "said", "what it printed is flushed, and no exit handler ran"
+    assert len(segments) == 1, "one participant, one segment of its own"
+    segment = Path("/dev/shm") / segments[0]
+    lock = segment.with_name(f"{segment.name}_el")
+    try:
+        assert segment.exists(), "the participant was not deleted"
+        descriptor = os.open(lock, os.O_RDONLY)
+        try:  # what remove_dead_segments asks of a segment it removes, its age aside
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        finally:
+            os.close(descriptor)
+    finally:
+        segment.unlink(missing_ok=True)
+        lock.unlink(missing_ok=True)
+
+
 def make_segment(directory: Path, number: int, *, age_s: float) -> Path:
     """A segment and its lock file, as Fast DDS makes them; returns the lock file."""
     name = f"fastdds_{number:016x}"

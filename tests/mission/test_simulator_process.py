@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -127,3 +129,22 @@ def test_the_navigation_parameters_reach_the_simulator_cold_and_on_every_warm_re
     without = WarmEpisode.from_line(json.dumps({
         "out": str(tmp_path), "run_id": "r", "executive": "baseline", "speed": 0.0}))
     assert "--nav-params" not in without.reset_arguments(), "the simulator's default"
+
+
+def test_only_a_simulator_killed_by_a_signal_it_did_not_handle_counts_as_killed(
+        tmp_path: Path) -> None:
+    """Killed, it ended without deleting its DDS participant; stopped, or exiting with a code
+    (a caught signal's 128 + N included), it did not."""
+    (tmp_path / "stopped").mkdir()
+    stopped = counting_process(tmp_path / "stopped")
+    assert not stopped.killed()  # still running
+    stopped.stop()
+    assert stopped.exit_code() == 0 and not stopped.killed()
+    killed = counting_process(tmp_path)
+    assert killed.pid is not None
+    os.kill(killed.pid, signal.SIGKILL)
+    deadline = time.monotonic() + 30.0
+    while killed.exit_code() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert killed.killed()
+    assert killed.describe_exit() == "the simulator was killed by SIGKILL"
