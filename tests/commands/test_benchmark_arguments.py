@@ -1,6 +1,7 @@
 """``benchmarks/sim_rtf.py``, ``startup.py``, ``service_burst.py``, ``tick_cost.py``,
-``lockstep_cost.py`` and ``timed_run.py``: bad arguments are one line on stderr and exit status
-2, before any process starts; ``lockstep_cost.py``, which starts no ROS, also runs briefly."""
+``killed_simulator.py``, ``lockstep_cost.py`` and ``timed_run.py``: bad arguments are one line
+on stderr and exit status 2, before any process starts; ``lockstep_cost.py``, which starts no
+ROS, also runs briefly."""
 
 from __future__ import annotations
 
@@ -103,6 +104,18 @@ def test_the_suite_under_load_benchmark_refuses_bad_arguments_in_one_line(
         arguments: list[str], named: str) -> None:
     refused_in_one_line(SIM_RTF.with_name("suite_under_load.py"), arguments, named)
 
+
+
+@pytest.mark.parametrize(("arguments", "named"), [
+    (["--runs", "0"], "--runs 0: give at least one run"),
+    (["--jobs", "0"], "--jobs 0: give at least one loop"),
+    (["--hogs", "-1"], "--hogs -1: give zero or more hogs"),
+    (["--speed", "0"], "--speed 0: must be more than 0"),
+    (["--speed", "nan"], "--speed nan: must be more than 0"),
+])
+def test_the_killed_simulator_benchmark_refuses_bad_arguments_in_one_line(
+        arguments: list[str], named: str) -> None:
+    refused_in_one_line(SIM_RTF.with_name("killed_simulator.py"), arguments, named)
 
 def suite_under_load() -> Any:
     spec = importlib.util.spec_from_file_location(
