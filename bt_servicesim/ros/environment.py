@@ -30,10 +30,11 @@ deleting it leaves it there for good. Called for this process (no ``environment`
 
 One process keeps its participant on purpose: one whose peer was killed outright
 (:func:`end_keeping_the_participant`). A peer killed while it wrote into this process's
-segment can leave it so that Fast DDS crashes deleting the participant: about one run in a
-hundred whose simulator was SIGKILLed then died by SIGSEGV in
-``SharedMemChannelResource::release`` (from ``rcl_node_fini``), after it had written its report.
-Its segment is then left for the next process to remove, like the killed peer's own.
+segment can leave it so that Fast DDS crashes deleting the participant: a SIGSEGV in
+``SharedMemChannelResource::release`` (from ``rcl_node_fini``), after the process has said
+everything, in about one run in two hundred whose simulator is SIGKILLed beside a CPU hog
+(``benchmarks/killed_simulator.py``). Its segment is left for the next process to remove, like
+the killed peer's own.
 
 (``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` would avoid the segments altogether, but rmw_fastrtps
 replaces Fast DDS's builtin transports with its own, shared memory included, whenever discovery
