@@ -26,11 +26,26 @@ SWEEPS: dict[str, Callable[..., list[str]]] = {
     "simulator": simulator_environment.remove_dead_segments,
 }
 
+# The segment this process's participant holds the lock file of, for the scripts below.
+OWN_SEGMENT = r"""
+def own_segment():
+    import os, re
+    for descriptor in os.listdir("/proc/self/fd"):
+        try:
+            target = os.readlink(f"/proc/self/fd/{descriptor}")
+        except OSError:
+            continue
+        found = re.search(r"/dev/shm/(fastdds_[0-9a-f]{16})_el$", target)
+        if found:
+            return found.group(1)
+    return "no segment"
+"""
+
 # A participant whose node is kept alive to the very end by a daemon thread (as entities caught
 # in cycles through C++ callbacks are): rclpy never deletes it, and without the exit hook its
 # segment stays in /dev/shm.
-KEPT_ALIVE = r"""
-import os, re, sys, threading, time
+KEPT_ALIVE = OWN_SEGMENT + r"""
+import sys, threading, time
 if sys.argv[1] == "executive":
     from bt_servicesim.ros.environment import apply_localhost_defaults as defaults
 else:
@@ -43,14 +58,7 @@ from nav2_msgs.action import NavigateToPose
 rclpy.init()
 node = Node("kept_alive")
 client = ActionClient(node, NavigateToPose, "/kept_alive")  # destroy_node() leaves it
-for descriptor in os.listdir("/proc/self/fd"):
-    try:
-        target = os.readlink(f"/proc/self/fd/{descriptor}")
-    except OSError:
-        continue
-    found = re.search(r"/dev/shm/(fastdds_[0-9a-f]{16})_el$", target)
-    if found:
-        print(found.group(1), flush=True)
+print(own_segment(), flush=True)
 node.destroy_node()
 rclpy.try_shutdown()
 threading.Thread(target=lambda held=(node, client): time.sleep(1000), daemon=True).start()
@@ -63,7 +71,7 @@ def test_a_participant_kept_alive_to_the_end_is_deleted_at_exit(program: str) ->
                             text=True, timeout=60, env=dict(os.environ))
     assert result.returncode == 0, result.stderr
     segments = result.stdout.split()
-    assert len(segments) == 1, "one participant, one segment of its own"
+    assert len(segments) == 1 and segments[0].startswith("fastdds_"), segments
     segment = segments[0]
     assert not (Path("/dev/shm") / segment).exists(), "the segment went with the process"
     assert not (Path("/dev/shm") / f"{segment}_el").exists()
@@ -71,22 +79,15 @@ def test_a_participant_kept_alive_to_the_end_is_deleted_at_exit(program: str) ->
 
 # A process that ends on purpose without deleting its participant (its peer was killed): its
 # output so far is flushed, no exit handler runs, and its segment is left for the next process.
-KEPT_ON_PURPOSE = r"""
-import atexit, os, re
+KEPT_ON_PURPOSE = OWN_SEGMENT + r"""
+import atexit
 from bt_servicesim.ros.environment import apply_localhost_defaults, end_keeping_the_participant
 apply_localhost_defaults()
 import rclpy
 from rclpy.node import Node
 rclpy.init()
 node = Node("kept_on_purpose")
-for descriptor in os.listdir("/proc/self/fd"):
-    try:
-        target = os.readlink(f"/proc/self/fd/{descriptor}")
-    except OSError:
-        continue
-    found = re.search(r"/dev/shm/(fastdds_[0-9a-f]{16})_el$", target)
-    if found:
-        print(found.group(1))
+print(own_segment())
 atexit.register(print, "an exit handler ran")
 print("said", end="")
 end_keeping_the_participant(3)
@@ -99,7 +100,7 @@ def test_a_participant_kept_on_purpose_is_left_for_the_next_process_to_remove() 
     assert result.returncode == 3, result.stderr
     *segments, said = result.stdout.split("\n")
     assert said == "said", "what it printed is flushed, and no exit handler ran"
-    assert len(segments) == 1, "one participant, one segment of its own"
+    assert len(segments) == 1 and segments[0].startswith("fastdds_"), segments
     segment = Path("/dev/shm") / segments[0]
     lock = segment.with_name(f"{segment.name}_el")
     try:
