@@ -26,10 +26,12 @@ SWEEPS: dict[str, Callable[..., list[str]]] = {
     "simulator": simulator_environment.remove_dead_segments,
 }
 
-# The segment this process's participant holds the lock file of, for the scripts below.
-OWN_SEGMENT = r"""
-def own_segment():
+# The segments whose lock file this process holds open (one per participant), for the scripts
+# below: their names, space-separated.
+OWN_SEGMENTS = r"""
+def own_segments():
     import os, re
+    names = []
     for descriptor in os.listdir("/proc/self/fd"):
         try:
             target = os.readlink(f"/proc/self/fd/{descriptor}")
@@ -37,14 +39,14 @@ def own_segment():
             continue
         found = re.search(r"/dev/shm/(fastdds_[0-9a-f]{16})_el$", target)
         if found:
-            return found.group(1)
-    return "no segment"
+            names.append(found.group(1))
+    return " ".join(names)
 """
 
 # A participant whose node is kept alive to the very end by a daemon thread (as entities caught
 # in cycles through C++ callbacks are): rclpy never deletes it, and without the exit hook its
 # segment stays in /dev/shm.
-KEPT_ALIVE = OWN_SEGMENT + r"""
+KEPT_ALIVE = OWN_SEGMENTS + r"""
 import sys, threading, time
 if sys.argv[1] == "executive":
     from bt_servicesim.ros.environment import apply_localhost_defaults as defaults
@@ -58,7 +60,7 @@ from nav2_msgs.action import NavigateToPose
 rclpy.init()
 node = Node("kept_alive")
 client = ActionClient(node, NavigateToPose, "/kept_alive")  # destroy_node() leaves it
-print(own_segment(), flush=True)
+print(own_segments(), flush=True)
 node.destroy_node()
 rclpy.try_shutdown()
 threading.Thread(target=lambda held=(node, client): time.sleep(1000), daemon=True).start()
@@ -71,7 +73,7 @@ def test_a_participant_kept_alive_to_the_end_is_deleted_at_exit(program: str) ->
                             text=True, timeout=60, env=dict(os.environ))
     assert result.returncode == 0, result.stderr
     segments = result.stdout.split()
-    assert len(segments) == 1 and segments[0].startswith("fastdds_"), segments
+    assert len(segments) == 1, "one participant, one segment of its own"
     segment = segments[0]
     assert not (Path("/dev/shm") / segment).exists(), "the segment went with the process"
     assert not (Path("/dev/shm") / f"{segment}_el").exists()
@@ -79,7 +81,7 @@ def test_a_participant_kept_alive_to_the_end_is_deleted_at_exit(program: str) ->
 
 # A process that ends on purpose without deleting its participant (its peer was killed): its
 # output so far is flushed, no exit handler runs, and its segment is left for the next process.
-KEPT_ON_PURPOSE = OWN_SEGMENT + r"""
+KEPT_ON_PURPOSE = OWN_SEGMENTS + r"""
 import atexit
 from bt_servicesim.ros.environment import apply_localhost_defaults, end_keeping_the_participant
 apply_localhost_defaults()
@@ -87,7 +89,7 @@ import rclpy
 from rclpy.node import Node
 rclpy.init()
 node = Node("kept_on_purpose")
-print(own_segment())
+print(own_segments())
 atexit.register(print, "an exit handler ran")
 print("said", end="")
 end_keeping_the_participant(3)
@@ -98,9 +100,10 @@ def test_a_participant_kept_on_purpose_is_left_for_the_next_process_to_remove() 
     result = subprocess.run([sys.executable, "-c", KEPT_ON_PURPOSE], capture_output=True,
                             text=True, timeout=60, env=dict(os.environ))
     assert result.returncode == 3, result.stderr
-    *segments, said = result.stdout.split("\n")
+    printed, said = result.stdout.split("\n")
+    segments = printed.split()
     assert said == "said", "what it printed is flushed, and no exit handler ran"
-    assert len(segments) == 1 and segments[0].startswith("fastdds_"), segments
+    assert len(segments) == 1, "one participant, one segment of its own"
     segment = Path("/dev/shm") / segments[0]
     lock = segment.with_name(f"{segment.name}_el")
     try:
