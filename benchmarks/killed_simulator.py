@@ -32,11 +32,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from suite_under_load import start_hogs, stop
+from suite_under_load import REPO, start_hogs, stop
 
 from bt_servicesim.cli import OneLineArgumentParser
 
-REPO = Path(__file__).resolve().parents[1]
 EXPECTED_STATUS = 1
 EXPECTED_FAILURE = "the simulator was killed by SIGKILL"
 START_LIMIT_S = 120.0
