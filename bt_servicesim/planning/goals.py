@@ -153,7 +153,8 @@ def _best_cell(
 
 
 # ============================================================================ pick-up
-def pickup_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> Pose2D | None:
+def pickup_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D, *,
+                people: np.ndarray | None = None) -> Pose2D | None:
     """A reachable goal INSIDE ``box``, within pick-up reach of wherever the guest may stand,
     but not on top of them.
 
@@ -165,15 +166,25 @@ def pickup_goal(box: Box, grid: OccupancyGrid2D, robot: Pose2D) -> Pose2D | None
     spawn area where it can — the seed drove at the centre, onto the guest, and a robot within
     0.75 m of a person is penalised every physics step — and is the nearest to the robot. The
     robot faces the box centre.
+
+    ``people`` (n, 2) are those the robot sees standing near the box (navigation's costmap): the
+    goal keeps :data:`PEOPLE_KEEP` from them where the box leaves room, before it keeps its
+    distance from the spawn area. A walker can stand in a pick-up box for good, waiting for a
+    robot in its lane, and a goal on top of them is never reached.
     """
     reachable = grid.reachable_from(robot.x, robot.y, ROBOT_CLEARANCE)
     spawn = guest_spawn_area(box)
+    seen = np.zeros((0, 2)) if people is None else np.asarray(people, dtype=float).reshape(-1, 2)
 
     def cost(xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         beyond_reach = np.maximum(farthest_corner(spawn, xs, ys) - PICKUP_REACH, 0.0)
+        beside_people = np.zeros_like(xs)
+        for px, py in seen:
+            beside_people += np.maximum(PEOPLE_KEEP - np.hypot(xs - px, ys - py), 0.0)
         crowding = np.maximum(SOCIAL_DISTANCE - distance_to_box(spawn, xs, ys), 0.0)
         travel = np.hypot(xs - robot.x, ys - robot.y)
-        costs: NDArray[np.float64] = 100.0 * beyond_reach + 10.0 * crowding + 1e-2 * travel
+        costs: NDArray[np.float64] = (100.0 * beyond_reach + 50.0 * beside_people
+                                      + 10.0 * crowding + 1e-2 * travel)
         return costs
 
     for margin in (GOAL_TOLERANCE, GOAL_TOLERANCE / 2.0, 0.0):

@@ -110,18 +110,29 @@ def describe(pose: Pose2D) -> str:
 
 
 class PickupGoal(_Computation):
-    """The pick-up goal: inside the box, nearest the guest's spawn area (:func:`pickup_goal`)."""
+    """The pick-up goal: inside the box, nearest the guest's spawn area, clear of the people
+    navigation's costmap shows standing near the box (:func:`pickup_goal`). Without a costmap
+    it is planned without people."""
 
-    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE}
+    INPUT_PORTS: Ports = {"box": BOX, "occupancy": OCCUPANCY, "robot_pose": ROBOT_POSE,
+                          "costmap": COSTMAP}
     OUTPUT_PORTS: Ports = {"goal": GOAL_OUT}
 
     def __init__(self, name: str = "PickupGoal", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
 
-    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D) -> Pose2D | None:
-        goal = pickup_goal(box, occupancy, robot_pose)
+    def compute(self, box: Box, occupancy: OccupancyGrid2D, robot_pose: Pose2D,
+                costmap: Costmap2D | None) -> Pose2D | None:
+        people = None
+        if costmap is not None:
+            centre_x, centre_y = box.centre
+            people = people_on_costmap(costmap, occupancy, x=centre_x, y=centre_y,
+                                       reach=PEOPLE_REACH)
+        goal = pickup_goal(box, occupancy, robot_pose, people=people)
         self.feedback_message = (f"pick-up goal {describe(goal)}" if goal is not None
                                  else "no reachable free spot inside the pick-up box")
+        if people is not None:
+            self.feedback_message += f" ({_seen(people)})"
         return goal
 
 

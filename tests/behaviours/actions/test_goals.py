@@ -155,6 +155,27 @@ def test_pickup_goal_in_a_box_over_a_wall_keeps_off_the_wall() -> None:
     assert depth(box, goal.x, goal.y) >= TOLERANCE
 
 
+def test_pickup_goal_keeps_clear_of_someone_standing_where_it_would_lie() -> None:
+    """A walker standing in the pick-up box (waiting, for good, for a robot in its lane) where
+    the goal would lie: the goal moves to where the box leaves a metre clear of them, still
+    inside it and within reach of the guest's spawn area."""
+    grid, robot, box = open_room(), Pose2D(2.0, 3.0), centred_box(3.0, 3.0)
+    unseen = output(run(PickupGoal(), box=box, occupancy=grid, robot_pose=robot))
+    walker = (unseen.x, unseen.y + 0.2)
+    Blackboard.clear()
+    behaviour = run(PickupGoal(), box=box, occupancy=grid, robot_pose=robot,
+                    costmap=costmap_of(grid, [walker]))
+    goal = output(behaviour)
+    assert_good_goal(grid, robot, goal)
+    assert depth(box, goal.x, goal.y) >= TOLERANCE
+    assert math.dist((goal.x, goal.y), walker) >= 1.0
+    assert behaviour.feedback_message.endswith(f"(1 people near: ({walker[0]:.1f}, {walker[1]:.1f}))")
+    Blackboard.clear()
+    nobody = output(run(PickupGoal(), box=box, occupancy=grid, robot_pose=robot,
+                        costmap=costmap_of(grid, [])))
+    assert (nobody.x, nobody.y) == (unseen.x, unseen.y)
+
+
 # ----------------------------------------------------------------------------- drop-off
 def trailing_spot(goal: Pose2D, short: float = 0.0) -> tuple[float, float]:
     """Where the guest stops: TRAIL behind the robot along its arrival heading (the goal's
