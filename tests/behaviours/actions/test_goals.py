@@ -169,7 +169,8 @@ def test_pickup_goal_keeps_clear_of_someone_standing_where_it_would_lie() -> Non
     assert_good_goal(grid, robot, goal)
     assert depth(box, goal.x, goal.y) >= TOLERANCE
     assert math.dist((goal.x, goal.y), walker) >= 1.0
-    assert behaviour.feedback_message.endswith(f"(1 people near: ({walker[0]:.1f}, {walker[1]:.1f}))")
+    seen = f"(1 people near: ({walker[0]:.1f}, {walker[1]:.1f}))"
+    assert behaviour.feedback_message.endswith(seen)
     Blackboard.clear()
     nobody = output(run(PickupGoal(), box=box, occupancy=grid, robot_pose=robot,
                         costmap=costmap_of(grid, [])))
