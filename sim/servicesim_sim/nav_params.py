@@ -2,9 +2,10 @@
 
 Reads a Nav2 parameters file as the simulator's ``--nav-params`` does and prints what the
 robot's navigation makes of it (the inscribed radius, the inflations of walls and of people, the
-goal checker's tolerances); without a file, the default, the original servicebot's. A file the
-simulator would refuse is one line on stderr and exit status 2. The run and the evaluation
-check ``--nav-params`` with it before they start anything, without importing the simulator.
+goal checker's tolerances, when it plans again); without a file, the default, the original
+servicebot's. A file the simulator would refuse is one line on stderr and exit status 2. The
+run and the evaluation check ``--nav-params`` with it before they start anything, without
+importing the simulator.
 """
 
 from __future__ import annotations
@@ -36,7 +37,10 @@ def describe(parameters: NavigationParameters) -> list[str]:
             f"walls inflated: {inflations(costmap.walls)}",
             f"people inflated: {inflations(costmap.people)}",
             f"goal tolerance: {checker.xy_goal_tolerance:g} m, "
-            f"{checker.yaw_goal_tolerance:g} rad"]
+            f"{checker.yaw_goal_tolerance:g} rad",
+            f"navigation tree: {parameters.navigation_tree} ("
+            + ("plans again every second" if parameters.replans_every_second
+               else "plans again when people stand on the path") + ")"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

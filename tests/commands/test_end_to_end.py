@@ -26,6 +26,20 @@ WALL_LIMIT_S = 300
 #: The shipped tree's navigation parameters: its robot's berth around people, with which the
 #: situations below arise (docs/reference/navigation.md).
 TREE_NAV_PARAMS = str(Path(__file__).resolve().parents[2] / "trees" / "servicesim_nav2_params.yaml")
+EVERY_SECOND_TREE = "navigate_to_pose_w_replanning_and_recovery.xml"
+WHEN_INVALID_TREE = "navigate_w_replanning_only_if_path_becomes_invalid.xml"
+
+
+def planning_again_only_when_blocked(directory: Path) -> str:
+    """The shipped tree's navigation parameters with Nav2's navigation tree that plans the path
+    again only once people stand on it, instead of every second: the robot with which a seed's
+    situation below was found. The situation is the mission tree's to handle whichever way its
+    navigation plans; the seed that plays it depends on both."""
+    text = Path(TREE_NAV_PARAMS).read_text(encoding="utf-8")
+    assert EVERY_SECOND_TREE in text
+    params = directory / "nav_params_when_blocked.yaml"
+    params.write_text(text.replace(EVERY_SECOND_TREE, WHEN_INVALID_TREE), encoding="utf-8")
+    return str(params)
 
 
 def mission(out: Path, *arguments: str) -> tuple[int, dict[str, Any]]:
@@ -157,12 +171,13 @@ def test_a_walker_standoff_is_broken_by_giving_way_where_the_costmap_shows_nobod
     where the costmap shows nobody near. Before giving way learnt where people stand, nothing
     moved again before the 900 s limit. In lockstep the speed changes nothing: flat out. The
     walkers walk our random loops (the office's own are the original's one-way loops). The robot
-    keeps the shipped tree's berth around people (its navigation parameters)."""
-    code, report = mission(tmp_path, "--seed", "10", "--speed", "0", "--time-limit", "600",
-                           "--sim-arg=--walker-routes", "--sim-arg=random",
-                           "--nav-params", TREE_NAV_PARAMS, "--trajectory", "never")
+    keeps the shipped tree's berth around people, planning again only when blocked."""
+    params = planning_again_only_when_blocked(tmp_path)
+    code, report = mission(tmp_path / "run", "--seed", "10", "--speed", "0", "--time-limit",
+                           "600", "--sim-arg=--walker-routes", "--sim-arg=random",
+                           "--nav-params", params, "--trajectory", "never")
     assert_completed(code, report)
-    spots = [message for message in tree_log_feedback(tmp_path, "FindGiveWaySpot")
+    spots = [message for message in tree_log_feedback(tmp_path / "run", "FindGiveWaySpot")
              if message.startswith("give way at")]
     assert len(set(spots)) >= 2, spots  # in the corridor, and again in the room
 
@@ -175,15 +190,18 @@ def test_a_random_abort_beside_someone_keeps_the_costmaps_and_touches_nobody(
     costmaps would forget whoever stands out of the lidar's 240 degrees, and the local
     planner's escape (backing off while no turn keeps the box off the walls) could drive into
     them. The recovery keeps the costmaps after an abort no obstacle caused, steps aside (the
-    costmap shows someone near), and the mission completes touching nobody."""
-    code, report = mission(tmp_path, "--seed", "14", "--sim-arg=--difficulty",
-                           "--sim-arg=hard", "--trajectory", "never")
+    costmap shows someone near), and the mission completes touching nobody. The robot plans
+    again only when blocked."""
+    params = planning_again_only_when_blocked(tmp_path)
+    out = tmp_path / "run"
+    code, report = mission(out, "--seed", "14", "--sim-arg=--difficulty", "--sim-arg=hard",
+                           "--nav-params", params, "--trajectory", "never")
     assert_completed(code, report)
-    kept = [message for message in tree_log_feedback(tmp_path, "WaypointRecovery.WayBlocked")
+    kept = [message for message in tree_log_feedback(out, "WaypointRecovery.WayBlocked")
             if message.startswith("navigation error 9000")]
     assert kept, "the seed still plays a random abort while exploring"
     assert "SUCCESS" not in tree_log_statuses(
-        tmp_path, "ClearCostmapsForWaypointIfBlocked.ClearCostmaps")
+        out, "ClearCostmapsForWaypointIfBlocked.ClearCostmaps")
 
 
 @pytest.mark.long

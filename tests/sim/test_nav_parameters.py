@@ -18,6 +18,8 @@ from servicesim_sim.nav_params import main as nav_params_main
 from servicesim_sim.navigation.costmap import INSCRIBED, LETHAL, PERSON_RADIUS, Costmap, Lidar
 from servicesim_sim.navigation.navigator import Navigator
 from servicesim_sim.navigation.parameters import (
+    REPLAN_EVERY_SECOND,
+    REPLAN_WHEN_INVALID,
     SERVICEBOT,
     CostmapParameters,
     GoalChecker,
@@ -59,6 +61,8 @@ def test_the_default_is_the_servicebots_move_base_configuration() -> None:
     servicebot = InflationLayer(inflation_radius=0.4, cost_scaling_factor=10.0)
     assert costmap.walls == (servicebot,) and costmap.people == (servicebot,)
     assert (checker.xy_goal_tolerance, checker.yaw_goal_tolerance) == (0.3, 0.262)
+    assert SERVICEBOT.navigation_tree == REPLAN_WHEN_INVALID
+    assert not SERVICEBOT.replans_every_second
     assert NavigationParameters() == SERVICEBOT and navigation_from(
         build_parser().parse_args([])) == SERVICEBOT
 
@@ -78,7 +82,22 @@ def test_the_shipped_trees_file_gives_people_a_berth_of_their_own() -> None:
     assert shipped == NavigationParameters(
         costmap=CostmapParameters(inscribed_radius=0.25, walls=(InflationLayer(0.4, 5.0),),
                                   people=(InflationLayer(0.8, 2.5),)),
-        goal_checker=GoalChecker(xy_goal_tolerance=0.3, yaw_goal_tolerance=0.262))
+        goal_checker=GoalChecker(xy_goal_tolerance=0.3, yaw_goal_tolerance=0.262),
+        navigation_tree=REPLAN_EVERY_SECOND)
+    assert shipped.replans_every_second
+
+
+@pytest.mark.parametrize("given", [
+    REPLAN_EVERY_SECOND,
+    "/opt/ros/kilted/share/nav2_bt_navigator/behavior_trees/" + REPLAN_EVERY_SECOND])
+def test_the_navigation_tree_is_nav2s_file_by_name_or_by_path(given: str) -> None:
+    chosen = parsed(f"bt_navigator:\n  ros__parameters:\n"
+                    f"    default_nav_to_pose_bt_xml: {given!r}\n")
+    assert chosen.navigation_tree == REPLAN_EVERY_SECOND and chosen.replans_every_second
+    assert (chosen.costmap, chosen.goal_checker) == (SERVICEBOT.costmap, SERVICEBOT.goal_checker)
+    named_default = parsed("bt_navigator:\n  ros__parameters:\n"
+                           f"    default_nav_to_pose_bt_xml: {REPLAN_WHEN_INVALID}\n")
+    assert named_default == SERVICEBOT
 
 
 # --------------------------------------------------------------------------- layers in order
@@ -195,6 +214,15 @@ def test_the_robot_is_its_footprints_inscribed_disc_or_its_radius() -> None:
     pytest.param("controller_server:\n  ros__parameters:\n"
                  '    goal_checker_plugins: ["a", "b"]\n', "goal_checker_plugins",
                  "must name one goal checker", id="two-goal-checkers"),
+    pytest.param("bt_navigator:\n  ros__parameters:\n"
+                 "    default_nav_to_pose_bt_xml: navigate_w_replanning_time.xml\n",
+                 "bt_navigator.ros__parameters.default_nav_to_pose_bt_xml",
+                 "not a navigation tree this simulator's navigation plays", id="other-tree"),
+    pytest.param("bt_navigator:\n  ros__parameters:\n    default_nav_to_pose_bt_xml: 3\n",
+                 "default_nav_to_pose_bt_xml", "must be a string", id="tree-not-a-string"),
+    pytest.param("bt_navigator:\n  ros__parameters:\n    navigators: [navigate_to_pose]\n",
+                 "bt_navigator.ros__parameters.navigators", "not a parameter",
+                 id="unknown-navigator-key"),
     pytest.param("controller_server:\n  ros__parameters:\n    FollowPath: {}\n",
                  "controller_server.ros__parameters.FollowPath", "not a parameter",
                  id="unknown-controller-key"),
@@ -220,9 +248,13 @@ def test_an_unreadable_file_is_one_line_through_the_simulators_settings(tmp_path
 def test_the_check_command_prints_what_a_file_means_or_one_line(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert nav_params_main([str(SHIPPED)]) == 0
-    assert "people inflated: to 0.8 m, cost scaling 2.5" in capsys.readouterr().out
+    shipped = capsys.readouterr().out
+    assert "people inflated: to 0.8 m, cost scaling 2.5" in shipped
+    assert f"navigation tree: {REPLAN_EVERY_SECOND} (plans again every second)" in shipped
     assert nav_params_main([]) == 0
-    assert "inscribed radius: 0.2 m" in capsys.readouterr().out
+    default = capsys.readouterr().out
+    assert "inscribed radius: 0.2 m" in default
+    assert f"navigation tree: {REPLAN_WHEN_INVALID} (plans again when" in default
     (tmp_path / "bad.yaml").write_text(costmap_with("robot_radius: 2"))
     assert nav_params_main([str(tmp_path / "bad.yaml")]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()

@@ -30,7 +30,13 @@ from servicesim_sim.navigation.navigator import (
     PolylinePath,
     evenly_spaced,
 )
-from servicesim_sim.navigation.parameters import CostmapParameters, InflationLayer
+from servicesim_sim.navigation.parameters import (
+    REPLAN_EVERY_SECOND,
+    REPLAN_WHEN_INVALID,
+    CostmapParameters,
+    InflationLayer,
+    NavigationParameters,
+)
 from servicesim_sim.navigation.planner import ComputePathToPoseError, Planner, path_length
 from servicesim_sim.world.files import OccupancyMap
 
@@ -534,6 +540,43 @@ def test_a_person_appearing_a_few_metres_ahead_is_passed_without_stopping() -> N
     assert nav.status == "succeeded"
     assert nav.recoveries == 0  # replanned round in time, never had to stop and wait
     assert min(gaps) >= 0.3 + 0.25
+
+
+SHIPPED_BERTH = CostmapParameters(inscribed_radius=0.25, walls=(InflationLayer(0.4, 5.0),),
+                                  people=(InflationLayer(0.8, 2.5),))
+"""The shipped tree's costmap: a berth of 0.8 m round people's marks, none of it forbidden."""
+
+
+def closest_pass(navigation_tree: str) -> float:
+    """How near the robot's centre comes to a person who, once it is on its way, stops 0.7 m
+    beside its straight path across an open room: off the path's inscribed cost, in its
+    berth."""
+    occupancy_map = occupancy(room(10.0, 6.0))
+    parameters = NavigationParameters(costmap=SHIPPED_BERTH, navigation_tree=navigation_tree)
+    nav = Navigator(occupancy_map, rng=np.random.default_rng(7), parameters=parameters)
+    robot = Unicycle(occupancy_map, 1.0, 3.0, 0.0)
+    nav.start(9.0, 3.0, 0.0, now=0.0)
+    person: list[tuple[float, float]] = []
+    gaps = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        if not person and now >= 2.0:
+            person.append((robot.x + 2.5, 3.7))
+        if person:
+            gaps.append(math.dist(robot.pose[:2], person[0]))
+        return person
+
+    drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    return min(gaps)
+
+
+def test_nav2s_default_tree_replans_round_a_person_who_stops_beside_the_path() -> None:
+    kept = closest_pass(REPLAN_WHEN_INVALID)
+    replanned = closest_pass(REPLAN_EVERY_SECOND)
+    assert kept < 0.8  # the path was not invalid: the robot kept to it, past them
+    assert replanned > 1.0  # planned again within a second: round them, at the berth
+    # (the referee's approximation zone reaches 1.0 m from the robot's centre to theirs)
 
 
 def two_corridor_map() -> OccupancyMap:

@@ -18,7 +18,10 @@ Design intent:
   when people now obstruct the next 4 m (taking the way round unless it is over 5 m longer),
   else every 5 s (taking only a way at least 1 m and 10 % shorter). So the robot neither
   dithers between routes as people come and go nor replans at every change (a plan takes
-  ~15 ms on the full map).
+  ~15 ms on the full map). That is the default navigation tree; with Nav2's own default
+  (:data:`~servicesim_sim.navigation.parameters.REPLAN_EVERY_SECOND`) the robot plans again
+  every second while the costmap changes and takes the new path, unless no path is found
+  (people who stand on the path then stop it, as below).
 * A person within 0.7 m ahead on the path (between the robot's front and their body) stops the
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
@@ -419,10 +422,13 @@ class Navigator:
 
     def _reconsider_due(self, now: float) -> bool:
         """Whether the costmap changed since the last plan, and that plan is a second old with
-        people now obstructing the next few metres of the path, or five seconds old."""
+        people now obstructing the next few metres of the path (or at all, when the navigation
+        tree plans every second), or five seconds old."""
         if self.costmap.version == self._planned_version:
             return False
         since = now - self._planned_at
+        if self.parameters.replans_every_second:
+            return since >= self.tuning.replan_period
         return since >= self.tuning.refresh_period or (
             since >= self.tuning.replan_period and self._path_obstructed())
 
@@ -443,7 +449,8 @@ class Navigator:
         return self._obstructed
 
     def _reconsider(self, pose: Pose, now: float) -> None:
-        """Plan afresh, but keep the current path unless the new one is worth the switch.
+        """Plan afresh, but keep the current path unless the new one is worth the switch
+        (with Nav2's default tree it always is: :meth:`_follow_new_plan`).
 
         Round people obstructing the path the new way is taken unless it is a long detour
         (a person crossing will likely be gone; one who stays stops the robot, which then
@@ -454,6 +461,9 @@ class Navigator:
         """
         assert self._track is not None and self._goal is not None
         start, goal = (pose[0], pose[1]), (self._goal[0], self._goal[1])
+        if self.parameters.replans_every_second:
+            self._follow_new_plan(start, goal, now)
+            return
         tuning = self.tuning
         remaining = self._off_path + self._track.total - self._s
         if self._path_obstructed():
@@ -467,6 +477,15 @@ class Navigator:
         result = self.planner.plan(start, goal)
         self._planned_at, self._planned_version = now, self.costmap.version
         if result.waypoints is not None and path_length(result.waypoints) <= remaining + worth:
+            self._take(result)
+
+    def _follow_new_plan(self, start: tuple[float, float], goal: tuple[float, float],
+                         now: float) -> None:
+        """Nav2's default tree: plan afresh and follow the new path; no path found (people
+        in the way) keeps the current one, on which a person standing stops the robot."""
+        result = self.planner.plan(start, goal)
+        self._planned_at, self._planned_version = now, self.costmap.version
+        if result.waypoints is not None:
             self._take(result)
 
     def _replan(self, pose: Pose, now: float) -> bool:

@@ -13,7 +13,16 @@ parameters a Nav2 stack really has, and only those the simulator's navigation mo
   its own: an obstacle layer and an inflation layer in a container inflate the people alone,
   the way Nav2 gives "different inflation layers for different sensors";
 * ``controller_server``'s goal checker (``nav2_controller::SimpleGoalChecker``:
-  ``xy_goal_tolerance``, ``yaw_goal_tolerance``).
+  ``xy_goal_tolerance``, ``yaw_goal_tolerance``);
+* ``bt_navigator``'s ``default_nav_to_pose_bt_xml``: when the robot plans its path again. Nav2
+  ships its navigation trees as XML files; the simulator's navigation models two of them by
+  name (a path ending in the name, as Nav2 users give it, or the name alone):
+  ``navigate_w_replanning_only_if_path_becomes_invalid.xml``, the default, plans again once
+  people stand on the path (and every few seconds for a clearly shorter way), near what
+  move_base does with its default ``planner_frequency`` of 0, which the servicebot kept (plan
+  once, again when the way is blocked); ``navigate_to_pose_w_replanning_and_recovery.xml``,
+  Nav2's own default, plans again every second and follows the new path, so a berth the
+  costmap keeps round people holds while they move and stop.
 
 Design intent:
 
@@ -49,6 +58,12 @@ OBSTACLE_LAYER = "nav2_costmap_2d::ObstacleLayer"
 INFLATION_LAYER = "nav2_costmap_2d::InflationLayer"
 CONTAINER_LAYER = "nav2_costmap_2d::PluginContainerLayer"
 GOAL_CHECKER = "nav2_controller::SimpleGoalChecker"
+REPLAN_WHEN_INVALID = "navigate_w_replanning_only_if_path_becomes_invalid.xml"
+"""Nav2's navigation tree that plans again only when the path becomes invalid: the default."""
+REPLAN_EVERY_SECOND = "navigate_to_pose_w_replanning_and_recovery.xml"
+"""Nav2's default navigation tree: it plans again every second (a ``RateController`` of 1 Hz
+round ``ComputePathToPose``) and follows the new path."""
+NAVIGATION_TREES = (REPLAN_WHEN_INVALID, REPLAN_EVERY_SECOND)
 ROS_PARAMETERS = "ros__parameters"
 
 # The servicebot's configuration (competitor_example_solution/servicebot_2dnav/config/).
@@ -131,6 +146,14 @@ class NavigationParameters:
 
     costmap: CostmapParameters = field(default_factory=CostmapParameters)
     goal_checker: GoalChecker = field(default_factory=GoalChecker)
+    navigation_tree: str = REPLAN_WHEN_INVALID
+    """Which of :data:`NAVIGATION_TREES` the navigation plays (``bt_navigator``'s
+    ``default_nav_to_pose_bt_xml``, by its file name)."""
+
+    @property
+    def replans_every_second(self) -> bool:
+        """Whether the path is planned again every second, as Nav2's default tree does."""
+        return self.navigation_tree == REPLAN_EVERY_SECOND
 
 
 SERVICEBOT = NavigationParameters()
@@ -186,9 +209,9 @@ class _Reader:
         if document is None:
             raise NavigationParametersError(f"{self.source}: empty; name a node's "
                                             f"{ROS_PARAMETERS} (global_costmap, "
-                                            "controller_server)")
+                                            "controller_server, bt_navigator)")
         top = self.mapping(document, "the document")
-        self.only(top, "", ("global_costmap", "controller_server"))
+        self.only(top, "", ("global_costmap", "controller_server", "bt_navigator"))
         costmap = SERVICEBOT.costmap
         if "global_costmap" in top:
             inner = self.mapping(top["global_costmap"], "global_costmap")
@@ -201,7 +224,13 @@ class _Reader:
             goal_checker = self.controller(
                 self.parameters(top["controller_server"], "controller_server"),
                 f"controller_server.{ROS_PARAMETERS}")
-        return NavigationParameters(costmap=costmap, goal_checker=goal_checker)
+        navigation_tree = SERVICEBOT.navigation_tree
+        if "bt_navigator" in top:
+            navigation_tree = self.navigator(
+                self.parameters(top["bt_navigator"], "bt_navigator"),
+                f"bt_navigator.{ROS_PARAMETERS}")
+        return NavigationParameters(costmap=costmap, goal_checker=goal_checker,
+                                    navigation_tree=navigation_tree)
 
     def parameters(self, node: object, key: str) -> Mapping[str, Any]:
         values = self.mapping(node, key)
@@ -328,6 +357,22 @@ class _Reader:
                                           default.xy_goal_tolerance, XY_TOLERANCE_RANGE),
             yaw_goal_tolerance=self.double(section, where, "yaw_goal_tolerance",
                                            default.yaw_goal_tolerance, YAW_TOLERANCE_RANGE))
+
+
+    # ------------------------------------------------------------------ bt_navigator
+    def navigator(self, values: Mapping[str, Any], key: str) -> str:
+        """The navigation tree's file name, one of :data:`NAVIGATION_TREES`."""
+        name = "default_nav_to_pose_bt_xml"
+        self.only(values, key, (name,))
+        path = self.string(values, key, name)
+        if path is None:
+            return SERVICEBOT.navigation_tree
+        tree = path.rsplit("/", 1)[-1]
+        if tree not in NAVIGATION_TREES:
+            raise self.fail(f"{key}.{name}", f"{path!r}: not a navigation tree this "
+                            f"simulator's navigation plays (it plays Nav2's "
+                            f"{' and '.join(NAVIGATION_TREES)})")
+        return tree
 
 
 _DEFAULT_TYPES = dict(zip(SERVICEBOT_LAYERS, (STATIC_LAYER, OBSTACLE_LAYER, INFLATION_LAYER),
