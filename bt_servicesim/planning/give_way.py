@@ -142,6 +142,8 @@ reaches this far ahead of it (the robot's origin, on the floor, is in it from ab
 a costmap's mark lags), and the costmap does not say which way a person faces."""
 STANDING_STILL = 0.15
 """Metres within which a robot still stands where it stopped (:class:`Standstill`)."""
+SETTING_OFF_TURN = 0.2
+"""Radians a robot yet to leave where it started turns by as it sets off (:class:`Standstill`)."""
 GUEST_STOP_ROOM_WITHOUT_LANES = 0.5
 """Metres of free space around a following guest's stop when the lanes had to be given up."""
 
@@ -401,18 +403,22 @@ def held_up_on_costmap(costmap: Costmap2D, occupancy: OccupancyGrid2D, *, robot:
 
 
 class Standstill:
-    """How long the robot has stood since it stopped on its way: the sim seconds since it was
-    last more than ``still`` metres from where it stopped, counted only once it has moved off
-    where it was at first (a start is not a stop: the robot that has just dropped off its guest
-    turns and sets off beside them). Turning in place is standing: nobody in a lane gets by.
+    """How long the robot has stood: the sim seconds since it was last more than ``still``
+    metres from where it stopped. Turning in place on its way is standing: nobody in a lane
+    gets by. Before the robot has left where it started, a turn of more than ``turn`` is
+    setting off, not standing (the robot that has just dropped off its guest turns and leaves
+    beside them), and the count starts again; a robot that neither moves nor turns from the
+    start stands from the start (someone stands where it must go, and navigation waits).
 
     Args:
         still: metres of drift that still count as standing (a stopped robot's estimate jitters)
+        turn: radians of turning at the start that count as setting off
     """
 
-    def __init__(self, *, still: float = STANDING_STILL) -> None:
+    def __init__(self, *, still: float = STANDING_STILL, turn: float = SETTING_OFF_TURN) -> None:
         self.still = still
-        self._since: tuple[float, float, float] | None = None
+        self.turn = turn
+        self._since: tuple[float, float, float, float] | None = None
         self._on_its_way = False
 
     def forget(self) -> None:
@@ -420,14 +426,23 @@ class Standstill:
         self._since = None
         self._on_its_way = False
 
-    def stood(self, x: float, y: float, now: float) -> float:
-        """Sim seconds the robot at (x, y) has stood by ``now`` since it stopped on its way."""
-        if self._since is None:
-            self._since = (x, y, now)
-        elif math.hypot(x - self._since[0], y - self._since[1]) > self.still:
-            self._since = (x, y, now)
+    def stood(self, x: float, y: float, yaw: float, now: float) -> float:
+        """Sim seconds the robot at (x, y), facing ``yaw``, has stood by ``now``."""
+        since = self._since
+        if since is None:
+            self._since = (x, y, yaw, now)
+        elif math.hypot(x - since[0], y - since[1]) > self.still:
+            self._since = (x, y, yaw, now)
             self._on_its_way = True
-        return max(0.0, now - self._since[2]) if self._on_its_way else 0.0
+        elif not self._on_its_way and abs(_wrapped(yaw - since[2])) > self.turn:
+            self._since = (x, y, yaw, now)
+        assert self._since is not None
+        return max(0.0, now - self._since[3])
+
+
+def _wrapped(angle: float) -> float:
+    """``angle`` in [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def without_the_guest(people: np.ndarray, *, robot: Pose2D, trail: np.ndarray) -> np.ndarray:

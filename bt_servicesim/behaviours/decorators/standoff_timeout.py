@@ -12,9 +12,10 @@ fails, and the mission's recovery gives way
 near (waiting for a way to clear, turning in place) is left to its navigation.
 
 Standing is measured in sim time from the robot's pose
-(:class:`~bt_servicesim.planning.give_way.Standstill`), from the first stop after the robot set
-off: a robot that stood before its goal began, or has yet to leave where it stands (beside the
-guest it has just dropped off), is not taken for one held up on its way.
+(:class:`~bt_servicesim.planning.give_way.Standstill`), from the goal's start: a robot that
+stood before its goal began is not taken for one held up on this goal, and one that turns to
+set off (beside the guest it has just dropped off) starts counting again; one that neither
+moves nor turns is held up from the start (someone stands where it must go).
 """
 
 from __future__ import annotations
@@ -95,7 +96,7 @@ class StandoffTimeout(PortsMixin, py_trees.decorators.Decorator):
             robot = self.get_input("robot_pose")
         except NoDataAvailable:
             return 0.0
-        return self._standstill.stood(robot.x, robot.y, now) if now > 0.0 else 0.0
+        return self._standstill.stood(robot.x, robot.y, robot.yaw, now) if now > 0.0 else 0.0
 
     def terminate(self, new_status: Status) -> None:
         """Note an interruption; Decorator.stop() stops the child."""

@@ -83,12 +83,24 @@ def test_standing_with_nobody_near_is_left_to_its_navigation() -> None:
     assert decorator.feedback_message == "stood 9.9 sim s: nobody within 1.5 m"
 
 
-def test_a_robot_yet_to_set_off_beside_someone_is_left_to_its_navigation() -> None:
-    # a start is not a stop: the robot that dropped its guest off turns and leaves beside them
+def test_a_robot_turning_to_set_off_beside_someone_is_left_to_its_navigation() -> None:
+    # the robot that dropped its guest off turns on the spot and leaves beside them
     decorator, clock = watch(people=[WALKER_AHEAD])
-    assert set(tick_for(decorator, clock, 10.0)) == {Status.RUNNING}
+    for step in range(60):  # 6 sim s turning at 0.5 rad/s where it started
+        Blackboard.set("/robot_pose", Pose2D(ROBOT.x, ROBOT.y, 0.05 * step))
+        decorator.tick_once()
+        clock.advance(TICK_S)
+        assert decorator.status == Status.RUNNING
     arrive(decorator, clock)
     assert Status.FAILURE in tick_for(decorator, clock, 4.1)
+
+
+def test_a_robot_that_gets_nowhere_from_the_start_beside_someone_stops_after_4_s() -> None:
+    # someone stands where it must go: navigation waits, neither moving nor turning the robot
+    decorator, clock = watch(people=[WALKER_AHEAD])
+    statuses = tick_for(decorator, clock, 4.1)
+    assert statuses[:40] == [Status.RUNNING] * 40
+    assert statuses[40] == Status.FAILURE
 
 
 def test_the_guest_in_tow_stopped_behind_the_robot_is_nobody_held_up() -> None:
@@ -133,13 +145,17 @@ def test_it_is_a_decorator() -> None:
 
 
 @pytest.mark.parametrize(("moves", "stood"), [
-    ([(0.0, 0.0, 0.0), (0.1, 0.0, 2.0), (0.1, 0.1, 5.0)], 0.0),  # never set off: no stop
-    ([(0.0, 0.0, 0.0), (0.3, 0.0, 2.0), (0.3, 0.0, 5.0)], 3.0),  # set off, stopped at 2 s
-    ([(0.0, 0.0, 0.0), (0.3, 0.0, 2.0), (0.4, 0.1, 5.0)], 3.0),  # jitter within 0.15 m
-    ([(0.0, 0.0, 0.0), (0.3, 0.0, 2.0), (0.6, 0.0, 5.0)], 0.0),  # on the move again
+    ([(0.0, 0.0, 0.0, 0.0), (0.1, 0.0, 0.0, 2.0), (0.1, 0.1, 0.0, 5.0)], 5.0),  # never got going
+    ([(0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0, 2.0), (0.0, 0.0, 1.1, 5.0)], 3.0),  # turned to set off
+    ([(0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0, 2.0), (0.0, 0.0, 2.0, 5.0)], 0.0),  # still turning
+    ([(0.0, 0.0, 0.0, 0.0), (0.3, 0.0, 0.0, 2.0), (0.3, 0.0, 0.0, 5.0)], 3.0),  # stopped at 2 s
+    ([(0.0, 0.0, 0.0, 0.0), (0.3, 0.0, 0.0, 2.0), (0.4, 0.1, 0.0, 5.0)], 3.0),  # jitter, 0.15 m
+    ([(0.0, 0.0, 0.0, 0.0), (0.3, 0.0, 0.0, 2.0), (0.3, 0.0, 1.5, 5.0)], 3.0),  # turns on its way
+    ([(0.0, 0.0, 0.0, 0.0), (0.3, 0.0, 0.0, 2.0), (0.6, 0.0, 0.0, 5.0)], 0.0),  # on the move
+    ([(0.0, 0.0, 3.1, 0.0), (0.0, 0.0, -3.1, 5.0)], 5.0),  # 0.08 rad across the wrap: no turn
 ])
-def test_standstill_counts_from_where_the_robot_last_stopped(
-        moves: list[tuple[float, float, float]], stood: float) -> None:
+def test_standstill_counts_from_where_the_robot_last_stopped_or_got_nowhere(
+        moves: list[tuple[float, float, float, float]], stood: float) -> None:
     standstill = Standstill()
-    results = [standstill.stood(x, y, now) for x, y, now in moves]
+    results = [standstill.stood(x, y, yaw, now) for x, y, yaw, now in moves]
     assert results[-1] == pytest.approx(stood)
