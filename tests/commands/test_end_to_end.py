@@ -146,12 +146,14 @@ def test_a_hard_mission_whose_guest_the_camera_finds_replays_in_lockstep(
     look subscribes to the camera in a tick; its frames come from the period the lockstep
     client names, three of 0.9 MB a period, and nothing of lockstep's guarantee is lost under
     them: played twice to 150 sim s (the whole mission completes at 230 s), the tree logs are
-    the same, tick for tick."""
+    the same, tick for tick. The robot plans again only when blocked."""
+    params = planning_again_only_when_blocked(tmp_path)
     logs = []
     for run in ("a", "b"):
         out = tmp_path / run
-        code, report = mission(out, "--seed", "9", "--sim-arg=--difficulty",
-                               "--sim-arg=hard", "--trajectory", "never", "--time-limit", "150")
+        code, report = mission(out, "--seed", "9", "--sim-arg=--difficulty", "--sim-arg=hard",
+                               "--nav-params", params, "--trajectory", "never",
+                               "--time-limit", "150")
         assert code == 1 and report["checkpoints"][1]["done"], report.get("failure")
         assert (report["lockstep_dropped"], report["lockstep_stalls"]) == (None, 0)
         seen = sorted({message for message in tree_log_feedback(

@@ -603,6 +603,29 @@ def test_a_long_detour_is_not_taken_for_a_person_briefly_in_the_way() -> None:
     assert ended < 30.0
 
 
+@pytest.mark.parametrize("navigation_tree", [REPLAN_WHEN_INVALID, REPLAN_EVERY_SECOND])
+def test_a_way_round_much_longer_than_a_wait_is_not_taken_whichever_tree(
+        navigation_tree: str) -> None:
+    """Someone stands in the lower corridor, seen from the start, and leaves before the robot
+    reaches them: the way round the top (about 9 m longer) is not taken, whether the path is
+    planned again only when blocked or every second (which would otherwise switch to every
+    way the costmap makes cheapest, and back)."""
+    occupancy_map = two_corridor_map()
+    nav = Navigator(occupancy_map, rng=np.random.default_rng(7), lidar=MARK_AT_ANY_RANGE,
+                    parameters=NavigationParameters(navigation_tree=navigation_tree))
+    robot = Unicycle(occupancy_map, 1.0, 0.8, 0.0)
+    nav.start(11.0, 0.8, 0.0, now=0.0)
+    heights = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        heights.append(robot.y)
+        return [(6.0, 0.8)] if 2.0 <= now < 7.0 else []
+
+    drive(nav, robot, people=people)
+    assert nav.status == "succeeded"
+    assert max(heights) < 1.5
+
+
 def test_a_person_standing_in_the_lower_corridor_sends_the_robot_round_the_top() -> None:
     occupancy_map = two_corridor_map()
     nav = navigator(occupancy_map, lidar=MARK_AT_ANY_RANGE)

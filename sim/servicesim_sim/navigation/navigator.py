@@ -20,8 +20,10 @@ Design intent:
   dithers between routes as people come and go nor replans at every change (a plan takes
   ~15 ms on the full map). That is the default navigation tree; with Nav2's own default
   (:data:`~servicesim_sim.navigation.parameters.REPLAN_EVERY_SECOND`) the robot plans again
-  every second while the costmap changes and takes the new path, unless no path is found
-  (people who stand on the path then stop it, as below).
+  every second while the costmap changes and takes the new path unless it is much longer than
+  what is left of the current one: over 1 m and 10 % longer while the current path is clear
+  (a way round someone beside it is taken), over 5 m while people obstruct it, as above. Taking
+  every new path, a robot whose guest stood in its way turned between two routes for good.
 * A person within 0.7 m ahead on the path (between the robot's front and their body) stops the
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
@@ -481,11 +483,19 @@ class Navigator:
 
     def _follow_new_plan(self, start: tuple[float, float], goal: tuple[float, float],
                          now: float) -> None:
-        """Nav2's default tree: plan afresh and follow the new path; no path found (people
+        """Nav2's default tree: plan afresh and follow the new path, unless it is much longer
+        than what is left of the current one (see the module docstring); no path found (people
         in the way) keeps the current one, on which a person standing stops the robot."""
         result = self.planner.plan(start, goal)
         self._planned_at, self._planned_version = now, self.costmap.version
-        if result.waypoints is not None:
+        if result.waypoints is None:
+            return
+        assert self._track is not None
+        tuning = self.tuning
+        remaining = self._off_path + self._track.total - self._s
+        worth = (tuning.detour_allowance if self._path_obstructed()
+                 else max(tuning.shortcut_gain, tuning.shortcut_fraction * remaining))
+        if path_length(result.waypoints) <= remaining + worth:
             self._take(result)
 
     def _replan(self, pose: Pose, now: float) -> bool:

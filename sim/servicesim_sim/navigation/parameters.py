@@ -21,8 +21,9 @@ parameters a Nav2 stack really has, and only those the simulator's navigation mo
   people stand on the path (and every few seconds for a clearly shorter way), near what
   move_base does with its default ``planner_frequency`` of 0, which the servicebot kept (plan
   once, again when the way is blocked); ``navigate_to_pose_w_replanning_and_recovery.xml``,
-  Nav2's own default, plans again every second and follows the new path, so a berth the
-  costmap keeps round people holds while they move and stop.
+  Nav2's own default, plans again every second and follows the new path (unless it is much
+  longer than what is left of the current one), so a berth the costmap keeps round people
+  holds while they move and stop.
 
 Design intent:
 
