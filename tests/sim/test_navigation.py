@@ -521,22 +521,30 @@ def test_a_person_stepping_onto_the_path_stops_the_robot_which_then_goes_round()
     assert min(gaps) > 0.3 + CONTACT_RADIUS
 
 
+def appearing_at(robot: Unicycle, ahead: float, y: float | None,
+                 gaps: list[float]) -> People:
+    """A person who appears 2 s in (after the first plan), ``ahead`` metres in x before the
+    robot, at ``y`` (the robot's own without one), and stands there; ``gaps`` collects the
+    robot's distance to them at every step from then on."""
+    person: list[tuple[float, float]] = []
+
+    def people(now: float) -> list[tuple[float, float]]:
+        if not person and now >= 2.0:
+            person.append((robot.x + ahead, robot.y if y is None else y))
+        if person:
+            gaps.append(math.dist(robot.pose[:2], person[0]))
+        return person
+
+    return people
+
+
 def test_a_person_appearing_a_few_metres_ahead_is_passed_without_stopping() -> None:
     occupancy_map = corridor_map(3.0)
     nav = navigator(occupancy_map)
     robot = Unicycle(occupancy_map, 1.0, 1.6, 0.0)
     nav.start(11.0, 1.6, 0.0, now=0.0)
-    person: list[tuple[float, float]] = []
-    gaps = []
-
-    def people(now: float) -> list[tuple[float, float]]:
-        if not person and now >= 2.0:
-            person.append((robot.x + 3.0, robot.y))  # after the first plan, on the path
-        if person:
-            gaps.append(math.dist(robot.pose[:2], person[0]))
-        return person
-
-    drive(nav, robot, people=people)
+    gaps: list[float] = []
+    drive(nav, robot, people=appearing_at(robot, 3.0, None, gaps))  # on the path
     assert nav.status == "succeeded"
     assert nav.recoveries == 0  # replanned round in time, never had to stop and wait
     assert min(gaps) >= 0.3 + 0.25
@@ -556,17 +564,8 @@ def closest_pass(navigation_tree: str) -> float:
     nav = Navigator(occupancy_map, rng=np.random.default_rng(7), parameters=parameters)
     robot = Unicycle(occupancy_map, 1.0, 3.0, 0.0)
     nav.start(9.0, 3.0, 0.0, now=0.0)
-    person: list[tuple[float, float]] = []
-    gaps = []
-
-    def people(now: float) -> list[tuple[float, float]]:
-        if not person and now >= 2.0:
-            person.append((robot.x + 2.5, 3.7))
-        if person:
-            gaps.append(math.dist(robot.pose[:2], person[0]))
-        return person
-
-    drive(nav, robot, people=people)
+    gaps: list[float] = []
+    drive(nav, robot, people=appearing_at(robot, 2.5, 3.7, gaps))
     assert nav.status == "succeeded"
     return min(gaps)
 

@@ -22,8 +22,9 @@ Design intent:
   (:data:`~servicesim_sim.navigation.parameters.REPLAN_EVERY_SECOND`) the robot plans again
   every second while the costmap changes and takes the new path unless it is much longer than
   what is left of the current one: over 1 m and 10 % longer while the current path is clear
-  (a way round someone beside it is taken), over 5 m while people obstruct it, as above. Taking
-  every new path, a robot whose guest stood in its way turned between two routes for good.
+  (a way round someone beside it is taken), over 5 m while people obstruct it, as above: so the
+  robot does not turn for good between two routes that are cheapest in turn as a person near
+  it is seen and lost again.
 * A person within 0.7 m ahead on the path (between the robot's front and their body) stops the
   robot: it waits a random 0.5–1.5 s, replans around the now-marked person and goes on. While
   no way exists because of people, the same wait-and-replan repeats, clearing stale marks every
