@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -43,11 +44,20 @@ def planning_again_only_when_blocked(directory: Path) -> str:
 
 
 def mission(out: Path, *arguments: str) -> tuple[int, dict[str, Any]]:
+    """The run's exit status and report. Its standard error is kept beside its directory
+    (``<out>.stderr``) and, when the status is not the one the report gives, shown in the
+    test's captured output: a run that failed after its report says why."""
     result = run_module("bt_servicesim.run", *RUN, "--out", str(out), *arguments,
                         timeout=WALL_LIMIT_S)
+    out.with_name(f"{out.name}.stderr").write_text(result.stderr, encoding="utf-8")
     report_file = out / "report.json"
     assert report_file.is_file(), result.stderr[-2000:]
-    return result.returncode, json.loads(report_file.read_text())
+    report = json.loads(report_file.read_text())
+    if result.returncode != report.get("exit_code"):
+        print(f"the run exited with status {result.returncode}, its report says "
+              f"{report.get('exit_code')}; its standard error ends:\n{result.stderr[-4000:]}",
+              file=sys.stderr)
+    return result.returncode, report
 
 
 def tree_log_statuses(out: Path, key: str) -> list[str]:
