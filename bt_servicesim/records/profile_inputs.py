@@ -25,11 +25,12 @@ from typing import Any
 from mcap.reader import make_reader
 from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message
-from servicesim_competition.msg import ActorStates, RefereeState
+from servicesim_competition.msg import RefereeState
 from std_msgs.msg import String
 
 from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, PENALTY_CAUSES_TOPIC
 from bt_servicesim.records.profile import Booking, CheckpointMark, Proximity
+from bt_servicesim.records.recording import recorded_people
 from bt_servicesim.records.situations import PeopleSample
 from bt_servicesim.ros.planar_cdr import odometry_pose
 
@@ -108,16 +109,16 @@ def _on_robot(inputs: ProfileInputs, now: float, data: bytes) -> None:
 def _on_actors(inputs: ProfileInputs, now: float, data: bytes) -> None:
     if inputs.robot is None:
         return
-    message = deserialize_message(data, ActorStates)
+    message = recorded_people(data)
     x, y = inputs.robot
     guest: float | None = None
     others: float | None = None
     inputs.people.append(PeopleSample(sim_time_s=now, robot=(x, y), people={
-        str(name): (str(role), float(position.x), float(position.y))
-        for name, role, position in zip(message.names, message.roles, message.positions,
+        name: (role, px, py)
+        for name, role, (px, py) in zip(message.names, message.roles, message.positions,
                                         strict=True)}))
-    for role, position in zip(message.roles, message.positions, strict=True):
-        distance = math.hypot(position.x - x, position.y - y)
+    for role, (px, py) in zip(message.roles, message.positions, strict=True):
+        distance = math.hypot(px - x, py - y)
         if role == "guest":
             guest = distance if guest is None else min(guest, distance)
         else:

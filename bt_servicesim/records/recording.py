@@ -8,6 +8,10 @@ with a record length of billions of gigabytes. Such a file is read front to back
 message up to the last whole chunk, and :func:`recorded_messages` then says it was cut short
 (:class:`RecordingCutShortError`); a file that is empty or not MCAP at all is a
 :class:`RecordingError`. Each message is one line naming the file.
+
+The people's ground truth, the largest messages read back, is read by :func:`recorded_people`
+straight from its bytes (:func:`~bt_servicesim.ros.planar_cdr.people_states`), the same numbers
+rclpy's deserialisation gives, without an object per person.
 """
 
 from __future__ import annotations
@@ -20,8 +24,13 @@ from pathlib import Path
 from mcap.exceptions import McapError
 from mcap.reader import NonSeekingReader, make_reader
 from mcap.records import Channel, Message
+from rclpy.serialization import deserialize_message
+from servicesim_competition.msg import ActorStates
 
-__all__ = ["MCAP_MAGIC", "RecordingCutShortError", "RecordingError", "recorded_messages"]
+from bt_servicesim.ros.planar_cdr import PeopleStates, people_states
+
+__all__ = ["MCAP_MAGIC", "RecordingCutShortError", "RecordingError", "recorded_messages",
+           "recorded_people"]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 """The bytes an MCAP file begins with, and a closed one ends with."""
@@ -33,6 +42,18 @@ class RecordingError(ValueError):
 
 class RecordingCutShortError(RecordingError):
     """A recording that stops mid-record; raised after the messages before the cut."""
+
+
+def recorded_people(data: bytes) -> PeopleStates:
+    """A recorded ``/servicesim/actors`` message (``ActorStates``) as :class:`PeopleStates`."""
+    read = people_states(data)
+    if read is not None:
+        return read
+    message = deserialize_message(data, ActorStates)  # not little-endian plain CDR
+    return PeopleStates(names=[str(name) for name in message.names],
+                        roles=[str(role) for role in message.roles],
+                        positions=[(position.x, position.y) for position in message.positions],
+                        guest_state=str(message.guest_state))
 
 
 def recorded_messages(path: Path, *,

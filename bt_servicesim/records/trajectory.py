@@ -44,9 +44,13 @@ from std_msgs.msg import String
 
 from bt_servicesim.planning.geometry import Box
 from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, RECORDED_TOPICS, TREE_TOPIC
-from bt_servicesim.records.recording import RecordingCutShortError, recorded_messages
+from bt_servicesim.records.recording import (
+    RecordingCutShortError,
+    recorded_messages,
+    recorded_people,
+)
 from bt_servicesim.records.tree_log import read_tree_log
-from bt_servicesim.ros.planar_cdr import odometry_pose
+from bt_servicesim.ros.planar_cdr import PeopleStates, odometry_pose
 
 if TYPE_CHECKING:  # matplotlib is imported when a picture is drawn
     from matplotlib.axes import Axes
@@ -194,11 +198,17 @@ class TraceBuilder:
             self._unplaced.clear()
 
     def on_actors(self, message: ActorStates) -> None:
+        self.on_people(PeopleStates(
+            names=list(message.names), roles=list(message.roles),
+            positions=[(position.x, position.y) for position in message.positions],
+            guest_state=message.guest_state))
+
+    def on_people(self, message: PeopleStates) -> None:
+        """:meth:`on_actors` for the people already read from the message."""
         self.received["/servicesim/actors"] += 1
         guest: Point2D | None = None
-        for name, role, position in zip(message.names, message.roles, message.positions,
-                                        strict=False):
-            point = (position.x, position.y)
+        for name, role, point in zip(message.names, message.roles, message.positions,
+                                     strict=False):
             if role == "guest":
                 guest = point
                 _append_moved(self.trace.guest, point, self.min_step_m)
@@ -414,7 +424,7 @@ def trace_from_recording(mcap_path: Path,
     handlers: dict[str, Callable[[Any], None]] = {
         "/servicebot/map": builder.on_map, GROUND_TRUTH_TOPIC: builder.on_robot,
         "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
-    }
+    }  # the ground truth and the people are read from their bytes (below)
     topics = [*handlers, *([TREE_TOPIC] if phases is None else [])]
     try:  # in the order written, which is the order of arrival
         for channel, message in recorded_messages(mcap_path, topics=topics):
@@ -425,6 +435,8 @@ def trace_from_recording(mcap_path: Path,
             now_ns[0] = message.log_time
             if channel.topic == GROUND_TRUTH_TOPIC:
                 _read_robot(builder, message.data)
+            elif channel.topic == "/servicesim/actors":
+                builder.on_people(recorded_people(message.data))
             elif channel.topic in handlers:
                 handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
             elif channel.topic == TREE_TOPIC and phases is None:

@@ -7,14 +7,15 @@ import random
 import struct
 
 import pytest
-from geometry_msgs.msg import TransformStamped
+from geometry_msgs.msg import Point, TransformStamped
 from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
+from servicesim_competition.msg import ActorStates
 from tf2_msgs.msg import TFMessage
 
 from bt_servicesim.behaviours.actions.localised_pose import LocalisedPoseToBlackboard
 from bt_servicesim.planning.geometry import Pose2D, yaw_of
-from bt_servicesim.ros.planar_cdr import odometry_pose, transforms
+from bt_servicesim.ros.planar_cdr import odometry_pose, people_states, transforms
 
 # frame names of every length mod 4 and mod 8, so that every alignment after them is met
 FRAMES = ["", "m", "od", "map", "odom", "base_footprint", "a/b/c", "ünïcode_frame"]
@@ -116,3 +117,32 @@ def test_the_pose_reader_falls_back_to_rclpy_for_big_endian_odometry() -> None:
         stamped(random.Random(4), "map", "odom")])))
     assert reader._odometry == Pose2D(x=1.5, y=-2.25, yaw=pytest.approx(0.7))
     assert reader._map_to_odom is not None
+
+
+def actor_states(rng: random.Random, count: int) -> ActorStates:
+    message = ActorStates(names=[rng.choice(FRAMES) + str(index) for index in range(count)],
+                          roles=[rng.choice(FRAMES) for _ in range(count)],
+                          guest_state=rng.choice(FRAMES))
+    message.stamp.sec, message.stamp.nanosec = rng.randrange(2**31), rng.randrange(10**9)
+    message.positions = [Point(x=rng.uniform(-1e3, 1e3), y=rng.uniform(-1e3, 1e3),
+                               z=rng.uniform(-1.0, 1.0)) for _ in range(count)]
+    return message
+
+
+@pytest.mark.parametrize("count", [0, 1, 2, 3, 5, 41])
+@pytest.mark.parametrize("seed", range(4))
+def test_people_states_reads_what_rclpy_wrote(count: int, seed: int) -> None:
+    message = actor_states(random.Random(f"{count}/{seed}"), count)
+    read = people_states(serialize_message(message))
+    assert read is not None
+    assert (read.names, read.roles, read.guest_state) == (
+        list(message.names), list(message.roles), message.guest_state)
+    assert read.positions == [(point.x, point.y) for point in message.positions]
+
+
+def test_people_states_refuses_bytes_that_end_early_and_leaves_big_endian_to_rclpy() -> None:
+    data = serialize_message(actor_states(random.Random(5), 3))
+    for cut in (10, len(data) - 30, len(data) - 2):
+        with pytest.raises(ValueError, match="message"):
+            people_states(data[:cut])
+    assert people_states(b"\x00\x00" + data[2:]) is None
