@@ -4,17 +4,21 @@ The tree's snapshot log (``tree_log.jsonl``), its final tick (``final_tree.txt``
 mission profile built from the records (``profile.json``, :mod:`bt_servicesim.records.profile`)
 when the executive is a behaviour tree, the trajectory picture (``trajectory.png``) and the ROS
 traffic (``run.mcap``). They are written on every way out, a signal included; a record that
-cannot be written costs a warning line, never the report.
+cannot be written costs a warning line, never the report. The picture and the profile are both
+built from the recording, read back once for the two: parsing an MCAP file is most of what
+either costs.
 """
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import py_trees
+from mcap.records import Message
 from rclpy.node import Node
 
 from bt_servicesim.monitor.live_server import LiveServer
@@ -27,12 +31,20 @@ from bt_servicesim.records.mcap import (
     TreeTopic,
 )
 from bt_servicesim.records.profile import PROFILE_NAME
-from bt_servicesim.records.profile_inputs import profile_of_run, write_profile
+from bt_servicesim.records.profile_inputs import (
+    PROFILE_TOPICS,
+    profile_inputs_of,
+    profile_of_run,
+    write_profile,
+)
+from bt_servicesim.records.recording import RecordingError, recorded_messages
 from bt_servicesim.records.trajectory import (
+    TRACE_TOPICS,
     TRAJECTORY_NAME,
     boxes_from_blackboard,
     render_trajectory,
     trace_from_recording,
+    trace_of,
 )
 from bt_servicesim.records.tree_log import LOG_NAME, TreeLog, behaviour_tree_of
 from bt_servicesim.ros.lockstep import LockstepHost
@@ -123,8 +135,21 @@ class RunRecords:
             except Exception as error:  # a record is not worth losing the report for
                 print(f"warning: could not write {self.out / name}: {error}", file=sys.stderr)
 
+    @cached_property
+    def _recorded(self) -> list[tuple[str, Message]] | None:
+        """The recorded messages the picture and the profile are built from, read once for
+        both; None when the recording cannot be read whole: each then reads it as it does
+        alone (a picture of what was read before a cut, or a warning)."""
+        try:
+            return [(channel.topic, message) for channel, message in recorded_messages(
+                self.out / MCAP_NAME, topics=sorted({*TRACE_TOPICS, *PROFILE_TOPICS}))]
+        except RecordingError:
+            return None
+
     def _write_profile(self) -> None:
-        self.profile = profile_of_run(self.out)
+        recorded = self._recorded
+        self.profile = profile_of_run(
+            self.out, None if recorded is None else profile_inputs_of(recorded))
         write_profile(self.out, self.profile)
 
     def _close_recording(self) -> None:
@@ -136,7 +161,9 @@ class RunRecords:
 
     def _render_trajectory(self, title: str) -> None:
         boxes = boxes_from_blackboard(py_trees.blackboard.Blackboard.storage)
-        trace = trace_from_recording(self.out / MCAP_NAME, phases=self.phases)
+        recorded = self._recorded
+        trace = (trace_from_recording(self.out / MCAP_NAME, phases=self.phases)
+                 if recorded is None else trace_of(recorded, phases=self.phases))
         render_trajectory(trace, path=self.out / TRAJECTORY_NAME, boxes=boxes,
                           title=title)
 

@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from mcap.reader import make_reader
+from mcap.records import Message
 from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message
 from servicesim_competition.msg import RefereeState
@@ -62,17 +63,22 @@ class ProfileInputs:
 
 def read_profile_inputs(mcap_path: Path) -> ProfileInputs:
     """Every sample from the recording (see the module docstring)."""
-    inputs = ProfileInputs()
-    handlers: dict[str, Callable[[ProfileInputs, float, bytes], None]] = {
-        PENALTY_CAUSES_TOPIC: _on_causes, REFEREE_TOPIC: _on_referee,
-        ACTORS_TOPIC: _on_actors, GROUND_TRUTH_TOPIC: _on_robot,
-    }
     with mcap_path.open("rb") as stream:
-        for _schema, channel, message in make_reader(stream).iter_messages(
-                topics=list(handlers), log_time_order=False):
+        return profile_inputs_of(
+            (channel.topic, message) for _schema, channel, message in make_reader(
+                stream).iter_messages(topics=list(PROFILE_TOPICS), log_time_order=False))
+
+
+def profile_inputs_of(messages: Iterable[tuple[str, Message]]) -> ProfileInputs:
+    """Every sample from recorded ``messages`` (topic, message) in the order written; topics
+    other than :data:`PROFILE_TOPICS` are passed over."""
+    inputs = ProfileInputs()
+    for topic, message in messages:
+        handler = _HANDLERS.get(topic)
+        if handler is not None:
             now = message.log_time / 1e9
             inputs.end_s = max(inputs.end_s, now)
-            handlers[channel.topic](inputs, now, message.data)
+            handler(inputs, now, message.data)
     return inputs
 
 
@@ -126,14 +132,24 @@ def _on_actors(inputs: ProfileInputs, now: float, data: bytes) -> None:
     inputs.proximity.append(Proximity(sim_time_s=now, guest_m=guest, others_m=others))
 
 
-def profile_of_run(run: Path) -> dict[str, Any]:
-    """The profile of the run recorded in directory ``run`` (its tree log and run.mcap)."""
+_HANDLERS: dict[str, Callable[[ProfileInputs, float, bytes], None]] = {
+    PENALTY_CAUSES_TOPIC: _on_causes, REFEREE_TOPIC: _on_referee,
+    ACTORS_TOPIC: _on_actors, GROUND_TRUTH_TOPIC: _on_robot,
+}
+PROFILE_TOPICS = tuple(_HANDLERS)
+"""The recorded topics a profile is built from."""
+
+
+def profile_of_run(run: Path, inputs: ProfileInputs | None = None) -> dict[str, Any]:
+    """The profile of the run recorded in directory ``run`` (its tree log and run.mcap);
+    ``inputs``: the recording's samples when already read (:func:`profile_inputs_of`)."""
     from bt_servicesim.records.mcap import MCAP_NAME
     from bt_servicesim.records.profile import build_profile
     from bt_servicesim.records.tree_log import LOG_NAME, read_records
 
     header, records = read_records(run / LOG_NAME)
-    inputs = read_profile_inputs(run / MCAP_NAME)
+    if inputs is None:
+        inputs = read_profile_inputs(run / MCAP_NAME)
     return build_profile(shape=header.shape, records=records,
                          phases=header.phases or DEFAULT_PHASES,
                          bookings=inputs.attributed, proximity=inputs.proximity,

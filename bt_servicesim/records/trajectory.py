@@ -29,12 +29,13 @@ import json
 import math
 import re
 from collections import Counter, deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from mcap.records import Message
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -403,6 +404,9 @@ def _frame(axes: Axes, trace: RunTrace, boxes: Mapping[str, Box]) -> None:
 
 
 # ---------------------------------------------------------------------- from a recorded run
+TRACE_TOPICS = ("/servicebot/map", GROUND_TRUTH_TOPIC, "/servicesim/actors", "/servicesim/referee")
+"""The recorded topics a trace is drawn from (and the tree's, for the phases, when the run did
+not note them)."""
 _NUMBER = r"(-?[0-9.]+(?:e[-+]?[0-9]+)?)"
 _BOX_REPR = re.compile(
     rf"Box\(min_x={_NUMBER}, min_y={_NUMBER}, max_x={_NUMBER}, max_y={_NUMBER}\)")
@@ -417,29 +421,36 @@ def trace_from_recording(mcap_path: Path,
     the trace up to the cut, with :attr:`RunTrace.cut_short` saying so; one that cannot be read
     at all raises :class:`~bt_servicesim.records.recording.RecordingError`.
     """
+    topics = [*TRACE_TOPICS, *([TREE_TOPIC] if phases is None else [])]
+    return trace_of(((channel.topic, message)
+                     for channel, message in recorded_messages(mcap_path, topics=topics)),
+                    phases=phases)
+
+
+def trace_of(messages: Iterable[tuple[str, Message]],
+             phases: Sequence[tuple[float, str]] | None = None) -> RunTrace:
+    """:func:`trace_from_recording` of recorded ``messages`` (topic, message) in the order
+    written; topics the trace is not drawn from are passed over."""
     types = {topic.name: topic.message_type for topic in RECORDED_TOPICS}
     now_ns = [0]
     builder = TraceBuilder(now_s=lambda: now_ns[0] / 1e9)
     noted = deque(phases or ())
-    handlers: dict[str, Callable[[Any], None]] = {
-        "/servicebot/map": builder.on_map, GROUND_TRUTH_TOPIC: builder.on_robot,
-        "/servicesim/actors": builder.on_actors, "/servicesim/referee": builder.on_referee,
-    }  # the ground truth and the people are read from their bytes (below)
-    topics = [*handlers, *([TREE_TOPIC] if phases is None else [])]
+    handlers: dict[str, Callable[[Any], None]] = {  # the ground truth and the people: below
+        "/servicebot/map": builder.on_map, "/servicesim/referee": builder.on_referee}
     try:  # in the order written, which is the order of arrival
-        for channel, message in recorded_messages(mcap_path, topics=topics):
+        for topic, message in messages:
             while noted and noted[0][0] * 1e9 < message.log_time:  # ties: message first
                 when, phase = noted.popleft()
                 now_ns[0] = round(when * 1e9)
                 builder.note_phase(phase)
             now_ns[0] = message.log_time
-            if channel.topic == GROUND_TRUTH_TOPIC:
+            if topic == GROUND_TRUTH_TOPIC:
                 _read_robot(builder, message.data)
-            elif channel.topic == "/servicesim/actors":
+            elif topic == "/servicesim/actors":
                 builder.on_people(recorded_people(message.data))
-            elif channel.topic in handlers:
-                handlers[channel.topic](deserialize_message(message.data, types[channel.topic]))
-            elif channel.topic == TREE_TOPIC and phases is None:
+            elif topic in handlers:
+                handlers[topic](deserialize_message(message.data, types[topic]))
+            elif topic == TREE_TOPIC and phases is None:
                 snapshot = json.loads(deserialize_message(message.data, String).data)
                 builder.note_phase(str(snapshot.get("phase", "-")))
     except RecordingCutShortError as error:  # what was read before the cut is drawn

@@ -25,7 +25,15 @@ from servicesim_competition.msg import ActorStates, RefereeState
 
 from bt_servicesim import trajectory
 from bt_servicesim.planning.geometry import Box
-from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, TREE_TOPIC, McapRecorder, TreeTopic
+from bt_servicesim.records.mcap import (
+    GROUND_TRUTH_TOPIC,
+    RECORDED_TOPICS,
+    TREE_TOPIC,
+    McapRecorder,
+    TreeTopic,
+)
+from bt_servicesim.records.profile_inputs import profile_inputs_of, read_profile_inputs
+from bt_servicesim.records.recording import recorded_messages
 from bt_servicesim.records.trajectory import (
     LATCHED,
     ROBOT_COLOUR,
@@ -35,6 +43,7 @@ from bt_servicesim.records.trajectory import (
     boxes_from_tree_log,
     render_trajectory,
     trace_from_recording,
+    trace_of,
 )
 from bt_servicesim.records.tree_log import TickRecord, TreeLog
 from tests.fakes.graphs import SimTimeGraph
@@ -218,6 +227,22 @@ def test_a_recorded_run_is_drawn_again_from_its_mcap(story: Story, tmp_path: Pat
     assert trajectory.main([str(tmp_path), "--out", str(tmp_path / "again.png")]) == 0
     with Image.open(tmp_path / "again.png") as image:
         assert image.format == "PNG" and image.size[0] >= 1000
+
+
+def test_one_reading_of_every_topic_gives_the_trace_and_the_profile_inputs_each_reads_alone(
+        story: Story, tmp_path: Path) -> None:
+    recording = McapRecorder(node=story.node, path=tmp_path / "run.mcap")
+    recorder = TrajectoryRecorder(node=story.node)
+    play(story, recorder, recording.counts)
+    recording.close()
+    every = [(channel.topic, message) for channel, message in recorded_messages(
+        tmp_path / "run.mcap", topics=[topic.name for topic in RECORDED_TOPICS])]
+    alone, shared = trace_from_recording(tmp_path / "run.mcap"), trace_of(every)
+    assert (shared.robot, shared.guest, shared.people, shared.events, shared.start) == (
+        alone.robot, alone.guest, alone.people, alone.events, alone.start)
+    assert shared.robot and shared.people and shared.events
+    assert profile_inputs_of(every) == read_profile_inputs(tmp_path / "run.mcap")
+    recorder.close()
 
 
 def test_phases_noted_during_a_run_are_marked_where_the_live_recorder_marked_them(
