@@ -80,6 +80,7 @@ __all__ = [
     "held_up_on_costmap",
     "local_grid_around",
     "passage_axis",
+    "passage_width",
     "people_held_up",
     "recent_trail",
     "travel_heading",
@@ -171,6 +172,16 @@ def passage_axis(grid: OccupancyGrid2D, x: float, y: float, *, reach: float = AX
     axis of the corridor it stands in."""
     spans = _free_spans(grid, x, y, reach)
     return float(np.pi * int(np.argmax(spans)) / AXIS_DIRECTIONS)
+
+
+def passage_width(grid: OccupancyGrid2D, x: float, y: float, *,
+                  reach: float = AXIS_REACH) -> float:
+    """Metres of the shortest free straight span through (x, y), among
+    :data:`AXIS_DIRECTIONS` directions: the width of the passage it stands in (a corridor's,
+    a doorway's; in the open, up to twice ``reach``). 0 in a blocked cell."""
+    if grid.clearance(x, y) <= 0.0:
+        return 0.0
+    return float(np.min(_free_spans(grid, x, y, reach))) * grid.resolution
 
 
 class Doorway(NamedTuple):

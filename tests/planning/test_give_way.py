@@ -22,6 +22,7 @@ from bt_servicesim.planning.give_way import (
     doorway,
     give_way_spot,
     passage_axis,
+    passage_width,
     people_held_up,
     recent_trail,
     without_the_guest,
@@ -235,3 +236,17 @@ def test_a_spot_to_step_to_before_standing_is_looked_for_only_within_its_route()
     assert spot is not None and spot.y > 5.8, spot  # the room
     assert math.dist((spot.x, spot.y), (9.0, 4.8)) > PEOPLE_LANE_LENGTH
     assert give_way_spot(grid, robot=ROBOT, trail=trail(), people=near, max_route=1.0) is None
+
+
+@pytest.mark.parametrize(("x", "y", "low", "high"), [
+    (3.0, 4.8, 1.5, 1.7),  # mid-corridor, 1.6 m between its walls
+    (3.0, 4.3, 1.5, 1.7),  # off its middle: the same corridor
+    (8.0, 7.4, 3.1, 3.3),  # in the room, 3.2 m deep, away from its door
+])
+def test_the_passage_width_is_the_shortest_free_span_through_a_point(
+        x: float, y: float, low: float, high: float) -> None:
+    assert low <= passage_width(office(alcove=False), x, y) <= high
+
+
+def test_a_blocked_point_stands_in_no_passage() -> None:
+    assert passage_width(office(), 3.0, 2.0) == 0.0
