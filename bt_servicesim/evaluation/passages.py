@@ -122,12 +122,11 @@ def _situation(t: float, role: str, track: Track, grid: OccupancyGrid2D,
 
 def recorded_track(mcap_path: Path) -> tuple[Track, OccupancyGrid2D | None]:
     """The robot's and the people's samples in a run's recording, and the map it recorded."""
-    from nav_msgs.msg import OccupancyGrid
+    from nav_msgs.msg import OccupancyGrid, Odometry
     from rclpy.serialization import deserialize_message
 
     from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC
     from bt_servicesim.records.recording import recorded_messages, recorded_people
-    from bt_servicesim.ros.planar_cdr import odometry_pose
 
     track = Track([], [], [], [])
     grid = None
@@ -137,23 +136,16 @@ def recorded_track(mcap_path: Path) -> tuple[Track, OccupancyGrid2D | None]:
         if channel.topic == "/servicebot/map":
             grid = OccupancyGrid2D.from_message(deserialize_message(message.data, OccupancyGrid))
         elif channel.topic == GROUND_TRUTH_TOPIC:
-            pose = odometry_pose(message.data)
-            if pose is not None:
-                track.robot_times.append(t)
-                track.robot.append((pose[1].x, pose[1].y, _forward_speed(message.data)))
+            odometry = deserialize_message(message.data, Odometry)
+            track.robot_times.append(t)
+            track.robot.append((odometry.pose.pose.position.x, odometry.pose.pose.position.y,
+                                odometry.twist.twist.linear.x))
         else:
             people = recorded_people(message.data)
             track.people_times.append(t)
             track.people.append({name: (role, px, py) for name, role, (px, py) in zip(
                 people.names, people.roles, people.positions, strict=True)})
     return track, grid
-
-
-def _forward_speed(data: bytes) -> float:
-    from nav_msgs.msg import Odometry
-    from rclpy.serialization import deserialize_message
-
-    return float(deserialize_message(data, Odometry).twist.twist.linear.x)
 
 
 def tally_of(rows: Iterable[dict[str, Any]], *, narrow: float = NARROW) -> Tally:

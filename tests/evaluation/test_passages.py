@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bt_servicesim.evaluation.passages import KINDS, Tally, Track, classify, table_lines
@@ -98,3 +99,55 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path: Path, arguments: tuple[str
     assert done.returncode == 2
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], done.stderr
+
+
+def write_episode(out: Path) -> None:
+    """An episode's records: a profile with two walker bookings at 1.0 s, and a recording of
+    the map, the robot driving up the corridor and a walker standing in it."""
+    from geometry_msgs.msg import Point
+    from mcap.writer import Writer
+    from nav_msgs.msg import OccupancyGrid, Odometry
+    from rclpy.serialization import serialize_message
+    from servicesim_competition.msg import ActorStates
+
+    from bt_servicesim.records.mcap import GROUND_TRUTH_TOPIC, complete_definition, type_name
+
+    out.mkdir(parents=True)
+    (out / "profile.json").write_text(json.dumps({"timeline": {"bookings": [
+        [1.0, "approximation/walker", 30.0], [1.0, "approximation/walls", 5.0]]}}))
+    map_message = grid_message(np.asarray(GRID.values, dtype=np.int8))
+    messages: list[tuple[str, object]] = [("/servicebot/map", map_message)]
+    for step in range(5):
+        odometry = Odometry()
+        odometry.pose.pose.position.x, odometry.pose.pose.position.y = 3.0 + 0.25 * step, 4.5
+        odometry.twist.twist.linear.x = 0.5
+        actors = ActorStates(names=["human_1"], roles=["walker"],
+                             positions=[Point(x=4.6, y=5.1, z=0.0)])
+        messages += [(GROUND_TRUTH_TOPIC, odometry), ("/servicesim/actors", actors)]
+    with (out / "run.mcap").open("wb") as stream:
+        writer = Writer(stream)
+        writer.start(profile="ros2", library="test")
+        channels = {}
+        for topic, message_type in (("/servicebot/map", OccupancyGrid),
+                                    (GROUND_TRUTH_TOPIC, Odometry),
+                                    ("/servicesim/actors", ActorStates)):
+            name = type_name(message_type)
+            schema = writer.register_schema(name=name, encoding="ros2msg",
+                                            data=complete_definition(name).encode())
+            channels[topic] = writer.register_channel(topic=topic, message_encoding="cdr",
+                                                      schema_id=schema)
+        for index, (topic, message) in enumerate(messages):
+            when = int(index // 2 * 0.5e9)  # the map and the first samples at 0 s, then 0.5 s on
+            writer.add_message(channel_id=channels[topic], log_time=when, publish_time=when,
+                               data=serialize_message(message))
+        writer.finish()
+
+
+def test_the_command_reads_each_episodes_profile_and_recording(tmp_path: Path) -> None:
+    write_episode(tmp_path / "bt" / "random" / "0")
+    rows = [{"episode": 0, "scenario": "random", "episode_seed": 0, "completed": True,
+             "score": 100.0, "checkpoints": [], "out": str(tmp_path / "bt" / "random" / "0")}]
+    (tmp_path / "summary.json").write_text(json.dumps({"bt": {"rows": rows}}))
+    done = run_module("bt_servicesim.evaluation.passages", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[3] == "| walker | 30.0 | 30.0 (100%) | 30.0 | 0.0 | 0.0 |"
