@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, interruptible
-from bt_servicesim.evaluation.summary import SummaryFileError, summary_rows
+from bt_servicesim.cli import EXIT_OK, interruptible
+from bt_servicesim.evaluation.episode_set import episode_set_parser, rows_of_set
 from bt_servicesim.planning.give_way import passage_width
 from bt_servicesim.planning.occupancy import OccupancyGrid2D
 
@@ -182,23 +182,14 @@ def table_lines(tally: Tally, *, narrow: float) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = OneLineArgumentParser(prog=PROG, description="Where the people's approximation "
-                                   "points were booked: narrow passages or room to pass.")
-    parser.add_argument("directory", type=Path, help="an evaluation's --out directory")
-    parser.add_argument("--executive", default="bt", help="whose episodes (default bt)")
-    parser.add_argument("--set", dest="scenario", default="random",
-                        help="which scenario set (default random)")
+    parser = episode_set_parser(prog=PROG, description="Where the people's approximation "
+                                "points were booked: narrow passages or room to pass.")
     parser.add_argument("--narrow", type=float, default=NARROW,
                         help=f"metres under which a passage is narrow (default {NARROW:g})")
     args = parser.parse_args(argv)
     if not 0.0 < args.narrow < 100.0:
         parser.error(f"--narrow {args.narrow:g}: must be more than 0 and less than 100 m")
-    try:
-        rows, _ = summary_rows(args.directory, args.executive)
-    except SummaryFileError as error:
-        parser.error(str(error))
-    tally = tally_of((row for row in rows if row.get("scenario") == args.scenario),
-                     narrow=args.narrow)
+    tally = tally_of(rows_of_set(parser, args), narrow=args.narrow)
     if not tally.episodes or not tally.points:
         parser.error(f"{args.directory / 'summary.json'}: no {args.executive} episode of the "
                      f"{args.scenario!r} set with a profile and a recording")

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from bt_servicesim.cli import EXIT_OK, OneLineArgumentParser, interruptible
-from bt_servicesim.evaluation.summary import SummaryFileError, summary_rows
+from bt_servicesim.cli import EXIT_OK, interruptible
+from bt_servicesim.evaluation.episode_set import episode_set_parser, rows_of_set
 
 PROG = "python -m bt_servicesim.evaluation.path_excess"
 STANDING_M_S = 0.05
@@ -132,22 +132,13 @@ def summary_lines(figures: Sequence[PathFigures]) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = OneLineArgumentParser(prog=PROG, description="Where the time over the "
-                                   "kinematic bound goes: path length or speed.")
-    parser.add_argument("directory", type=Path, help="an evaluation's --out directory")
-    parser.add_argument("--executive", default="bt", help="whose episodes (default bt)")
-    parser.add_argument("--set", dest="scenario", default="random",
-                        help="which scenario set (default random)")
+    parser = episode_set_parser(prog=PROG, description="Where the time over the kinematic "
+                                "bound goes: path length or speed.")
     args = parser.parse_args(argv)
-    summary_file = args.directory / "summary.json"
-    try:
-        rows, _ = summary_rows(args.directory, args.executive)
-    except SummaryFileError as error:
-        parser.error(str(error))
-    figures = figures_of(row for row in rows if row.get("scenario") == args.scenario)
+    figures = figures_of(rows_of_set(parser, args))
     if not figures:
-        parser.error(f"{summary_file}: no completed {args.executive} episode of the "
-                     f"{args.scenario!r} set with a bound and a recording")
+        parser.error(f"{args.directory / 'summary.json'}: no completed {args.executive} "
+                     f"episode of the {args.scenario!r} set with a bound and a recording")
     print("\n".join(summary_lines(figures)))
     return EXIT_OK
 
